@@ -1,0 +1,503 @@
+"""Media decoding behind one small interface (PyAV / FFmpeg). Stages never touch FFmpeg.
+
+- :func:`probe` -> :class:`MediaInfo` (streams, duration, fps, sample rate, channels).
+- :func:`iter_audio` -> float32 mono chunks at 48 kHz, in pascal-free digital full scale
+  (calibration to pascal is the loudness stage's parameter). Streaming: memory does not grow
+  with the length of the film.
+- :func:`iter_video` -> :class:`Frame` handles, one per decoded frame, in presentation order;
+  a frame is converted to a small proxy array only when a stage asks for it
+  (:meth:`Frame.proxy`), because converting every 1080p frame to RGB costs as much as decoding it.
+
+Downmix (documented decision, ALGORITHM.md section 2): the mono analysis signal is the MEAN of
+the main channels (not the sum, so a sound panned everywhere keeps its level) plus the LFE channel
+with its cinema playback gain of +10 dB, also divided by the number of main channels:
+``mono = (sum(main) + 10**(lfe_gain_db/20) * lfe) / n_main``. Channel roles come from the
+stream's layout; a stream with 6 or 8 channels and no layout is read in FFmpeg's default
+5.1 (FL FR FC LFE BL BR) or 7.1 (FL FR FC LFE BL BR SL SR) order; any other unlabelled layout
+has no LFE. Non-finite samples (NaN, inf in float PCM) are replaced by 0 and counted.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass, field, replace
+from fractions import Fraction
+from pathlib import Path
+
+import av
+import numpy as np
+
+from autohaptics.errors import MediaError
+from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
+
+# Declared vs decoded duration: beyond this shortfall the file is called truncated.
+TRUNCATION_TOLERANCE_S = 0.5
+TRUNCATION_TOLERANCE_FRAC = 0.02
+
+
+@dataclass(frozen=True)
+class VideoInfo:
+    index: int
+    width: int
+    height: int
+    fps: float  # average frame rate, frames per second
+    codec: str
+    n_frames: int | None  # as declared by the container, None when unknown
+    rotation: int  # display rotation in degrees (0, 90, 180, 270), counter-clockwise
+    duration_s: float | None
+
+    @property
+    def display_size(self) -> tuple[int, int]:
+        """(width, height) as shown, after the rotation metadata."""
+        return (self.height, self.width) if self.rotation % 180 else (self.width, self.height)
+
+
+@dataclass(frozen=True)
+class AudioInfo:
+    index: int
+    sample_rate: int  # Hz
+    channels: int
+    layout: str
+    codec: str
+    duration_s: float | None
+
+
+@dataclass(frozen=True)
+class MediaInfo:
+    path: str
+    size_bytes: int
+    container: str
+    duration_s: float  # seconds, > 0
+    start_s: float  # container start time; t = 0 of every analysis is this instant
+    video: VideoInfo | None
+    audio: AudioInfo | None
+
+    def source_block(self, *, sha256: str | None = None, name: str | None = None) -> dict:
+        """The timeline's ``source`` object (TIMELINE.md)."""
+        v, a = self.video, self.audio
+        return {
+            "name": name if name is not None else os.path.basename(self.path),
+            "sha256": sha256,
+            "duration_s": round(self.duration_s, 6),
+            "size_bytes": self.size_bytes,
+            "container": self.container,
+            "video": None if v is None else {"width": v.width, "height": v.height, "fps": round(v.fps, 6),
+                                              "codec": v.codec, "rotation": v.rotation},
+            "audio": None if a is None else {"sample_rate": a.sample_rate, "channels": a.channels,
+                                              "layout": a.layout, "codec": a.codec},
+        }
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class AudioReport:
+    """What :func:`iter_audio` saw; filled in while iterating."""
+
+    samples_out: int = 0  # mono samples at the analysis rate
+    nonfinite_samples: int = 0  # input samples replaced by 0
+    decode_errors: int = 0
+    first_error: str | None = None
+    lfe_channel: int | None = None
+    main_channels: list[int] = field(default_factory=list)
+
+    @property
+    def duration_s(self) -> float:
+        return self.samples_out / ANALYSIS_SAMPLE_RATE
+
+
+# ------------------------------------------------------------------- probe
+def open_container(path: str | os.PathLike) -> av.container.InputContainer:
+    """Open a media file, mapping every failure to a MediaError that names the file."""
+    p = Path(path)
+    if not p.exists():
+        raise MediaError(f"{p}: no such file")
+    if p.is_dir():
+        raise MediaError(f"{p}: is a directory, not a media file")
+    if p.stat().st_size == 0:
+        raise MediaError(f"{p}: file is empty (0 bytes)")
+    try:
+        return av.open(str(p), mode="r", metadata_errors="ignore")
+    except av.error.FFmpegError as exc:
+        raise MediaError(f"{p}: not a readable media file ({_ffmpeg_reason(exc)})") from None
+    except (OSError, ValueError, UnicodeDecodeError) as exc:
+        raise MediaError(f"{p}: cannot open ({exc})") from None
+
+
+def probe(path: str | os.PathLike) -> MediaInfo:
+    """Streams, duration, frame rate, sample rate and channels of a media file.
+
+    Raises MediaError when the file is missing, not media, has neither audio nor video,
+    or has no usable duration.
+    """
+    p = Path(path)
+    with open_container(p) as c:
+        vs = next((s for s in c.streams.video if _is_real_video(s)), None)
+        as_ = c.streams.audio[0] if c.streams.audio else None
+        video = _video_info(vs) if vs is not None else None
+        audio = _audio_info(as_) if as_ is not None else None
+        if video is None and audio is None:
+            raise MediaError(f"{p}: no audio or video stream (container {c.format.name})")
+        start_s = _container_start(c)
+        duration = _duration_s(c, [s for s in (vs, as_) if s is not None])
+        if duration is None:
+            duration = _scan_duration(c, [s for s in (vs, as_) if s is not None], start_s)
+        if duration is None or not math.isfinite(duration) or duration <= 0:
+            raise MediaError(f"{p}: zero-length media (no decodable duration)")
+        if video is not None:
+            c.seek(0)
+            video = replace(video, rotation=_first_frame_rotation(c, vs))
+        return MediaInfo(path=str(p), size_bytes=p.stat().st_size, container=c.format.name,
+                         duration_s=float(duration), start_s=start_s, video=video, audio=audio)
+
+
+# ------------------------------------------------------------------- audio
+def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_gain_db: float = 10.0,
+               chunk_s: float = 2.0, report: AudioReport | None = None) -> Iterator[np.ndarray]:
+    """Decode the first audio stream as float32 mono chunks at 48 kHz (digital full scale).
+
+    Time 0 is the container start (``info.start_s``): leading gaps are zero-filled so audio
+    stays aligned with the picture. ``chunk_s`` bounds the chunk length (seconds); memory is
+    constant in the film length. Raises MediaError when there is no audio stream or nothing
+    decodes; a decode error in the middle of a file is counted in ``report`` and skipped.
+    """
+    info = info or probe(path)
+    if info.audio is None:
+        raise MediaError(f"{info.path}: no audio stream")
+    report = report if report is not None else AudioReport()
+    sr_in = info.audio.sample_rate
+    resampler = None
+    if sr_in != ANALYSIS_SAMPLE_RATE:
+        resampler = av.AudioResampler(format="flt", layout="mono", rate=ANALYSIS_SAMPLE_RATE)
+    chunk_n = max(1, int(chunk_s * ANALYSIS_SAMPLE_RATE))
+    pending: list[np.ndarray] = []
+    pending_n = 0
+    next_t_in = 0.0  # seconds (relative to start) of the next expected input sample
+    lfe_gain = 10.0 ** (lfe_gain_db / 20.0)
+
+    def emit(x: np.ndarray):
+        nonlocal pending_n
+        if x.size:
+            pending.append(x)
+            pending_n += x.size
+
+    def drain(final: bool):
+        nonlocal pending, pending_n
+        while pending_n >= chunk_n or (final and pending_n):
+            buf = np.concatenate(pending) if len(pending) > 1 else pending[0]
+            out, rest = buf[:chunk_n], buf[chunk_n:]
+            pending = [rest] if rest.size else []
+            pending_n = rest.size
+            report.samples_out += out.size
+            yield out.astype(np.float32, copy=False)
+
+    def to_out_rate(mono: np.ndarray) -> np.ndarray:
+        if resampler is None:
+            return mono
+        frame = av.AudioFrame.from_ndarray(mono[None, :], format="flt", layout="mono")
+        frame.sample_rate = sr_in
+        return _frames_to_array(resampler.resample(frame))
+
+    with open_container(info.path) as c:
+        stream = c.streams.audio[0]
+        stream.thread_type = "AUTO"
+        mapping = None
+        for frame in _decode_tolerant(c, stream, report, info.path):
+            x = frame.to_ndarray()
+            if x.ndim == 1:
+                x = x[None, :]
+            if not frame.format.is_planar:
+                x = x.reshape(-1, frame.layout.nb_channels).T
+            x = _to_float(x)
+            if mapping is None:
+                mapping = _channel_roles(frame.layout, x.shape[0])
+                report.main_channels, report.lfe_channel = mapping
+            bad = ~np.isfinite(x)
+            if bad.any():
+                report.nonfinite_samples += int(bad.sum())
+                x = np.where(bad, 0.0, x)
+            main, lfe = mapping
+            mono = x[main].sum(axis=0, dtype=np.float64)
+            if lfe is not None:
+                mono += lfe_gain * x[lfe]
+            mono = (mono / max(1, len(main))).astype(np.float32)
+            # Align to the container clock: zero-fill gaps (and the lead-in), drop overlaps.
+            if frame.time is not None:
+                t0 = float(frame.time) - info.start_s
+                gap = t0 - next_t_in
+                if gap > 1.0 / sr_in * 2:
+                    emit(to_out_rate(np.zeros(int(round(gap * sr_in)), np.float32)))
+                    next_t_in += round(gap * sr_in) / sr_in
+                elif gap < -1.0 / sr_in * 2:
+                    drop = min(mono.size, int(round(-gap * sr_in)))
+                    mono = mono[drop:]
+            next_t_in += mono.size / sr_in
+            emit(to_out_rate(mono))
+            yield from drain(False)
+        if resampler is not None:
+            emit(_frames_to_array(resampler.resample(None)))
+        yield from drain(True)
+    if report.samples_out == 0:
+        reason = f" ({report.first_error})" if report.first_error else ""
+        raise MediaError(f"{info.path}: the audio stream holds no decodable samples{reason}")
+
+
+def read_audio(path: str | os.PathLike, **kwargs) -> np.ndarray:
+    """The whole mono 48 kHz track as one float32 array (tests and short clips only)."""
+    chunks = list(iter_audio(path, **kwargs))
+    return np.concatenate(chunks) if chunks else np.zeros(0, np.float32)
+
+
+# ------------------------------------------------------------------- video
+class Frame:
+    """One decoded picture. Valid only inside the iteration step that yielded it."""
+
+    __slots__ = ("_frame", "index", "time_s", "rotation", "width", "height")
+
+    def __init__(self, frame: av.VideoFrame, index: int, time_s: float, rotation: int):
+        self._frame = frame
+        self.index = index  # decoded frame number, 0-based
+        self.time_s = time_s  # presentation time relative to the container start, seconds
+        self.rotation = rotation
+        self.width, self.height = (frame.height, frame.width) if rotation % 180 else (frame.width, frame.height)
+
+    def proxy(self, width: int, height: int | None = None, *, fmt: str = "rgb24",
+              interpolation: str = "AREA") -> np.ndarray:
+        """Scaled, colour-converted copy in display orientation.
+
+        width, height : proxy size in pixels (height defaults to keep the display aspect).
+        fmt : "rgb24" -> uint8 [shape=(h, w, 3)]; "gray" -> uint8 [shape=(h, w)] (luma).
+        """
+        if height is None:
+            height = max(1, int(round(width * self.height / max(1, self.width))))
+        w, h = (height, width) if self.rotation % 180 else (width, height)
+        arr = self._frame.to_ndarray(width=max(1, w), height=max(1, h), format=fmt,
+                                     interpolation=interpolation)
+        if self.rotation:
+            arr = np.ascontiguousarray(np.rot90(arr, k=self.rotation // 90))
+        return arr
+
+    def full(self, *, fmt: str = "rgb24") -> np.ndarray:
+        """Full-resolution copy in display orientation (the reference preset)."""
+        return self.proxy(self.width, self.height, fmt=fmt)
+
+
+def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None) -> Iterator[Frame]:
+    """Decode the video stream frame by frame (presentation order); nothing is converted here.
+
+    Raises MediaError when there is no video stream or no frame decodes.
+    """
+    info = info or probe(path)
+    if info.video is None:
+        raise MediaError(f"{info.path}: no video stream")
+    report = AudioReport()
+    n = 0
+    with open_container(info.path) as c:
+        stream = _stream_by_index(c, info.video.index)
+        stream.thread_type = "AUTO"
+        last_t = -math.inf
+        for frame in _decode_tolerant(c, stream, report, info.path):
+            t = float(frame.time) - info.start_s if frame.time is not None else n / max(info.video.fps, 1e-9)
+            if t <= last_t:  # broken timestamps: keep frames ordered
+                t = last_t + 1.0 / max(info.video.fps, 1e-9)
+            last_t = t
+            yield Frame(frame, n, t, _norm_rotation(getattr(frame, "rotation", info.video.rotation)))
+            n += 1
+    if n == 0:
+        reason = f" ({report.first_error})" if report.first_error else ""
+        raise MediaError(f"{info.path}: the video stream holds no decodable frames{reason}")
+
+
+def decode_all(path: str | os.PathLike, *, info: MediaInfo | None = None) -> dict:
+    """Bare decode of every audio and video frame, nothing converted: the speed baseline.
+
+    Returns {"video_frames": int, "audio_samples": int}.
+    """
+    info = info or probe(path)
+    counts = {"video_frames": 0, "audio_samples": 0}
+    with open_container(info.path) as c:
+        streams = []
+        if info.video is not None:
+            vs = _stream_by_index(c, info.video.index)
+            vs.thread_type = "AUTO"
+            streams.append(vs)
+        if info.audio is not None:
+            as_ = _stream_by_index(c, info.audio.index)
+            as_.thread_type = "AUTO"
+            streams.append(as_)
+        report = AudioReport()
+        for frame in _decode_tolerant(c, streams, report, info.path):
+            if isinstance(frame, av.VideoFrame):
+                counts["video_frames"] += 1
+            else:
+                counts["audio_samples"] += frame.samples
+    return counts
+
+
+def check_truncation(info: MediaInfo, decoded_s: float, stream: str) -> None:
+    """Raise MediaError when a stream decodes to clearly less than the declared duration."""
+    declared = info.duration_s
+    missing = declared - decoded_s
+    if missing > max(TRUNCATION_TOLERANCE_S, TRUNCATION_TOLERANCE_FRAC * declared):
+        raise MediaError(
+            f"{info.path}: truncated or damaged file: the {stream} stream decodes {decoded_s:.2f} s "
+            f"of the {declared:.2f} s the container declares")
+
+
+# ------------------------------------------------------------------- private
+def _stream_by_index(c, index: int):
+    for s in c.streams:
+        if s.index == index:
+            return s
+    raise MediaError(f"stream #{index} vanished")
+
+
+def _is_real_video(s) -> bool:
+    # Cover art (attached pictures) is a video stream with one frame; it is not the film.
+    disposition = getattr(s, "disposition", None)
+    try:
+        if disposition is not None and (int(disposition) & int(av.stream.Disposition.attached_pic)):
+            return False
+    except (AttributeError, TypeError, ValueError):
+        pass
+    return s.codec_context.width > 0 and s.codec_context.height > 0
+
+
+def _video_info(s) -> VideoInfo:
+    cc = s.codec_context
+    rate = s.average_rate or s.guessed_rate or s.base_rate
+    fps = float(rate) if rate else 0.0
+    dur = float(s.duration * s.time_base) if s.duration and s.time_base else None
+    if (not fps or not math.isfinite(fps) or fps <= 0 or fps > 1000) and s.frames and dur:
+        fps = s.frames / dur
+    if not fps or not math.isfinite(fps) or fps <= 0:
+        fps = 25.0
+    return VideoInfo(index=s.index, width=cc.width, height=cc.height, fps=fps, codec=cc.name,
+                     n_frames=int(s.frames) if s.frames else None, rotation=0, duration_s=dur)
+
+
+def _first_frame_rotation(c, s) -> int:
+    """Display rotation (degrees counter-clockwise, 0/90/180/270) read from the first decoded frame."""
+    try:
+        for frame in c.decode(s):
+            return _norm_rotation(getattr(frame, "rotation", 0))
+    except av.error.FFmpegError:
+        return 0
+    return 0
+
+
+def _norm_rotation(deg) -> int:
+    try:
+        return int(round(float(deg or 0) / 90.0)) % 4 * 90
+    except (TypeError, ValueError):
+        return 0
+
+
+def _audio_info(s) -> AudioInfo:
+    cc = s.codec_context
+    dur = float(s.duration * s.time_base) if s.duration and s.time_base else None
+    layout = cc.layout
+    return AudioInfo(index=s.index, sample_rate=int(cc.sample_rate or 0), channels=int(layout.nb_channels),
+                     layout=str(layout.name), codec=cc.name, duration_s=dur)
+
+
+def _container_start(c) -> float:
+    if c.start_time is not None:
+        try:
+            return max(0.0, float(c.start_time) / av.time_base)
+        except (TypeError, OverflowError):
+            return 0.0
+    return 0.0
+
+
+def _duration_s(c, streams) -> float | None:
+    if c.duration is not None and c.duration > 0:
+        return float(c.duration) / av.time_base
+    durs = [float(s.duration * s.time_base) for s in streams if s.duration and s.time_base]
+    return max(durs) if durs else None
+
+
+def _scan_duration(c, streams, start_s: float) -> float | None:
+    """Last packet end time, read by demuxing only (no decoding)."""
+    end = None
+    try:
+        for pkt in c.demux(*streams):
+            if pkt.pts is None or pkt.time_base is None:
+                continue
+            t = float(pkt.pts * pkt.time_base) + float((pkt.duration or 0) * pkt.time_base)
+            end = t if end is None else max(end, t)
+    except av.error.FFmpegError:
+        pass
+    return None if end is None else end - start_s
+
+
+def _decode_tolerant(c, streams, report: AudioReport, path: str):
+    """Decode packets of ``streams``; a damaged packet is counted and skipped, never fatal here."""
+    try:
+        packets = c.demux(streams)
+        while True:
+            try:
+                pkt = next(packets)
+            except StopIteration:
+                break
+            except av.error.FFmpegError as exc:
+                report.decode_errors += 1
+                report.first_error = report.first_error or _ffmpeg_reason(exc)
+                break  # the demuxer cannot go on after a read error
+            try:
+                frames = pkt.decode()
+            except av.error.FFmpegError as exc:
+                report.decode_errors += 1
+                report.first_error = report.first_error or _ffmpeg_reason(exc)
+                if report.decode_errors > 1000:
+                    raise MediaError(f"{path}: undecodable stream ({report.first_error})") from None
+                continue
+            yield from frames
+    except av.error.FFmpegError as exc:
+        raise MediaError(f"{path}: cannot decode ({_ffmpeg_reason(exc)})") from None
+
+
+def _ffmpeg_reason(exc: Exception) -> str:
+    msg = getattr(exc, "strerror", None) or str(exc)
+    return str(msg).split(":")[-1].strip() or type(exc).__name__
+
+
+def _to_float(x: np.ndarray) -> np.ndarray:
+    """Decoded samples (any sample format) -> float64 in digital full scale."""
+    if x.dtype.kind == "f":
+        return x.astype(np.float64, copy=False)
+    if x.dtype == np.uint8:
+        return (x.astype(np.float64) - 128.0) / 128.0
+    info = np.iinfo(x.dtype)
+    return x.astype(np.float64) / float(-info.min)
+
+
+# FFmpeg channel names for the LFE channel.
+_LFE_NAMES = {"LFE", "LFE2", "LOW_FREQUENCY", "LOW_FREQUENCY_2"}
+
+
+def _channel_roles(layout, n: int) -> tuple[list[int], int | None]:
+    """(main channel indices, LFE index or None) for a decoded layout of ``n`` channels."""
+    names = [ch.name for ch in layout.channels][:n]
+    known = [nm for nm in names if nm and nm.upper() not in ("NONE", "NA", "UNKNOWN", "UNUSED")]
+    if len(known) == n:
+        lfe = [i for i, nm in enumerate(names) if nm.upper() in _LFE_NAMES]
+    elif n in (6, 8):
+        lfe = [3]  # FFmpeg's default 5.1 / 7.1 order: FL FR FC LFE ...
+    else:
+        lfe = []
+    lfe_idx = lfe[0] if lfe else None
+    main = [i for i in range(n) if i != lfe_idx]
+    if not main:  # a lone LFE channel is the whole signal
+        return [lfe_idx], None
+    return main, lfe_idx
+
+
+def _frames_to_array(frames) -> np.ndarray:
+    if not frames:
+        return np.zeros(0, np.float32)
+    parts = [f.to_ndarray().reshape(-1) for f in frames]
+    return np.concatenate(parts).astype(np.float32, copy=False)
