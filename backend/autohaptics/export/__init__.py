@@ -1,0 +1,110 @@
+"""Exporters: a timeline to other haptic formats (docs/EXPORT.md has the mapping and limits).
+
+``FORMATS`` maps a format name to an :class:`ExportFormat` (file suffix, media type, whether the
+output is binary, and its writer ``write(tl, stream, **options)``). :func:`export_timeline` writes
+one format to a path (atomically) or to an open stream:
+
+>>> export_timeline(tl, "csv", "movie.csv")                # doctest: +SKIP
+>>> export_timeline(tl, "ahap", open("movie.zip", "wb"))   # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import inspect
+import io
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO, Any
+
+from autohaptics.errors import ParameterError
+from autohaptics.export._common import atomic_output
+from autohaptics.export.ahap import write_ahap_zip
+from autohaptics.export.csv import write_csv, write_csv_sidecar
+from autohaptics.export.hjif import write_hjif
+from autohaptics.export.mpegv import write_sem
+from autohaptics.export.native import write_json
+from autohaptics.timeline import Timeline
+
+
+@dataclass(frozen=True)
+class ExportFormat:
+    name: str
+    suffix: str  # file name suffix, with the dot
+    media_type: str
+    binary: bool  # the writer takes a binary stream (else a text stream)
+    write: Callable[..., None]
+    description: str
+
+
+FORMATS: dict[str, ExportFormat] = {
+    f.name: f
+    for f in (
+        ExportFormat("csv", ".csv", "text/csv", False, write_csv,
+                     "one row per 100 ms tick: time_s, A1..A9, temperature_c, 153 fan cells"),
+        ExportFormat("json", ".json", "application/json", False, write_json,
+                     "the native autohaptics timeline file (lossless)"),
+        ExportFormat("ahap", ".zip", "application/zip", True, write_ahap_zip,
+                     "Apple Core Haptics: a zip of nine AHAP patterns, one per actuator"),
+        ExportFormat("hjif", ".hjif", "application/json", False, write_hjif,
+                     "MPEG-I Haptics (ISO/IEC 23090-31) interchange JSON"),
+        ExportFormat("mpegv", ".xml", "application/xml", False, write_sem,
+                     "MPEG-V (ISO/IEC 23005-3) Sensory Effect Metadata XML"),
+    )
+}
+
+
+def get_format(fmt: str) -> ExportFormat:
+    """The :class:`ExportFormat` called ``fmt``; ParameterError naming the known ones otherwise."""
+    try:
+        return FORMATS[str(fmt).lower()]
+    except KeyError:
+        raise ParameterError(
+            f"unknown export format {fmt!r}; choose one of {', '.join(FORMATS)}") from None
+
+
+def export_timeline(tl: Timeline, fmt: str, out: str | os.PathLike | IO, **options: Any) -> Path | None:
+    """Export ``tl`` in format ``fmt`` to ``out``: a path (written atomically, returned) or a stream.
+
+    A text format accepts a text stream or a binary one (written as UTF-8); ``ahap`` needs a binary
+    stream. ``options`` go to the format's writer (e.g. ``sharpness=`` for ahap, ``date=`` for
+    hjif); an option the writer does not take is a ParameterError.
+    """
+    spec = get_format(fmt)
+    _check_options(spec, options)
+    tl.validate()
+    if isinstance(out, (str, os.PathLike)):
+        path = Path(out)
+        with atomic_output(path, binary=spec.binary) as fh:
+            spec.write(tl, fh, **options)
+        return path
+    if spec.binary:
+        if isinstance(out, io.TextIOBase):
+            raise ParameterError(f"{spec.name} is a binary format ({spec.media_type}); "
+                                 "pass a binary stream or a path")
+        spec.write(tl, out, **options)
+    elif isinstance(out, io.TextIOBase):
+        spec.write(tl, out, **options)
+    else:
+        text = io.TextIOWrapper(out, encoding="utf-8", newline="")
+        try:
+            spec.write(tl, text, **options)
+            text.flush()
+        finally:
+            text.detach()
+    return None
+
+
+def _check_options(spec: ExportFormat, options: dict) -> None:
+    params = inspect.signature(spec.write).parameters
+    allowed = [p for p, v in params.items() if v.kind is inspect.Parameter.KEYWORD_ONLY]
+    unknown = sorted(set(options) - set(allowed))
+    if unknown:
+        raise ParameterError(
+            f"export format {spec.name} takes no option {', '.join(unknown)}"
+            + (f" (it takes: {', '.join(allowed)})" if allowed else " (it takes none)"))
+
+
+__all__ = ["FORMATS", "ExportFormat", "export_timeline", "get_format", "write_ahap_zip", "write_csv",
+           "write_csv_sidecar", "write_hjif", "write_json", "write_sem"]

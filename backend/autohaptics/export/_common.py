@@ -1,0 +1,115 @@
+"""Helpers shared by the exporters: value quantisation, slope breakpoints, runs, atomic output.
+
+Every exporter works on the timeline's own precision: tracks are stored with 4 decimals
+(``Timeline.write``), so values are quantised to integers of 1e-4 first. Breakpoint detection on
+those integers is exact, which is what makes the keyframe/curve exports lossless at the tick
+sample points (see docs/EXPORT.md, "Keyframes only where the slope changes").
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Iterator
+from pathlib import Path
+from typing import IO
+
+import numpy as np
+
+from autohaptics.layout import ACTUATORS, FAN_COLS, FAN_ROWS
+
+VALUE_DECIMALS = 4
+QUANTUM = 10 ** VALUE_DECIMALS  # values are integers of 1 / QUANTUM
+MS_PER_TICK = 100
+
+
+def quantise(values: np.ndarray) -> np.ndarray:
+    """Round ``values`` to 4 decimals and return them as int64 multiples of 1e-4 (same shape)."""
+    return np.rint(np.asarray(values, dtype=np.float64) * QUANTUM).astype(np.int64)
+
+
+def with_hold(q: np.ndarray) -> np.ndarray:
+    """Append a copy of the last row: the value of tick n-1 held until the end time n * tick.
+
+    q : np.ndarray [shape=(n_ticks, ...)] -> [shape=(n_ticks + 1, ...)]
+    """
+    return np.concatenate([q, q[-1:]], axis=0)
+
+
+def breakpoints(q: np.ndarray) -> np.ndarray:
+    """Indices of the samples where a piecewise-linear curve through ``q`` changes slope.
+
+    q : np.ndarray [shape=(n,)], int, samples on an evenly spaced grid.
+    Returns int64 indices, first and last always included. Linear interpolation between the
+    kept samples reproduces every sample of ``q`` exactly (integer arithmetic, no tolerance).
+    """
+    q = np.asarray(q, dtype=np.int64)
+    n = q.shape[0]
+    if n <= 2:
+        return np.arange(n, dtype=np.int64)
+    bend = q[:-2] - 2 * q[1:-1] + q[2:]
+    inner = np.flatnonzero(bend) + 1
+    return np.concatenate(([0], inner, [n - 1])).astype(np.int64)
+
+
+def runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Maximal runs of True in a 1-D boolean array as half-open ``(start, stop)`` index pairs."""
+    m = np.asarray(mask, dtype=bool)
+    if not m.any():
+        return []
+    edges = np.diff(np.concatenate(([0], m.astype(np.int8), [0])))
+    starts = np.flatnonzero(edges == 1)
+    stops = np.flatnonzero(edges == -1)
+    return [(int(a), int(b)) for a, b in zip(starts, stops)]
+
+
+def fmt_q(q: int) -> str:
+    """A quantised value as a short decimal string: 5000 -> '0.5', 0 -> '0', 12345 -> '1.2345'."""
+    q = int(q)
+    sign = "-" if q < 0 else ""
+    whole, frac = divmod(abs(q), QUANTUM)
+    if frac == 0:
+        return f"{sign}{whole}"
+    return f"{sign}{whole}.{frac:0{VALUE_DECIMALS}d}".rstrip("0")
+
+
+def fmt_ticks_s(ticks: int) -> str:
+    """A tick count as seconds with one decimal, exact: 123 -> '12.3'."""
+    whole, frac = divmod(int(ticks), 10)
+    return f"{whole}.{frac}"
+
+
+def fan_name(row: int, col: int) -> str:
+    """Column name of one fan cell, e.g. ``fan_r3_c4`` (row 0 top, column 0 left)."""
+    return f"fan_r{row}_c{col}"
+
+
+FAN_NAMES: tuple[str, ...] = tuple(fan_name(r, c) for r in range(FAN_ROWS) for c in range(FAN_COLS))
+ACTUATOR_BODY = {a.id: a.body for a in ACTUATORS}
+
+
+def timeline_title(source: dict) -> str:
+    """A short human title for file metadata: the source file name, or 'untitled timeline'."""
+    name = source.get("name") if isinstance(source, dict) else None
+    return str(name) if name else "untitled timeline"
+
+
+@contextlib.contextmanager
+def atomic_output(path: str | os.PathLike, *, binary: bool) -> Iterator[IO]:
+    """Open ``path`` for writing through a temporary ``.part`` file renamed into place on success.
+
+    A failed export never leaves a truncated file under the final name.
+    """
+    path = Path(path)
+    tmp = path.with_name(path.name + ".part")
+    try:
+        if binary:
+            fh = open(tmp, "wb")
+        else:
+            fh = open(tmp, "w", encoding="utf-8", newline="")
+        with fh:
+            yield fh
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
