@@ -1,0 +1,187 @@
+"""Quality presets and parameter overrides, with one meaning across the CLI, the API and the editor.
+
+A preset is a set of dotted overrides on :class:`autohaptics.pipeline.GenerateParams`
+(``"flow.method": "farneback"``). Every knob a preset sets stays individually overridable
+(``--set flow.method=dis`` on the CLI, ``overrides`` in the API) and the resolved values are
+recorded in the timeline's ``generator.params``.
+
+- ``reference``: the slowest, most faithful configuration: exact ISO 532-1 filter bank, every
+  decoded frame analysed at the largest sensible proxy, Farneback flow, no skipping.
+- ``balanced`` (default): proxies and the tick rate, DIS flow, skipping on.
+- ``fast``: smaller proxies, the cheapest flow and loudness settings.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import types
+import typing
+from typing import Any
+
+from autohaptics.errors import ParameterError
+
+PRESETS: dict[str, dict[str, Any]] = {
+    "reference": {
+        "audio.loudness_method": "iso",
+        "video.analysis": "every",
+        "video.proxy_width": 640,
+        "video.skip": False,
+        "saliency.proxy_width": 320,
+        "flow.method": "farneback",
+        "flow.proxy_width": 640,
+    },
+    "balanced": {},
+    "fast": {
+        "video.proxy_width": 96,
+        "saliency.proxy_width": 64,
+        "flow.proxy_width": 96,
+        "flow.dis_preset": "ultrafast",
+    },
+}
+DEFAULT_PRESET = "balanced"
+
+
+def preset_overrides(name: str) -> dict[str, Any]:
+    """The dotted overrides a preset applies (a copy)."""
+    if name not in PRESETS:
+        raise ParameterError(f"unknown preset {name!r}; choose one of {sorted(PRESETS)}")
+    return dict(PRESETS[name])
+
+
+def apply_overrides(params: Any, overrides: dict[str, Any]) -> Any:
+    """Return a copy of a (nested, frozen) params dataclass with dotted ``overrides`` applied.
+
+    Values may be strings (from the command line); they are converted to the field's type.
+    Unknown names raise ParameterError naming the key and the known fields.
+    """
+    for key, value in overrides.items():
+        params = _set_path(params, key.split("."), value, key)
+    return params
+
+
+def parse_assignments(items: list[str] | None) -> dict[str, str]:
+    """``["flow.method=dis", "video.proxy_width=128"]`` -> {"flow.method": "dis", ...}."""
+    out: dict[str, str] = {}
+    for item in items or []:
+        if "=" not in item:
+            raise ParameterError(f"expected NAME=VALUE, got {item!r}")
+        name, value = item.split("=", 1)
+        name = name.strip()
+        if not name:
+            raise ParameterError(f"expected NAME=VALUE, got {item!r}")
+        out[name] = value.strip()
+    return out
+
+
+def params_to_dict(params: Any) -> dict:
+    """A JSON-serialisable nested dict of a params dataclass."""
+    return json.loads(json.dumps(dataclasses.asdict(params), default=_default))
+
+
+def params_from_dict(cls: type, doc: dict) -> Any:
+    """Inverse of :func:`params_to_dict` for a params dataclass (unknown keys are errors)."""
+    base = cls()
+    flat: dict[str, Any] = {}
+
+    def walk(prefix: str, d: dict, obj: Any):
+        for k, v in d.items():
+            child = getattr(obj, k, None) if obj is not None else None
+            if isinstance(v, dict) and dataclasses.is_dataclass(child):
+                walk(f"{prefix}{k}.", v, child)
+            else:
+                flat[f"{prefix}{k}"] = v
+
+    walk("", doc, base)
+    return apply_overrides(base, flat)
+
+
+# ----------------------------------------------------------------------- private
+def _set_path(obj: Any, path: list[str], value: Any, key: str) -> Any:
+    if not dataclasses.is_dataclass(obj):
+        raise ParameterError(f"cannot set {key!r}: {type(obj).__name__} has no fields")
+    names = {f.name: f for f in dataclasses.fields(obj)}
+    head = path[0]
+    if head not in names:
+        raise ParameterError(f"unknown parameter {key!r}; {type(obj).__name__} has {sorted(names)}")
+    current = getattr(obj, head)
+    if len(path) > 1:
+        if isinstance(current, dict):
+            new = dict(current)
+            new[path[1]] = _convert(value, type(current.get(path[1], 0.0)) if path[1] in current else float, key)
+            return dataclasses.replace(obj, **{head: new})
+        return dataclasses.replace(obj, **{head: _set_path(current, path[1:], value, key)})
+    hints = typing.get_type_hints(type(obj))
+    converted = _convert_hint(value, hints.get(head, type(current)), current, key)
+    try:
+        return dataclasses.replace(obj, **{head: converted})
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"invalid value for {key!r}: {exc}") from None
+
+
+def _convert_hint(value: Any, hint: Any, current: Any, key: str) -> Any:
+    origin = typing.get_origin(hint)
+    args = typing.get_args(hint)
+    if origin in (typing.Union, types.UnionType):
+        if isinstance(value, str) and value.lower() in ("none", "null", "") and type(None) in args:
+            return None
+        if value is None and type(None) in args:
+            return None
+        last: Exception | None = None
+        for a in args:
+            if a is type(None):
+                continue
+            try:
+                return _convert_hint(value, a, current, key)
+            except ParameterError as exc:
+                last = exc
+        raise last or ParameterError(f"invalid value for {key!r}: {value!r}")
+    if hint is typing.Any:
+        return value
+    if origin in (tuple, list):
+        if isinstance(value, str):
+            value = [v for v in value.replace("x", ",").split(",") if v.strip()]
+        inner = args[0] if args else float
+        return (tuple if origin is tuple else list)(_convert(v, inner, key) for v in value)
+    if origin is dict or hint is dict:
+        if isinstance(value, str):
+            try:
+                value = json.loads(value)
+            except json.JSONDecodeError:
+                raise ParameterError(f"{key!r} expects a JSON object, got {value!r}") from None
+        if not isinstance(value, dict):
+            raise ParameterError(f"{key!r} expects an object, got {value!r}")
+        return dict(value)
+    if isinstance(hint, type):
+        return _convert(value, hint, key)
+    return value
+
+
+def _convert(value: Any, typ: type, key: str) -> Any:
+    if typ is bool:
+        if isinstance(value, bool):
+            return value
+        s = str(value).strip().lower()
+        if s in ("1", "true", "yes", "on"):
+            return True
+        if s in ("0", "false", "no", "off"):
+            return False
+        raise ParameterError(f"{key!r} expects true/false, got {value!r}")
+    if typ in (int, float):
+        try:
+            v = typ(value) if not (typ is int and isinstance(value, str) and "." in value) else int(float(value))
+        except (TypeError, ValueError):
+            raise ParameterError(f"{key!r} expects a number, got {value!r}") from None
+        if isinstance(v, float) and not math.isfinite(v):
+            raise ParameterError(f"{key!r} must be finite, got {value!r}")
+        return v
+    if typ is str:
+        return str(value)
+    return value
+
+
+def _default(obj: Any) -> Any:
+    if isinstance(obj, (set, frozenset, tuple)):
+        return list(obj)
+    return str(obj)
