@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from autohaptics.errors import ParameterError
-from autohaptics.export._common import atomic_output
+from autohaptics.export._common import atomic_output, ensure_valid
 from autohaptics.export.ahap import write_ahap_zip
 from autohaptics.export.csv import write_csv, write_csv_sidecar
 from autohaptics.export.hjif import write_hjif
@@ -73,7 +73,7 @@ def export_timeline(tl: Timeline, fmt: str, out: str | os.PathLike | IO, **optio
     """
     spec = get_format(fmt)
     _check_options(spec, options)
-    tl.validate()
+    tl = ensure_valid(tl)
     if isinstance(out, (str, os.PathLike)):
         path = Path(out)
         with atomic_output(path, binary=spec.binary) as fh:

@@ -26,6 +26,7 @@ import numpy as np
 
 from autohaptics.export._common import (
     breakpoints,
+    ensure_valid,
     fmt_q,
     fmt_ticks_s,
     quantise,
@@ -52,7 +53,7 @@ def write_ahap_zip(tl: Timeline, fh: IO[bytes], *, sharpness: float = DEFAULT_SH
     fh : binary stream (seekable or not). ``sharpness`` : HapticSharpness of every event, 0..1.
     ``created`` : the Metadata "Created" date (default: today, ISO 8601).
     """
-    tl.validate()
+    tl = ensure_valid(tl)
     sharpness = float(sharpness)
     if not 0.0 <= sharpness <= 1.0:
         raise ParameterError(f"AHAP sharpness must lie in [0, 1], got {sharpness!r}")

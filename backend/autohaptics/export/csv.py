@@ -14,7 +14,7 @@ from typing import IO
 
 import numpy as np
 
-from autohaptics.export._common import FAN_NAMES, VALUE_DECIMALS
+from autohaptics.export._common import FAN_NAMES, VALUE_DECIMALS, ensure_valid
 from autohaptics.layout import ACTUATOR_IDS, FAN_COLS, FAN_ROWS
 from autohaptics.timeline import Timeline
 
@@ -32,7 +32,7 @@ def write_csv(tl: Timeline, fh: IO[str]) -> None:
     Memory beyond the timeline itself is one block of formatted rows, so a 2-hour timeline
     (72,000 ticks x 164 columns) streams without building the whole text.
     """
-    tl.validate()
+    tl = ensure_valid(tl)
     n = tl.n_ticks
     row_fmt = ",".join([f"%.{VALUE_DECIMALS}f"] * len(CSV_COLUMNS)) + "\n"
     fh.write(",".join(CSV_COLUMNS) + "\n")
@@ -67,7 +67,7 @@ def sidecar_dict(tl: Timeline) -> dict:
 
 def write_csv_sidecar(tl: Timeline, fh: IO[str]) -> None:
     """Write the sidecar JSON (see :func:`sidecar_dict`) to the text stream ``fh``."""
-    tl.validate()
+    tl = ensure_valid(tl)
     json.dump(sidecar_dict(tl), fh, indent=1, default=_json_default)
     fh.write("\n")
 

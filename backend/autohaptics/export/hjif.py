@@ -31,6 +31,7 @@ from autohaptics.export._common import (
     MS_PER_TICK,
     QUANTUM,
     breakpoints,
+    ensure_valid,
     fmt_q,
     quantise,
     runs,
@@ -69,7 +70,7 @@ def write_hjif(tl: Timeline, fh: IO[str], *, date: str | None = None) -> None:
 
     ``date`` : the ``date`` field (default: today, ISO 8601).
     """
-    tl.validate()
+    tl = ensure_valid(tl)
     n = tl.n_ticks
     title = timeline_title(tl.source)
     head = {
@@ -85,12 +86,11 @@ def write_hjif(tl: Timeline, fh: IO[str], *, date: str | None = None) -> None:
     fh.write("{" + ", ".join(f"{json.dumps(k)}: {json.dumps(v)}" for k, v in head.items()))
     fh.write(',\n"perceptions": [\n')
 
-    qv = with_hold(quantise(tl.vibration))  # (n + 1, 9)
     _perception_open(fh, 0, "Vibrotactile",
                      "Chair vibration motors A1..A9; amplitude = motor intensity 0..1")
     for i, act in enumerate(ACTUATORS):
-        _channel(fh, i, f"{act.id}: {act.body}", ACTUATOR_MASK[act.id], _onoff_effects(qv[:, i]),
-                 first=i == 0)
+        qh = with_hold(quantise(tl.vibration[:, i]))  # (n + 1,)
+        _channel(fh, i, f"{act.id}: {act.body}", ACTUATOR_MASK[act.id], _onoff_effects(qh), first=i == 0)
     fh.write("\n]},\n")
 
     lo, hi = tl.temp_range
@@ -102,14 +102,14 @@ def write_hjif(tl: Timeline, fh: IO[str], *, date: str | None = None) -> None:
              _temperature_effects(qt, lo, hi), first=True)
     fh.write("\n]},\n")
 
-    qf = with_hold(quantise(tl.fans.reshape(n, FAN_ROWS * FAN_COLS)))  # (n + 1, 153)
     _perception_open(fh, 2, "Wind",
                      f"Fan grid {FAN_ROWS} rows x {FAN_COLS} columns facing the viewer; channel id = "
                      f"row * {FAN_COLS} + column (row 0 top, column 0 left); amplitude = fan level 0..1")
     for r in range(FAN_ROWS):
         for c in range(FAN_COLS):
             cid = r * FAN_COLS + c
-            _channel(fh, cid, f"fan r{r} c{c}", WIND_MASK, _onoff_effects(qf[:, cid]), first=cid == 0)
+            qh = with_hold(quantise(tl.fans[:, r, c]))  # (n + 1,), one channel at a time
+            _channel(fh, cid, f"fan r{r} c{c}", WIND_MASK, _onoff_effects(qh), first=cid == 0)
     fh.write("\n]}\n],\n")
     fh.write('"syncs": []\n}\n')
 

@@ -24,8 +24,8 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 
-from autohaptics.export._common import MS_PER_TICK, QUANTUM, quantise, timeline_title
-from autohaptics.layout import ACTUATOR_IDS, FAN_COLS, FAN_ROWS
+from autohaptics.export._common import MS_PER_TICK, QUANTUM, ensure_valid, quantise, timeline_title
+from autohaptics.layout import ACTUATOR_IDS, FAN_COLS, FAN_ROWS, N_ACTUATORS
 from autohaptics.timeline import Timeline
 
 SEDL_NS = "urn:mpeg:mpeg-v:2010:01-SEDL-NS"
@@ -47,7 +47,8 @@ ACTUATOR_LOCATION = {
 }
 _X = ("left", "centerleft", "center", "centerright", "right")
 _Y = ("top", "middle", "bottom")
-_FLUSH_LINES = 4096
+_BLOCK_TICKS = 2048
+_FLUSH_LINES = 8192
 
 
 def fan_location(row: int, col: int) -> str:
@@ -59,16 +60,10 @@ def fan_location(row: int, col: int) -> str:
 
 def write_sem(tl: Timeline, fh: IO[str]) -> None:
     """Write ``tl`` as an MPEG-V SEM document to the text stream ``fh`` (effects only on changes)."""
-    tl.validate()
+    tl = ensure_valid(tl)
     n = tl.n_ticks
     lo, hi = tl.temp_range
-    # Channel order within a tick: temperature, A1..A9, fans row-major.
-    q = np.concatenate([
-        quantise(tl.temperature_c)[:, None],
-        quantise(tl.vibration),
-        quantise(tl.fans.reshape(n, FAN_ROWS * FAN_COLS)),
-    ], axis=1)
-    n_ch = q.shape[1]
+    n_ch = 1 + N_ACTUATORS + FAN_ROWS * FAN_COLS  # order within a tick: temperature, A1..A9, fans
     on_tpl, off_tpl = _templates(lo, hi)
 
     title = escape(timeline_title(tl.source)).replace("--", "- -")
@@ -77,28 +72,36 @@ def write_sem(tl: Timeline, fh: IO[str]) -> None:
     fh.write(f'<SEM xmlns="{SEDL_NS}" xmlns:sev="{SEV_NS}" xmlns:si="{SI_NS}" xmlns:xsi="{XSI_NS}" '
              f'xmlns:ah="{AH_NS}" si:timeScale="{TIME_SCALE}">\n')
 
-    changed = np.empty_like(q, dtype=bool)
-    changed[0] = q[0] != 0
-    changed[0, 0] = True  # the temperature is always announced at the start
-    changed[1:] = q[1:] != q[:-1]
-    ticks, chans = np.nonzero(changed)
-    lines: list[str] = []
-    for k, ch, v in zip(ticks.tolist(), chans.tolist(), q[ticks, chans].tolist()):
-        pts = k * MS_PER_TICK
-        if ch == 0:
-            lines.append(on_tpl[0] % (_fmt_celsius(v), pts))
-        elif v:
-            lines.append(on_tpl[ch] % (_fmt_percent(v), pts))
-        else:
-            lines.append(off_tpl[ch] % pts)
-        if len(lines) >= _FLUSH_LINES:
-            fh.write("".join(lines))
-            lines = []
+    prev = np.zeros(n_ch, dtype=np.int64)  # everything off before the start
+    for a in range(0, n, _BLOCK_TICKS):
+        b = min(n, a + _BLOCK_TICKS)
+        q = np.concatenate([
+            quantise(tl.temperature_c[a:b])[:, None],
+            quantise(tl.vibration[a:b]),
+            quantise(tl.fans[a:b].reshape(b - a, n_ch - 1 - N_ACTUATORS)),
+        ], axis=1)
+        changed = np.empty(q.shape, dtype=bool)
+        changed[0] = q[0] != prev
+        changed[1:] = q[1:] != q[:-1]
+        if a == 0:
+            changed[0, 0] = True  # the temperature is always announced at the start
+        prev = q[-1].copy()
+        ticks, chans = np.nonzero(changed)
+        lines: list[str] = []
+        for k, ch, v in zip((ticks + a).tolist(), chans.tolist(), q[ticks, chans].tolist()):
+            pts = k * MS_PER_TICK
+            if ch == 0:
+                lines.append(on_tpl[0] % (_fmt_celsius(v), pts))
+            elif v:
+                lines.append(on_tpl[ch] % (_fmt_percent(v), pts))
+            else:
+                lines.append(off_tpl[ch] % pts)
+            if len(lines) >= _FLUSH_LINES:
+                fh.write("".join(lines))
+                lines = []
+        fh.write("".join(lines))
     end = n * MS_PER_TICK
-    for ch in range(n_ch):
-        if ch == 0 or q[-1, ch] != 0:
-            lines.append(off_tpl[ch] % end)
-    fh.write("".join(lines))
+    fh.write("".join(off_tpl[ch] % end for ch in range(n_ch) if ch == 0 or prev[ch] != 0))
     fh.write("</SEM>\n")
 
 
