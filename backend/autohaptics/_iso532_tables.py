@@ -156,7 +156,7 @@ TW_WEIGHT_LONG = 0.53
 TW_ITERATIONS = 24  # linear interpolation steps per 2 kHz sample
 
 # ---------------------------------------------------------------- DIN 45692 sharpness
-DIN_SHARPNESS_K = 0.11  # acum per (sone Bark / sone Bark)... k of S = k int N' g z dz / N
+DIN_SHARPNESS_K = 0.11  # acum per Bark: the k of S = k * int N'(z) g(z) z dz / N
 DIN_G_KNEE_BARK = 15.8  # g(z) = 1 below, 0.15 exp(0.42 (z - 15.8)) + 0.85 above
 DIN_G_A = 0.15
 DIN_G_B = 0.42

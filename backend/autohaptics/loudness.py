@@ -149,7 +149,7 @@ def loudness_update(p: np.ndarray, state: LoudnessState, *,
     Returns (result, new_state); ``result`` holds the 2 ms samples k with 96 k inside the
     input seen so far that were not returned before (their ``t_s`` continues the time axis).
     """
-    p = _check_pressure(p)
+    p = check_pressure(p)
     if state.method != params.method or state.field != params.field:
         raise ParameterError(f"loudness state was made for method={state.method!r}, field={state.field!r}; "
                              f"got params method={params.method!r}, field={params.field!r}")
@@ -188,7 +188,7 @@ def loudness_stationary(p: np.ndarray, *, field: str = "free", skip_s: float = 0
     onset); then core loudness and slopes as in the time-varying method (no decay, no weighting).
     Returns (N in sone, N'(z) [shape=(240,)] in sone/Bark).
     """
-    p = _check_pressure(p)
+    p = check_pressure(p)
     skip = int(round(max(0.0, float(skip_s)) * SAMPLE_RATE_HZ))
     if p.shape[0] - skip < 1:
         raise ParameterError(f"stationary loudness needs samples after skip_s={skip_s} s; got {p.shape[0]} samples")
@@ -230,8 +230,10 @@ def n_steps(n_samples: int) -> int:
     return _ceil_div(int(n_samples), SAMPLES_PER_STEP)
 
 
-# ------------------------------------------------------------------ step 0: input check
-def _check_pressure(p) -> np.ndarray:
+# ------------------------------------------------------------------ input check
+def check_pressure(p) -> np.ndarray:
+    """``p`` as float64 [shape=(n,)] Pa, or ParameterError naming the shape, dtype or the count of
+    non-finite samples; |p| above MAX_PRESSURE_PA (1e9 Pa) is an error (a calibration mistake)."""
     p = np.asarray(p)
     if p.ndim != 1:
         raise ParameterError(f"sound pressure must be a 1-D array [shape=(n,)], got shape {p.shape}")
