@@ -319,3 +319,30 @@ def slopes(core, zup, rns, usl, spec_row, total, spec):
             while iz < n_z:
                 spec[row, iz] = 0.0
                 iz += 1
+
+
+@numba.njit(**_JIT)
+def bank_mean_square(x, sos, gain, skip, out):
+    """Mean square of each band filter's output over samples skip .. n-1 (stationary levels).
+
+    x : float64 [shape=(n,)], Pa; sos [shape=(n_bands, n_sections, 6)]; gain [shape=(n_bands,)];
+    out : float64 [shape=(n_bands,)], Pa^2. Filters start from rest.
+    """
+    n = x.shape[0]
+    n_bands = sos.shape[0]
+    n_sec = sos.shape[1]
+    zi = np.zeros((n_sec, 2))
+    for b in range(n_bands):
+        zi[:, :] = 0.0
+        acc = 0.0
+        for i in range(n):
+            v = x[i]
+            for s in range(n_sec):
+                w = sos[b, s, 0] * v + zi[s, 0]
+                zi[s, 0] = sos[b, s, 1] * v - sos[b, s, 4] * w + zi[s, 1]
+                zi[s, 1] = sos[b, s, 2] * v - sos[b, s, 5] * w
+                v = w
+            if i >= skip:
+                v = gain[b] * v
+                acc += v * v
+        out[b] = acc / max(1, n - skip)

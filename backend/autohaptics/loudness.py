@@ -194,9 +194,7 @@ def loudness_stationary(p: np.ndarray, *, field: str = "free", skip_s: float = 0
         raise ParameterError(f"stationary loudness needs samples after skip_s={skip_s} s; got {p.shape[0]} samples")
     sos, gain = _iso_sos()
     ms = np.empty(T.N_THIRD_OCTAVE_BANDS)
-    for b in range(T.N_THIRD_OCTAVE_BANDS):
-        y = ss.sosfilt(sos[b], p)[skip:] * gain[b]
-        ms[b] = float(np.mean(y * y))
+    K.bank_mean_square(p, sos, gain, skip, ms)
     core = _core_loudness(ms[:, None], diffuse=field == "diffuse")
     total, specific = _slopes(core, np.zeros(1, dtype=np.int64))
     return float(total[0]), specific[0]
