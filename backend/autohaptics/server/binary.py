@@ -1,0 +1,129 @@
+"""The compact binary timeline the editor loads (docs/API.md, "Binary timeline").
+
+Layout::
+
+    offset 0   4 bytes  magic "AHTL"
+           4   u32 LE   format version (1)
+           8   u32 LE   header length H (bytes)
+          12   H bytes  UTF-8 JSON header {n_ticks, tick_s, revision, blocks: [{name, dtype, shape, offset, scale}]}
+      12 + H   blocks, each starting at a multiple of 4 bytes, little-endian, at the header's offsets
+
+A ``u8`` block stores ``round(value / scale)`` with ``scale = 1/255`` (value = byte * scale); an
+``f32`` block stores the value itself (scale 1). Blocks: ``vibration`` u8 (n, 9),
+``temperature_c`` f32 (n,), ``fans`` u8 (n, 9, 17), ``fan_activity`` u8 (n,) = fraction of the
+153 fans that are on, one block per feature: ``features.NAME`` u8 for the normalised features
+(0..1), f32 for any other curve.
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+from dataclasses import dataclass
+
+import numpy as np
+
+from autohaptics.errors import ParameterError
+from autohaptics.timeline import NORMALISED_FEATURES, Timeline
+
+MAGIC = b"AHTL"
+VERSION = 1
+U8_SCALE = 1.0 / 255.0
+_PREFIX = struct.Struct("<4sII")
+_DTYPES = {"u8": np.dtype("<u1"), "f32": np.dtype("<f4")}
+
+
+@dataclass(frozen=True)
+class Block:
+    name: str
+    dtype: str  # "u8" | "f32"
+    data: np.ndarray  # already quantised to the block's dtype
+
+
+def _u8(values: np.ndarray) -> np.ndarray:
+    return np.rint(np.clip(np.asarray(values, dtype=np.float64), 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
+def timeline_blocks(tl: Timeline) -> list[Block]:
+    """The blocks of ``tl`` in file order, quantised."""
+    fans = np.asarray(tl.fans)
+    blocks = [
+        Block("vibration", "u8", _u8(tl.vibration)),
+        Block("temperature_c", "f32", np.asarray(tl.temperature_c, dtype="<f4")),
+        Block("fans", "u8", _u8(fans)),
+        Block("fan_activity", "u8", _u8((fans > 0).reshape(tl.n_ticks, -1).mean(axis=1))),
+    ]
+    for name, values in tl.features.items():
+        if name in NORMALISED_FEATURES:
+            blocks.append(Block(f"features.{name}", "u8", _u8(values)))
+        else:
+            blocks.append(Block(f"features.{name}", "f32", np.asarray(values, dtype="<f4")))
+    return blocks
+
+
+def encode(tl: Timeline, *, revision: int) -> bytes:
+    """The binary form of ``tl`` (see the module docstring)."""
+    blocks = timeline_blocks(tl)
+    entries: list[dict] = []
+    # The header length changes the offsets and the offsets change the header: iterate until stable.
+    header_len = 0
+    for _ in range(8):
+        offset = _align(_PREFIX.size + header_len)
+        entries = []
+        for b in blocks:
+            entries.append({"name": b.name, "dtype": b.dtype, "shape": list(b.data.shape), "offset": offset,
+                            "scale": U8_SCALE if b.dtype == "u8" else 1.0})
+            offset = _align(offset + b.data.nbytes)
+        header = json.dumps({"n_ticks": int(tl.n_ticks), "tick_s": tl.tick_s, "revision": int(revision),
+                             "blocks": entries}, separators=(",", ":")).encode("utf-8")
+        if len(header) == header_len:
+            break
+        header_len = len(header)
+    total = _align(entries[-1]["offset"] + blocks[-1].data.nbytes) if entries else _align(_PREFIX.size + header_len)
+    out = bytearray(total)
+    _PREFIX.pack_into(out, 0, MAGIC, VERSION, header_len)
+    out[_PREFIX.size:_PREFIX.size + header_len] = header
+    for b, e in zip(blocks, entries):
+        raw = np.ascontiguousarray(b.data, dtype=_DTYPES[b.dtype]).tobytes()
+        out[e["offset"]:e["offset"] + len(raw)] = raw
+    return bytes(out)
+
+
+def decode(data: bytes) -> tuple[dict, dict[str, np.ndarray]]:
+    """Read a binary timeline: (header, {block name: float64 values, de-quantised}).
+
+    Raises ParameterError for a wrong magic, version, header or a block outside the data.
+    """
+    if len(data) < _PREFIX.size:
+        raise ParameterError(f"binary timeline is {len(data)} bytes, shorter than its {_PREFIX.size}-byte prefix")
+    magic, version, header_len = _PREFIX.unpack_from(data, 0)
+    if magic != MAGIC:
+        raise ParameterError(f"not a binary timeline: magic {magic!r}, expected {MAGIC!r}")
+    if version != VERSION:
+        raise ParameterError(f"binary timeline version {version}; this build reads version {VERSION}")
+    end = _PREFIX.size + header_len
+    if end > len(data):
+        raise ParameterError(f"binary timeline header ({header_len} bytes) runs past the data ({len(data)} bytes)")
+    try:
+        header = json.loads(bytes(data[_PREFIX.size:end]).decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ParameterError(f"binary timeline header is not UTF-8 JSON ({exc})") from None
+    arrays: dict[str, np.ndarray] = {}
+    for e in header.get("blocks", []):
+        dtype = _DTYPES.get(e.get("dtype"))
+        if dtype is None:
+            raise ParameterError(f"block {e.get('name')!r} has unknown dtype {e.get('dtype')!r}")
+        shape = tuple(int(s) for s in e["shape"])
+        count = int(np.prod(shape)) if shape else 1
+        start = int(e["offset"])
+        stop = start + count * dtype.itemsize
+        if start % 4 or stop > len(data):
+            raise ParameterError(f"block {e['name']!r} at offset {start} ({stop - start} bytes) is misaligned "
+                                 f"or runs past the data ({len(data)} bytes)")
+        raw = np.frombuffer(data, dtype=dtype, count=count, offset=start).reshape(shape)
+        arrays[e["name"]] = raw.astype(np.float64) * float(e["scale"])
+    return header, arrays
+
+
+def _align(n: int) -> int:
+    return (n + 3) & ~3
