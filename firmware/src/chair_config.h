@@ -67,7 +67,7 @@
 #error "AH_TEMP_RATE_CC_PER_S must lie in 1..10000"
 #endif
 
-/* ---- board: Teensy 3.2 layer (teensy/*.cpp); unused by the portable core ------------------ */
+/* ---- board: the Teensy 3.2 layer in teensy/ (unused by the portable core) ----------------- */
 /* ERM motors A1..A9 through logic-level MOSFETs (or a ULN2803-style driver), PWM at 20 kHz. */
 #define BOARD_MOTOR_PINS {3, 4, 5, 6, 9, 10, 20, 21, 22}
 #define BOARD_MOTOR_PWM_HZ 20000
