@@ -1,0 +1,349 @@
+/**
+ * The HTTP client for docs/API.md. Every method maps to one route; errors become ApiError with the
+ * server's one-sentence `detail`. Uploads use XMLHttpRequest (fetch has no upload progress), job
+ * progress uses Server-Sent Events.
+ */
+
+/**
+ * @typedef {{id: string, project_id: string, status: "queued"|"running"|"done"|"failed"|"cancelled",
+ *   progress: number, stage?: string|null, error?: string|null}} Job
+ * @typedef {{preset?: string, mode?: string, thresholds?: Record<string, number>,
+ *   overrides?: Record<string, any>}} Params
+ * @typedef {{id: string, name: string, created_at?: string, updated_at?: string,
+ *   status: "new"|"running"|"ready"|"failed"|"cancelled", duration_s?: number|null, n_ticks?: number|null,
+ *   source?: any, job?: Job|null, params?: Params, revision?: number, view?: Record<string, any>|null}} Project
+ * @typedef {{revision: number, cursor: number, ops: Array<Record<string, any>>}} EditList
+ * @typedef {{points: number, duration_s: number, min: number[], max: number[]}} Waveform
+ */
+
+export class ApiError extends Error {
+  /**
+   * @param {number} status HTTP status (0 when the request never reached the server)
+   * @param {string} detail
+   */
+  constructor(status, detail) {
+    super(detail);
+    this.name = "ApiError";
+    this.status = status;
+    this.detail = detail;
+  }
+}
+
+const TERMINAL = new Set(["done", "failed", "cancelled"]);
+
+/** @param {string} status */
+export function isTerminal(status) {
+  return TERMINAL.has(status);
+}
+
+export class Api {
+  /** @param {string} [base] origin prefix, "" for the page's own origin */
+  constructor(base = "") {
+    this.base = base;
+  }
+
+  /**
+   * @param {string} method
+   * @param {string} path
+   * @param {any} [body] JSON body
+   * @returns {Promise<any>}
+   */
+  async request(method, path, body) {
+    /** @type {RequestInit} */
+    const init = { method, headers: { Accept: "application/json" } };
+    if (body !== undefined) {
+      init.body = JSON.stringify(body);
+      init.headers = { ...init.headers, "Content-Type": "application/json" };
+    }
+    let res;
+    try {
+      res = await fetch(this.base + path, init);
+    } catch (err) {
+      throw new ApiError(0, `The server could not be reached (${method} ${path}).`);
+    }
+    if (!res.ok) throw await errorFrom(res, method, path);
+    if (res.status === 204) return null;
+    const type = res.headers.get("Content-Type") || "";
+    return type.includes("json") ? res.json() : res.text();
+  }
+
+  /** @returns {Promise<Record<string, any>>} */
+  config() {
+    return this.request("GET", "/api/config");
+  }
+
+  /** @returns {Promise<Project[]>} */
+  listProjects() {
+    return this.request("GET", "/api/projects");
+  }
+
+  /** @param {string} id @returns {Promise<Project>} */
+  project(id) {
+    return this.request("GET", `/api/projects/${enc(id)}`);
+  }
+
+  /** @param {string} id @param {{name?: string, view?: Record<string, any>}} patch @returns {Promise<Project>} */
+  patchProject(id, patch) {
+    return this.request("PATCH", `/api/projects/${enc(id)}`, patch);
+  }
+
+  /** @param {string} id */
+  deleteProject(id) {
+    return this.request("DELETE", `/api/projects/${enc(id)}`);
+  }
+
+  /** @param {string} id @returns {Promise<Project>} */
+  duplicateProject(id) {
+    return this.request("POST", `/api/projects/${enc(id)}/duplicate`);
+  }
+
+  /** @param {string} id */
+  mediaUrl(id) {
+    return `${this.base}/api/projects/${enc(id)}/media`;
+  }
+
+  /** @param {string} id @param {number} points @returns {Promise<Waveform>} */
+  waveform(id, points) {
+    return this.request("GET", `/api/projects/${enc(id)}/waveform?points=${Math.round(points)}`);
+  }
+
+  /** @param {string} id @param {Params} params @returns {Promise<{job: Job}>} */
+  generate(id, params) {
+    return this.request("POST", `/api/projects/${enc(id)}/generate`, params);
+  }
+
+  /** @param {string} jobId @returns {Promise<Job>} */
+  job(jobId) {
+    return this.request("GET", `/api/jobs/${enc(jobId)}`);
+  }
+
+  /** @param {string} jobId */
+  cancelJob(jobId) {
+    return this.request("POST", `/api/jobs/${enc(jobId)}/cancel`);
+  }
+
+  /**
+   * @param {string} id
+   * @param {Params} params
+   * @returns {Promise<{revision?: number, derived?: boolean, seconds?: number, job?: Job}>}
+   */
+  putParams(id, params) {
+    return this.request("PUT", `/api/projects/${enc(id)}/params`, params);
+  }
+
+  /** The composed timeline as native JSON (heavy for long films; used for markers and checks). */
+  timeline(/** @type {string} */ id) {
+    return this.request("GET", `/api/projects/${enc(id)}/timeline`);
+  }
+
+  /**
+   * The binary timeline (docs/API.md "Binary timeline").
+   * @param {string} id
+   * @param {"composed"|"generated"} [layer]
+   * @returns {Promise<ArrayBuffer>}
+   */
+  async timelineBin(id, layer = "composed") {
+    const path = `/api/projects/${enc(id)}/timeline.bin?layer=${layer}`;
+    let res;
+    try {
+      res = await fetch(this.base + path);
+    } catch (err) {
+      throw new ApiError(0, `The server could not be reached (GET ${path}).`);
+    }
+    if (!res.ok) throw await errorFrom(res, "GET", path);
+    return res.arrayBuffer();
+  }
+
+  /** @param {string} id @returns {Promise<EditList>} */
+  edits(id) {
+    return this.request("GET", `/api/projects/${enc(id)}/edits`);
+  }
+
+  /**
+   * @param {string} id
+   * @param {number} baseRevision
+   * @param {Record<string, any>} op
+   * @returns {Promise<{revision: number, cursor: number, op: Record<string, any>}>}
+   */
+  postEdit(id, baseRevision, op) {
+    return this.request("POST", `/api/projects/${enc(id)}/edits`, { base_revision: baseRevision, op });
+  }
+
+  /** @param {string} id @param {number} baseRevision @returns {Promise<{revision: number, cursor: number}>} */
+  undo(id, baseRevision) {
+    return this.request("POST", `/api/projects/${enc(id)}/undo`, { base_revision: baseRevision });
+  }
+
+  /** @param {string} id @param {number} baseRevision @returns {Promise<{revision: number, cursor: number}>} */
+  redo(id, baseRevision) {
+    return this.request("POST", `/api/projects/${enc(id)}/redo`, { base_revision: baseRevision });
+  }
+
+  /** @param {string} id @param {string} format */
+  exportUrl(id, format) {
+    return `${this.base}/api/projects/${enc(id)}/export?format=${encodeURIComponent(format)}`;
+  }
+
+  /**
+   * Upload a media file (multipart field `file`) with upload progress.
+   * @param {File} file
+   * @param {Record<string, string>} fields extra form fields (name, preset, mode, generate)
+   * @param {(fraction: number, loaded: number, total: number) => void} onProgress
+   * @returns {{promise: Promise<Project>, abort: () => void}}
+   */
+  upload(file, fields, onProgress) {
+    return this._multipart("/api/projects", file, fields, onProgress);
+  }
+
+  /**
+   * Import our JSON or CSV as an undoable `import` op.
+   * @param {string} id
+   * @param {File} file
+   * @returns {{promise: Promise<any>, abort: () => void}}
+   */
+  importFile(id, file) {
+    return this._multipart(`/api/projects/${enc(id)}/import`, file, {}, () => {});
+  }
+
+  /**
+   * @param {string} path
+   * @param {File} file
+   * @param {Record<string, string>} fields
+   * @param {(fraction: number, loaded: number, total: number) => void} onProgress
+   */
+  _multipart(path, file, fields, onProgress) {
+    const xhr = new XMLHttpRequest();
+    const form = new FormData();
+    for (const [k, v] of Object.entries(fields)) form.append(k, v);
+    form.append("file", file, file.name);
+    const promise = new Promise((resolve, reject) => {
+      xhr.open("POST", this.base + path);
+      xhr.responseType = "text";
+      xhr.setRequestHeader("Accept", "application/json");
+      xhr.upload.onprogress = (e) => {
+        if (e.lengthComputable && e.total > 0) onProgress(e.loaded / e.total, e.loaded, e.total);
+      };
+      xhr.upload.onload = () => onProgress(1, file.size, file.size);
+      xhr.onload = () => {
+        let body = null;
+        try {
+          body = xhr.responseText ? JSON.parse(xhr.responseText) : null;
+        } catch (err) {
+          body = null;
+        }
+        if (xhr.status >= 200 && xhr.status < 300) resolve(body);
+        else reject(new ApiError(xhr.status, detailOf(body, xhr.status, `POST ${path}`)));
+      };
+      xhr.onerror = () => reject(new ApiError(0, `The upload to ${path} failed: the server could not be reached.`));
+      xhr.onabort = () => reject(new ApiError(0, "The upload was cancelled."));
+      xhr.send(form);
+    });
+    return { promise, abort: () => xhr.abort() };
+  }
+
+  /**
+   * Follow a job's Server-Sent Events until it ends.
+   * @param {string} jobId
+   * @param {(progress: number, stage: string) => void} onProgress
+   * @returns {{promise: Promise<Job>, close: () => void}} resolves with the final job (done, failed or cancelled)
+   */
+  watchJob(jobId, onProgress) {
+    const url = `${this.base}/api/jobs/${enc(jobId)}/events`;
+    const source = new EventSource(url);
+    let settled = false;
+    /** @type {(job: Job) => void} */
+    let resolveFn = () => {};
+    /** @type {(err: Error) => void} */
+    let rejectFn = () => {};
+    const promise = new Promise((resolve, reject) => {
+      resolveFn = resolve;
+      rejectFn = reject;
+    });
+    /** @param {Job} job */
+    const finish = (job) => {
+      if (settled) return;
+      settled = true;
+      source.close();
+      resolveFn(job);
+    };
+    source.addEventListener("progress", (e) => {
+      const data = parse(/** @type {MessageEvent} */ (e).data);
+      if (data && typeof data.progress === "number") onProgress(data.progress, String(data.stage || ""));
+    });
+    for (const name of TERMINAL) {
+      source.addEventListener(name, (e) => {
+        const data = parse(/** @type {MessageEvent} */ (e).data) || {};
+        finish({ id: jobId, project_id: data.project_id || "", progress: data.progress ?? 1, ...data, status: name });
+      });
+    }
+    // The stream closes after the final event; a drop before it is retried by EventSource. Ask the
+    // job itself so a job that ended while we were disconnected is not waited on forever.
+    source.onerror = () => {
+      if (settled) return;
+      this.job(jobId).then(
+        (job) => {
+          if (isTerminal(job.status)) finish(job);
+        },
+        (err) => {
+          if (settled) return;
+          if (err instanceof ApiError && err.status === 404) {
+            settled = true;
+            source.close();
+            rejectFn(err);
+          }
+        },
+      );
+    };
+    return {
+      promise,
+      close: () => {
+        settled = true;
+        source.close();
+      },
+    };
+  }
+}
+
+/** @param {string} s */
+function enc(s) {
+  return encodeURIComponent(s);
+}
+
+/** @param {string} text */
+function parse(text) {
+  try {
+    return JSON.parse(text);
+  } catch (err) {
+    return null;
+  }
+}
+
+/**
+ * @param {Response} res
+ * @param {string} method
+ * @param {string} path
+ */
+async function errorFrom(res, method, path) {
+  let body = null;
+  try {
+    body = await res.json();
+  } catch (err) {
+    body = null;
+  }
+  return new ApiError(res.status, detailOf(body, res.status, `${method} ${path}`));
+}
+
+/**
+ * @param {any} body
+ * @param {number} status
+ * @param {string} what
+ */
+function detailOf(body, status, what) {
+  const d = body && body.detail;
+  if (typeof d === "string" && d) return d;
+  if (Array.isArray(d) && d.length) {
+    // FastAPI validation errors: [{loc, msg, type}]
+    return d.map((e) => `${(e.loc || []).slice(1).join(".") || "request"}: ${e.msg}`).join("; ");
+  }
+  return `${what} failed with HTTP ${status}.`;
+}

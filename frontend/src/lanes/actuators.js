@@ -1,0 +1,93 @@
+/**
+ * The nine vibration actuators A1..A9 as a heat map, one row each. Per pixel column the row shows
+ * the strongest value in the column's ticks (max pyramid), written into a width x 9 image that is
+ * scaled onto the lane without smoothing.
+ */
+
+import { HEAT_LUT } from "../colormap.js";
+import { ACTUATOR_IDS, N_ACTUATORS } from "../timeline-data.js";
+import { Columns, background, message } from "./common.js";
+
+const ROW_H = 15;
+
+export class ActuatorsLane {
+  /**
+   * @param {{data: () => import("../timeline-data.js").TimelineData|null, zones?: Record<string, string>}} hooks
+   */
+  constructor(hooks) {
+    this.id = "actuators";
+    this.label = "Vibration";
+    this.title = "Vibration A1..A9 as a heat map (dark = off, yellow = full); drag across rows to select them";
+    this.height = ROW_H * N_ACTUATORS;
+    this.hooks = hooks;
+    this.cols = new Columns();
+    /** @type {ImageData|null} */
+    this.image = null;
+    this.scratch = document.createElement("canvas");
+    this.scratchCtx = /** @type {CanvasRenderingContext2D} */ (this.scratch.getContext("2d"));
+  }
+
+  /** @param {number} height */
+  editRows(height) {
+    const h = height / N_ACTUATORS;
+    return ACTUATOR_IDS.map((lane, i) => ({ lane, y0: i * h, y1: (i + 1) * h }));
+  }
+
+  /** @param {HTMLElement} label */
+  decorateLabel(label) {
+    const list = document.createElement("div");
+    list.className = "tl-sublabels";
+    for (const id of ACTUATOR_IDS) {
+      const s = document.createElement("span");
+      s.textContent = id;
+      s.style.height = `${ROW_H}px`;
+      const zone = this.hooks.zones && this.hooks.zones[id];
+      if (zone) s.title = `${id}: ${zone}`;
+      list.append(s);
+    }
+    label.classList.add("tl-label-rows");
+    label.append(list);
+  }
+
+  /**
+   * @param {CanvasRenderingContext2D} ctx
+   * @param {import("../core/timeline.js").LaneFrame} f
+   */
+  draw(ctx, { width, height, view }) {
+    background(ctx, width, height);
+    const data = this.hooks.data();
+    if (!data) {
+      message(ctx, width, height, "");
+      return;
+    }
+    if (!this.image || this.image.width !== width) {
+      this.image = new ImageData(width, N_ACTUATORS);
+      this.scratch.width = width;
+      this.scratch.height = N_ACTUATORS;
+    }
+    const words = new Uint32Array(this.image.data.buffer);
+    const bg = HEAT_LUT[0];
+    for (let a = 0; a < N_ACTUATORS; a++) {
+      const { max } = this.cols.fill(data.vibrationPyr[a], view, width, 1 / data.tickS);
+      const row = a * width;
+      for (let x = 0; x < width; x++) {
+        const v = max[x];
+        words[row + x] = Number.isNaN(v) ? bg : HEAT_LUT[v];
+      }
+    }
+    this.scratchCtx.putImageData(this.image, 0, 0);
+    ctx.save();
+    ctx.imageSmoothingEnabled = false;
+    ctx.drawImage(this.scratch, 0, 0, width, N_ACTUATORS, 0, 0, width, height);
+    ctx.restore();
+    ctx.strokeStyle = "rgba(0, 0, 0, 0.55)";
+    ctx.lineWidth = 1;
+    ctx.beginPath();
+    for (let a = 1; a < N_ACTUATORS; a++) {
+      const y = Math.round((a * height) / N_ACTUATORS) + 0.5;
+      ctx.moveTo(0, y);
+      ctx.lineTo(width, y);
+    }
+    ctx.stroke();
+  }
+}

@@ -1,0 +1,100 @@
+/**
+ * Entry point: loads /api/config once, then routes by the URL hash:
+ *   #/                   the projects screen
+ *   #/project/<id>       the editor
+ * and exposes the read-only debug handle `window.autohaptics` (tests and the benchmark read it).
+ */
+
+import { Api } from "./api.js";
+import { h } from "./dom.js";
+import { errorText } from "./history.js";
+import { EditorPage } from "./pages/editor.js";
+import { ProjectsPage } from "./pages/projects.js";
+
+const api = new Api("");
+const app = /** @type {HTMLElement} */ (document.getElementById("app"));
+/** @type {EditorPage|ProjectsPage|null} */
+let page = null;
+/** @type {Record<string, any>} */
+let config = {};
+
+async function route() {
+  if (page) page.destroy();
+  page = null;
+  delete app.dataset.ready;
+  const m = location.hash.match(/^#\/project\/([^/?#]+)/);
+  if (m) {
+    const editor = new EditorPage(app, { api, config }, decodeURIComponent(m[1]));
+    page = editor;
+    await editor.open();
+  } else {
+    const list = new ProjectsPage(app, { api, config });
+    page = list;
+    await list.open();
+  }
+}
+
+function installDebugHandle() {
+  const editor = () => (page instanceof EditorPage ? page : null);
+  const handle = {
+    /** Which screen is shown. */
+    get screen() {
+      return page instanceof EditorPage ? "editor" : page instanceof ProjectsPage ? "projects" : "none";
+    },
+    /** A snapshot of the editor's state (null on the projects screen). */
+    state() {
+      const e = editor();
+      return e ? e.debugState() : null;
+    },
+    /** Composed values at one tick: {vibration[9], temperature_c, fans, fan_grid[153], features}. */
+    valuesAt(/** @type {number} */ tick) {
+      const e = editor();
+      return e ? e.valuesAt(tick) : null;
+    },
+    /** Page rectangle of a lane canvas ("waveform", "feature-loudness", "actuators", "detail", "temperature", "fans", "markers"). */
+    laneRect(/** @type {string} */ id) {
+      const e = editor();
+      return e ? e.laneRect(id) : null;
+    },
+    /** Client x of a time (seconds) on the timeline. */
+    clientXOf(/** @type {number} */ timeS) {
+      const e = editor();
+      return e ? e.clientXOf(timeS) : null;
+    },
+    /** Frame statistics of the editor's animation-frame loop (ms). */
+    perf() {
+      const e = editor();
+      return e ? e.loop.stats() : null;
+    },
+    /** Start a fresh frame-time measurement. */
+    resetPerf() {
+      const e = editor();
+      if (e) e.loop.resetStats();
+    },
+    /** Number of lane redraw passes so far. */
+    renderCount() {
+      const e = editor();
+      return e && e.timeline ? e.timeline.renderCount || 0 : 0;
+    },
+  };
+  Object.defineProperty(window, "autohaptics", { value: Object.freeze(handle), writable: false, configurable: false });
+}
+
+async function start() {
+  installDebugHandle();
+  // `autohaptics serve --open-sample` opens /?project=<id>: turn it into the editor's route.
+  const asked = new URLSearchParams(location.search).get("project");
+  if (asked) history.replaceState(null, "", `${location.pathname}#/project/${encodeURIComponent(asked)}`);
+  try {
+    config = await api.config();
+  } catch (err) {
+    app.replaceChildren(h("div", { class: "empty", role: "alert", "data-testid": "fatal" }, `The autohaptics server is not answering: ${errorText(err)}`));
+    return;
+  }
+  window.addEventListener("hashchange", () => {
+    route();
+  });
+  await route();
+}
+
+start();

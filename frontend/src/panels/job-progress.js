@@ -1,0 +1,83 @@
+/**
+ * A generation job's progress bar with a Cancel button, fed by the job's Server-Sent Events.
+ */
+
+import { errorText } from "../history.js";
+import { h, progressBar } from "../dom.js";
+
+const STAGES = /** @type {Record<string, string>} */ ({
+  queued: "queued",
+  hash: "reading",
+  audio: "analysing sound",
+  video: "analysing picture",
+  derive: "building tracks",
+  done: "done",
+});
+
+export class JobProgress {
+  /**
+   * @param {import("../api.js").Api} api
+   * @param {{label?: string, testid?: string}} [opts]
+   */
+  constructor(api, opts = {}) {
+    this.api = api;
+    this.bar = progressBar(opts.label || "Generation progress", opts.testid || "generation-progress");
+    this.cancelBtn = h("button", { class: "btn btn-small", type: "button", "data-testid": "generation-cancel" }, "Cancel");
+    this.status = h("span", { class: "job-status", "data-testid": "generation-status" });
+    this.el = h("div", { class: "job-progress" }, this.bar.el, this.cancelBtn, this.status);
+    /** @type {{promise: Promise<import("../api.js").Job>, close: () => void}|null} */
+    this.watch = null;
+    /** @type {string|null} */
+    this.jobId = null;
+    this.cancelBtn.addEventListener("click", () => this.cancel());
+  }
+
+  /**
+   * Follow a job until it ends; resolves with the final job.
+   * @param {import("../api.js").Job} job
+   * @returns {Promise<import("../api.js").Job>}
+   */
+  async follow(job) {
+    this.close();
+    this.jobId = job.id;
+    this.cancelBtn.disabled = false;
+    this.bar.set(job.progress || 0, STAGES[job.stage || job.status] || job.stage || job.status);
+    this.status.textContent = "";
+    this.watch = this.api.watchJob(job.id, (p, stage) => this.bar.set(p, STAGES[stage] || stage));
+    let final;
+    try {
+      final = await this.watch.promise;
+    } catch (err) {
+      this.status.textContent = errorText(err);
+      this.cancelBtn.disabled = true;
+      throw err;
+    }
+    this.cancelBtn.disabled = true;
+    if (final.status === "done") {
+      this.bar.set(1, "done");
+      this.status.textContent = "Generation finished.";
+    } else if (final.status === "cancelled") {
+      this.status.textContent = "Generation cancelled; the previous timeline stays.";
+    } else {
+      this.status.textContent = `Generation failed: ${final.error || "unknown error"}`;
+    }
+    return final;
+  }
+
+  async cancel() {
+    if (!this.jobId) return;
+    this.cancelBtn.disabled = true;
+    try {
+      await this.api.cancelJob(this.jobId);
+      this.status.textContent = "Cancelling…";
+    } catch (err) {
+      this.status.textContent = `Could not cancel: ${errorText(err)}`;
+      this.cancelBtn.disabled = false;
+    }
+  }
+
+  close() {
+    if (this.watch) this.watch.close();
+    this.watch = null;
+  }
+}

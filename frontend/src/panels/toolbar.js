@@ -1,0 +1,113 @@
+/**
+ * The editing toolbar: tools, the lanes an edit applies to, and one button per operation. It
+ * holds no state of its own; the editor calls `update()` with what is selected.
+ */
+
+import { h } from "../dom.js";
+import { formatTime } from "../format.js";
+import { ACTUATOR_IDS } from "../timeline-data.js";
+
+export const EDIT_LANES = [...ACTUATOR_IDS, "temperature", "fans"];
+const LANE_TEXT = /** @type {Record<string, string>} */ ({ temperature: "Temp", fans: "Fans" });
+
+/**
+ * @typedef {{
+ *   tool: (tool: "select"|"pencil"|"points") => void,
+ *   toggleLane: (lane: string) => void,
+ *   set: (value: number) => void,
+ *   scale: (factor: number) => void,
+ *   clear: () => void,
+ *   fade: (kind: "in"|"out") => void,
+ *   copy: () => void,
+ *   paste: () => void,
+ *   applyPoints: () => void,
+ *   discardPoints: () => void,
+ *   addMarker: () => void,
+ *   renameMarker: () => void,
+ *   deleteMarker: () => void,
+ * }} ToolbarActions
+ */
+
+export class EditToolbar {
+  /** @param {ToolbarActions} actions */
+  constructor(actions) {
+    const btn = (/** @type {string} */ text, /** @type {string} */ testid, /** @type {() => void} */ fn, /** @type {string} */ title = "") =>
+      h("button", { class: "btn btn-small", type: "button", "data-testid": testid, title: title || undefined, onclick: fn }, text);
+
+    /** @type {Record<string, HTMLButtonElement>} */
+    this.tools = {
+      select: btn("Select", "tool-select", () => actions.tool("select"), "Select ranges (drag on lanes)"),
+      pencil: btn("Pencil", "tool-pencil", () => actions.tool("pencil"), "Draw values on the Detail or Temperature lane"),
+      points: btn("Temp points", "tool-points", () => actions.tool("points"), "Place temperature breakpoints on the Temperature lane"),
+    };
+    const toolGroup = h("div", { class: "btn-group", role: "group", "aria-label": "Tool" }, ...Object.values(this.tools));
+
+    /** @type {Map<string, HTMLButtonElement>} */
+    this.chips = new Map();
+    const chipGroup = h("div", { class: "chip-group", role: "group", "aria-label": "Lanes the edit applies to" });
+    for (const lane of EDIT_LANES) {
+      const chip = h("button", { class: "chip", type: "button", "aria-pressed": "false", "data-testid": `lane-chip-${lane}`, onclick: () => actions.toggleLane(lane) }, LANE_TEXT[lane] || lane);
+      this.chips.set(lane, chip);
+      chipGroup.append(chip);
+    }
+
+    this.value = h("input", { type: "number", class: "input input-num", step: 0.05, value: "0.5", "aria-label": "Value to set (0..1, or °C for temperature)", "data-testid": "edit-value" });
+    this.factor = h("input", { type: "number", class: "input input-num", step: 0.1, min: 0, value: "1.5", "aria-label": "Scale factor", "data-testid": "edit-factor" });
+    this.setBtn = btn("Set", "edit-set", () => actions.set(Number(this.value.value)), "Set the selection to the value");
+    this.scaleBtn = btn("Scale", "edit-scale", () => actions.scale(Number(this.factor.value)), "Multiply the selection by the factor");
+    this.clearBtn = btn("Clear", "edit-clear", () => actions.clear(), "Clear the selection (Delete)");
+    this.fadeInBtn = btn("Fade in", "edit-fade-in", () => actions.fade("in"));
+    this.fadeOutBtn = btn("Fade out", "edit-fade-out", () => actions.fade("out"));
+    this.copyBtn = btn("Copy", "edit-copy", () => actions.copy(), "Copy the selection (Ctrl+C)");
+    this.pasteBtn = btn("Paste", "edit-paste", () => actions.paste(), "Paste at the playhead (Ctrl+V)");
+    this.applyPointsBtn = btn("Apply points", "points-apply", () => actions.applyPoints());
+    this.discardPointsBtn = btn("Discard", "points-discard", () => actions.discardPoints());
+    this.pointsGroup = h("div", { class: "btn-group", role: "group", "aria-label": "Temperature points" }, this.applyPointsBtn, this.discardPointsBtn);
+    this.markerAdd = btn("Add marker", "marker-add", () => actions.addMarker(), "Add a marker at the playhead");
+    this.markerRename = btn("Rename", "marker-rename", () => actions.renameMarker());
+    this.markerDelete = btn("Delete", "marker-delete", () => actions.deleteMarker());
+    this.info = h("span", { class: "selection-info", "data-testid": "selection-info", "aria-live": "polite" });
+
+    this.el = h(
+      "div",
+      { class: "toolbar", role: "toolbar", "aria-label": "Editing" },
+      toolGroup,
+      chipGroup,
+      h("div", { class: "btn-group" }, this.value, this.setBtn),
+      h("div", { class: "btn-group" }, this.factor, this.scaleBtn),
+      h("div", { class: "btn-group" }, this.clearBtn, this.fadeInBtn, this.fadeOutBtn),
+      h("div", { class: "btn-group" }, this.copyBtn, this.pasteBtn),
+      this.pointsGroup,
+      h("div", { class: "btn-group", role: "group", "aria-label": "Markers" }, this.markerAdd, this.markerRename, this.markerDelete),
+      this.info,
+    );
+  }
+
+  /**
+   * @param {{tool: string, selection: import("../core/timeline.js").Selection|null, lanes: string[],
+   *   tickS: number, canPaste: boolean, points: number, markerSelected: boolean, ready: boolean}} s
+   */
+  update(s) {
+    for (const [name, b] of Object.entries(this.tools)) b.setAttribute("aria-pressed", String(name === s.tool));
+    for (const [lane, chip] of this.chips) chip.setAttribute("aria-pressed", String(s.lanes.includes(lane)));
+    const has = !!s.selection && s.ready;
+    for (const b of [this.scaleBtn, this.clearBtn, this.fadeInBtn, this.fadeOutBtn, this.copyBtn]) b.disabled = !has;
+    const mixed = s.lanes.includes("temperature") && s.lanes.length > 1;
+    this.setBtn.disabled = !has || mixed;
+    this.setBtn.title = mixed ? "Select temperature on its own to set a temperature" : "Set the selection to the value";
+    this.value.setAttribute("aria-label", s.lanes.length === 1 && s.lanes[0] === "temperature" ? "Temperature to set, °C" : "Value to set, 0..1");
+    this.pasteBtn.disabled = !s.canPaste || !s.ready;
+    this.pointsGroup.hidden = s.tool !== "points";
+    this.applyPointsBtn.disabled = s.points === 0;
+    this.discardPointsBtn.disabled = s.points === 0;
+    this.markerAdd.disabled = !s.ready;
+    this.markerRename.disabled = !s.markerSelected;
+    this.markerDelete.disabled = !s.markerSelected;
+    if (s.selection) {
+      const { t0, t1 } = s.selection;
+      this.info.textContent = `${formatTime(t0 * s.tickS)} – ${formatTime(t1 * s.tickS)} (${t1 - t0} ticks) on ${s.lanes.join(", ")}`;
+    } else {
+      this.info.textContent = s.tool === "points" ? "Click the Temperature lane to place points" : "Drag on the lanes to select a range";
+    }
+  }
+}

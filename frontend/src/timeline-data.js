@@ -1,0 +1,165 @@
+/**
+ * The composed timeline as the editor holds it: typed arrays straight from /timeline.bin plus
+ * min/max pyramids per drawn curve. Read-only; a new instance replaces it after every change.
+ */
+
+import { parseTimelineBin } from "./binary.js";
+import { MinMaxPyramid, channel } from "./pyramid.js";
+
+export const N_ACTUATORS = 9;
+export const FAN_ROWS = 9;
+export const FAN_COLS = 17;
+export const ACTUATOR_IDS = ["A1", "A2", "A3", "A4", "A5", "A6", "A7", "A8", "A9"];
+export const AUDIO_FEATURES = ["loudness", "sharpness", "booming", "low_energy"];
+
+/**
+ * @typedef {{vibration: number[], temperature_c: number, fans: number, fan_grid: Float32Array,
+ *   features: Record<string, number>}} TickValues
+ */
+
+export class TimelineData {
+  /**
+   * @param {import("./binary.js").ParsedBin} parsed
+   */
+  constructor(parsed) {
+    const { header, blocks } = parsed;
+    const n = header.n_ticks;
+    if (!Number.isInteger(n) || n < 1) throw new Error(`binary timeline has n_ticks=${n}`);
+    this.nTicks = n;
+    this.tickS = Number(header.tick_s) || 0.1;
+    this.revision = Number(header.revision ?? 0);
+    this.header = header;
+    const need = (/** @type {string} */ name) => {
+      const b = blocks.get(name);
+      if (!b) throw new Error(`binary timeline has no "${name}" block`);
+      return b;
+    };
+    const vib = need("vibration");
+    checkShape(vib.info, [n, N_ACTUATORS]);
+    /** @type {Uint8Array} (n, 9) bytes, value = byte / 255 */
+    this.vibration = /** @type {Uint8Array} */ (vib.data);
+    const temp = need("temperature_c");
+    checkShape(temp.info, [n]);
+    /** @type {Float32Array} */
+    this.temperature = /** @type {Float32Array} */ (temp.data);
+    const fans = need("fans");
+    checkShape(fans.info, [n, FAN_ROWS, FAN_COLS]);
+    /** @type {Uint8Array} (n, 9, 17) bytes */
+    this.fans = /** @type {Uint8Array} */ (fans.data);
+    const act = need("fan_activity");
+    checkShape(act.info, [n]);
+    /** @type {Uint8Array} fraction of fans on x 255 */
+    this.fanActivity = /** @type {Uint8Array} */ (act.data);
+    /** @type {Map<string, Uint8Array>} */
+    this.features = new Map();
+    for (const [name, b] of blocks) {
+      if (name.startsWith("features.") && b.data instanceof Uint8Array) this.features.set(name.slice(9), b.data);
+    }
+
+    /** @type {MinMaxPyramid[]} */
+    this.vibrationPyr = ACTUATOR_IDS.map((_, i) => new MinMaxPyramid(channel(this.vibration, n, N_ACTUATORS, i)));
+    this.temperaturePyr = new MinMaxPyramid(this.temperature);
+    this.fanActivityPyr = new MinMaxPyramid(this.fanActivity);
+    /** @type {Map<string, MinMaxPyramid>} */
+    this.featurePyr = new Map();
+    for (const [name, data] of this.features) this.featurePyr.set(name, new MinMaxPyramid(data));
+    let tmin = Infinity;
+    let tmax = -Infinity;
+    for (let i = 0; i < n; i++) {
+      const v = this.temperature[i];
+      if (v < tmin) tmin = v;
+      if (v > tmax) tmax = v;
+    }
+    this.temperatureMin = tmin;
+    this.temperatureMax = tmax;
+  }
+
+  /** @param {ArrayBuffer} buf */
+  static fromBuffer(buf) {
+    return new TimelineData(parseTimelineBin(buf));
+  }
+
+  get durationS() {
+    return this.nTicks * this.tickS;
+  }
+
+  /** @param {number} timeS @returns {number} the tick under `timeS`, clamped to the timeline */
+  tickAt(timeS) {
+    return Math.min(this.nTicks - 1, Math.max(0, Math.floor(timeS / this.tickS + 1e-9)));
+  }
+
+  /**
+   * Every value at one tick (what the chair diagram and the fan overlay show).
+   * @param {number} tick
+   * @returns {TickValues}
+   */
+  valuesAt(tick) {
+    const k = Math.min(this.nTicks - 1, Math.max(0, Math.floor(tick)));
+    const vibration = [];
+    for (let i = 0; i < N_ACTUATORS; i++) vibration.push(this.vibration[k * N_ACTUATORS + i] / 255);
+    const cells = FAN_ROWS * FAN_COLS;
+    const grid = new Float32Array(cells);
+    for (let i = 0; i < cells; i++) grid[i] = this.fans[k * cells + i] / 255;
+    /** @type {Record<string, number>} */
+    const features = {};
+    for (const [name, data] of this.features) features[name] = data[k] / 255;
+    return {
+      vibration,
+      temperature_c: this.temperature[k],
+      fans: this.fanActivity[k] / 255,
+      fan_grid: grid,
+      features,
+    };
+  }
+
+  /**
+   * Per-tick values of edit lanes over [t0, t1), in the shape the `paste` op takes.
+   * @param {string[]} lanes "A1".."A9", "temperature", "fans"
+   * @param {number} t0
+   * @param {number} t1
+   * @returns {Record<string, any[]>}
+   */
+  slice(lanes, t0, t1) {
+    t0 = Math.max(0, Math.floor(t0));
+    t1 = Math.min(this.nTicks, Math.floor(t1));
+    /** @type {Record<string, any[]>} */
+    const out = {};
+    for (const lane of lanes) {
+      const values = [];
+      if (lane === "temperature") {
+        for (let k = t0; k < t1; k++) values.push(round4(this.temperature[k]));
+      } else if (lane === "fans") {
+        for (let k = t0; k < t1; k++) {
+          const rows = [];
+          for (let r = 0; r < FAN_ROWS; r++) {
+            const row = [];
+            for (let c = 0; c < FAN_COLS; c++) row.push(round4(this.fans[(k * FAN_ROWS + r) * FAN_COLS + c] / 255));
+            rows.push(row);
+          }
+          values.push(rows);
+        }
+      } else {
+        const i = ACTUATOR_IDS.indexOf(lane);
+        if (i < 0) throw new Error(`unknown lane ${lane}`);
+        for (let k = t0; k < t1; k++) values.push(round4(this.vibration[k * N_ACTUATORS + i] / 255));
+      }
+      out[lane] = values;
+    }
+    return out;
+  }
+}
+
+/** @param {number} v */
+function round4(v) {
+  return Math.round(v * 10000) / 10000;
+}
+
+/**
+ * @param {import("./binary.js").BlockInfo} info
+ * @param {number[]} shape
+ */
+function checkShape(info, shape) {
+  if (info.shape.length !== shape.length || info.shape.some((v, i) => v !== shape[i])) {
+    throw new Error(`binary timeline block ${info.name} has shape [${info.shape}], expected [${shape}]`);
+  }
+}
