@@ -1,0 +1,91 @@
+"""``autohaptics serve``: the editor and its HTTP API on http://127.0.0.1:8000 (uvicorn)."""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+import threading
+import time
+import urllib.error
+import urllib.request
+import uuid
+import webbrowser
+from pathlib import Path
+
+from autohaptics.errors import ParameterError
+
+
+def register(sub) -> None:
+    p = sub.add_parser("serve", help="run the web editor and its HTTP API",
+                       description="Serve the editor (frontend/) and the API (docs/API.md); OpenAPI at /docs.")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to bind (default 127.0.0.1: the editor has no authentication)")
+    p.add_argument("--port", type=int, default=8000, help="TCP port (default 8000)")
+    p.add_argument("--data", type=Path, default=None,
+                   help="data folder for projects and the database (default $AUTOHAPTICS_DATA or ./data)")
+    p.add_argument("--jobs", type=int, default=None, help="generation jobs running at once (default 1)")
+    p.add_argument("--max-upload-mb", type=float, default=None, help="largest accepted upload in MiB (default 4096)")
+    p.add_argument("--frontend", type=Path, default=None, help="static frontend folder (default: the repository's)")
+    p.add_argument("--open-sample", action="store_true",
+                   help="once the server is up, add the 10 s generated sample clip as a project and open the "
+                        "editor on it in the browser")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    import uvicorn
+
+    from autohaptics.server.app import create_app
+    from autohaptics.server.settings import MIB, Settings
+
+    if not 0 < args.port < 65536:
+        raise ParameterError(f"--port must lie in 1..65535, got {args.port}")
+    if args.jobs is not None and not 1 <= args.jobs <= 64:
+        raise ParameterError(f"--jobs must lie in 1..64, got {args.jobs}")
+    if args.max_upload_mb is not None and args.max_upload_mb <= 0:
+        raise ParameterError(f"--max-upload-mb must be positive, got {args.max_upload_mb}")
+    settings = Settings.from_env(
+        data_dir=args.data, jobs=args.jobs, frontend_dir=args.frontend,
+        max_upload_bytes=int(args.max_upload_mb * MIB) if args.max_upload_mb is not None else None)
+    app = create_app(settings)
+    url = f"http://{'127.0.0.1' if args.host in ('0.0.0.0', '::') else args.host}:{args.port}/"
+    print(f"autohaptics: serving {url} (data in {settings.data_dir.resolve()}, API docs at {url}docs)",
+          file=sys.stderr)
+    if args.open_sample:
+        threading.Thread(target=_open_sample, args=(url,), name="open-sample", daemon=True).start()
+    uvicorn.run(app, host=args.host, port=args.port, log_level="info")
+    return 0
+
+
+def _open_sample(url: str) -> None:
+    """Write the sample clip, upload it through the API once /health answers, open the editor on it."""
+    from autohaptics.synth import sample_clip
+
+    with tempfile.TemporaryDirectory(prefix="autohaptics-sample-") as tmp:
+        clip = sample_clip(Path(tmp) / "sample.mp4")
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                with urllib.request.urlopen(f"{url}health", timeout=2):
+                    break
+            except (urllib.error.URLError, OSError):
+                if time.monotonic() > deadline:
+                    print(f"autohaptics: the server did not answer at {url}; sample not added", file=sys.stderr)
+                    return
+                time.sleep(0.25)
+        boundary = uuid.uuid4().hex
+        body = b"".join([
+            f"--{boundary}\r\nContent-Disposition: form-data; name=\"name\"\r\n\r\nsample (10 s demo)\r\n".encode(),
+            f"--{boundary}\r\nContent-Disposition: form-data; name=\"file\"; filename=\"sample.mp4\"\r\n"
+            "Content-Type: video/mp4\r\n\r\n".encode(),
+            clip.read_bytes(), f"\r\n--{boundary}--\r\n".encode()])
+        req = urllib.request.Request(f"{url}api/projects", data=body, method="POST",
+                                     headers={"Content-Type": f"multipart/form-data; boundary={boundary}"})
+        try:
+            with urllib.request.urlopen(req, timeout=60) as resp:
+                project = json.load(resp)
+        except urllib.error.HTTPError as exc:
+            print(f"autohaptics: adding the sample failed: {exc.read().decode(errors='replace')}", file=sys.stderr)
+            return
+    webbrowser.open(f"{url}?project={project['id']}")

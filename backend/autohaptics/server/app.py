@@ -1,0 +1,115 @@
+"""The FastAPI application: routes, error mapping, the job runner's lifetime, the static frontend."""
+
+from __future__ import annotations
+
+import logging
+from contextlib import asynccontextmanager
+
+import anyio
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from starlette.staticfiles import StaticFiles
+
+from autohaptics import __version__
+from autohaptics.errors import MediaError, ParameterError
+from autohaptics.server.jobs import JobRunner
+from autohaptics.server.routes import jobs, projects, service, timeline
+from autohaptics.server.settings import Settings
+from autohaptics.server.store import Conflict, NotFound, Store
+from autohaptics.server.timelines import Timelines
+from autohaptics.server.uploads import MediaRejected, UploadTooLarge
+
+log = logging.getLogger("autohaptics.server")
+_NO_CACHE_SUFFIXES = (".html", ".js", ".mjs", ".css", ".json")
+
+
+class FrontendFiles(StaticFiles):
+    """The editor's static files; HTML, scripts and styles are revalidated on every load."""
+
+    def file_response(self, full_path, stat_result, scope, status_code=200):
+        response = super().file_response(full_path, stat_result, scope, status_code)
+        if str(full_path).endswith(_NO_CACHE_SUFFIXES):
+            response.headers["Cache-Control"] = "no-cache"
+        return response
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """The service for ``settings`` (default: :meth:`Settings.from_env`).
+
+    The store, the timelines service and the job runner start with the application's lifespan
+    (use ``with TestClient(app)`` in tests) and are reachable through the dependencies of
+    :mod:`autohaptics.server.deps`.
+    """
+    settings = settings or Settings.from_env()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI):
+        store = Store(settings.data_dir)
+        interrupted = store.recover()
+        if interrupted:
+            log.warning("%d job(s) were interrupted by a server restart", len(interrupted))
+        timelines = Timelines(store)
+        runner = JobRunner(store, workers=settings.jobs, mp_context=settings.mp_context, timelines=timelines)
+        await anyio.to_thread.run_sync(runner.start)
+        app.state.store, app.state.timelines, app.state.runner = store, timelines, runner
+        try:
+            yield
+        finally:
+            await anyio.to_thread.run_sync(runner.stop)
+            store.close()
+
+    app = FastAPI(title="autohaptics", version=__version__, lifespan=lifespan,
+                  description="The editor's HTTP API: projects, generation jobs, timelines and edits "
+                              "(docs/API.md).")
+    app.state.settings = settings
+    _add_error_handlers(app)
+    for module in (service, projects, jobs, timeline):
+        app.include_router(module.router)
+    front = settings.frontend_dir
+    if front is not None and front.is_dir():
+        app.mount("/", FrontendFiles(directory=front, html=True), name="frontend")
+    return app
+
+
+def _detail(status: int, message: str, **extra) -> JSONResponse:
+    return JSONResponse(status_code=status, content={"detail": message, **extra})
+
+
+def _add_error_handlers(app: FastAPI) -> None:
+    @app.exception_handler(NotFound)
+    async def not_found(request: Request, exc: NotFound):
+        return _detail(404, str(exc))
+
+    @app.exception_handler(Conflict)
+    async def conflict(request: Request, exc: Conflict):
+        return _detail(409, str(exc))
+
+    @app.exception_handler(ParameterError)
+    async def bad_parameter(request: Request, exc: ParameterError):
+        problems = getattr(exc, "problems", None)
+        if problems is not None:
+            return _detail(400, str(exc), problems=[
+                {"row": p.row, "column": p.column, "message": p.message} for p in problems])
+        return _detail(400, str(exc))
+
+    @app.exception_handler(UploadTooLarge)
+    async def too_large(request: Request, exc: UploadTooLarge):
+        return _detail(413, str(exc))
+
+    @app.exception_handler(MediaRejected)
+    async def rejected(request: Request, exc: MediaRejected):
+        return _detail(exc.status, str(exc))
+
+    @app.exception_handler(MediaError)
+    async def media_error(request: Request, exc: MediaError):
+        return _detail(422, str(exc))
+
+    @app.exception_handler(RequestValidationError)
+    async def invalid_request(request: Request, exc: RequestValidationError):
+        errors = exc.errors()
+        if not errors:
+            return _detail(400, "invalid request")
+        first = errors[0]
+        where = ".".join(str(p) for p in first.get("loc", ())[1:]) or "body"
+        return _detail(400, f"field '{where}': {first.get('msg', 'invalid')}")

@@ -1,0 +1,34 @@
+"""Dependencies of the routes, as short aliases; tests swap them with ``app.dependency_overrides``."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import Depends, Request
+
+from autohaptics.server.jobs import JobRunner
+from autohaptics.server.settings import Settings
+from autohaptics.server.store import Store
+from autohaptics.server.timelines import Timelines
+
+
+def get_settings(request: Request) -> Settings:
+    return request.app.state.settings
+
+
+def get_store(request: Request) -> Store:
+    return request.app.state.store
+
+
+def get_runner(request: Request) -> JobRunner:
+    return request.app.state.runner
+
+
+def get_timelines(request: Request) -> Timelines:
+    return request.app.state.timelines
+
+
+SettingsDep = Annotated[Settings, Depends(get_settings)]
+StoreDep = Annotated[Store, Depends(get_store)]
+RunnerDep = Annotated[JobRunner, Depends(get_runner)]
+TimelinesDep = Annotated[Timelines, Depends(get_timelines)]

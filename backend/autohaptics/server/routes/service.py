@@ -1,0 +1,47 @@
+"""``/health`` and ``/api/config``."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter
+
+from autohaptics import __version__, intensity, layout, pipeline
+from autohaptics.export import FORMATS
+from autohaptics.presets import DEFAULT_PRESET, PRESETS
+from autohaptics.server import edits
+from autohaptics.server.deps import SettingsDep
+from autohaptics.server.schemas import ConfigOut, HealthOut
+from autohaptics.timebase import TICK_S
+from autohaptics.timeline import NORMALISED_FEATURES
+
+router = APIRouter(tags=["service"])
+
+
+@router.get("/health", response_model=HealthOut)
+def health() -> HealthOut:
+    return HealthOut(version=__version__)
+
+
+@router.get("/api/config", response_model=ConfigOut)
+def config(settings: SettingsDep) -> ConfigOut:
+    return ConfigOut(
+        version=__version__,
+        presets=list(PRESETS),
+        default_preset=DEFAULT_PRESET,
+        modes=list(pipeline.MODES),
+        default_thresholds=dict(intensity.DEFAULT_THRESHOLDS),
+        features=list(intensity.FEATURES),
+        normalised_features=sorted(NORMALISED_FEATURES),
+        lanes=list(edits.LANES),
+        vibration_lanes=list(edits.VIBRATION_LANES),
+        edit_ops=list(edits.OPS),
+        tick_s=TICK_S,
+        upload_limit_bytes=settings.max_upload_bytes,
+        import_limit_bytes=settings.max_import_bytes,
+        layout=layout.layout_dict(),
+        zones=list(layout.ZONES),
+        temperature={"neutral_c": layout.TEMP_NEUTRAL_C, "low_c": layout.TEMP_LOW_C, "high_c": layout.TEMP_HIGH_C,
+                     "device_min_c": layout.DEVICE_TEMP_MIN_C, "device_max_c": layout.DEVICE_TEMP_MAX_C},
+        export_formats=[{"name": f.name, "suffix": f.suffix, "media_type": f.media_type,
+                         "description": f.description} for f in FORMATS.values()],
+        import_formats=["json", "csv"],
+    )

@@ -1,0 +1,436 @@
+"""Persistence: projects, jobs and edit history in SQLite, project files in the data folder.
+
+Layout of ``data_dir``::
+
+    autohaptics.sqlite3          projects, jobs, edits
+    projects/<id>/<uuid>.<ext>   the uploaded media (server-chosen name)
+    projects/<id>/analysis.npz   the feature cache (pipeline.Analysis)
+    projects/<id>/generated.json the generated timeline (never edited; edits live in the database)
+    projects/<id>/waveform-<N>.json  cached audio peaks
+    uploads/<uuid>.part          uploads in flight (removed on failure and on start)
+    work/<job id>/               a running job's outputs (moved into the project when it succeeds)
+
+Ids are 32 lower-case hex digits chosen here; no client-supplied string ever becomes a path.
+One connection guarded by a lock serves every thread; writes run in ``BEGIN IMMEDIATE``
+transactions, so the revision check of an edit and its insertion are atomic.
+
+``revision`` counts changes of a project's composed timeline (edit, undo, redo, a re-derive, a
+finished job); an edit must name the revision it was based on, or it is refused (Conflict).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import re
+import shutil
+import sqlite3
+import threading
+import uuid
+from collections.abc import Iterator
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+from autohaptics.errors import AutohapticsError
+
+DB_NAME = "autohaptics.sqlite3"
+ACTIVE_JOB_STATES = ("queued", "running")
+INTERRUPTED = "interrupted by a server restart"
+_ID = re.compile(r"^[0-9a-f]{32}$")
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS projects (
+    id TEXT PRIMARY KEY,
+    name TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    updated_at TEXT NOT NULL,
+    status TEXT NOT NULL,
+    media_file TEXT NOT NULL,
+    media_type TEXT NOT NULL,
+    source TEXT NOT NULL,
+    params TEXT NOT NULL,
+    view TEXT NOT NULL DEFAULT '{}',
+    revision INTEGER NOT NULL DEFAULT 0,
+    cursor INTEGER NOT NULL DEFAULT 0,
+    n_ticks INTEGER NOT NULL,
+    duration_s REAL NOT NULL,
+    has_timeline INTEGER NOT NULL DEFAULT 0,
+    job_id TEXT
+);
+CREATE TABLE IF NOT EXISTS jobs (
+    id TEXT PRIMARY KEY,
+    project_id TEXT NOT NULL,
+    status TEXT NOT NULL,
+    progress REAL NOT NULL DEFAULT 0,
+    stage TEXT NOT NULL DEFAULT '',
+    error TEXT,
+    params TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    started_at TEXT,
+    finished_at TEXT
+);
+CREATE INDEX IF NOT EXISTS jobs_project ON jobs (project_id);
+CREATE TABLE IF NOT EXISTS edits (
+    project_id TEXT NOT NULL,
+    seq INTEGER NOT NULL,
+    op TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    PRIMARY KEY (project_id, seq)
+);
+"""
+
+
+class NotFound(AutohapticsError):
+    """No project or job with that id."""
+
+
+class Conflict(AutohapticsError):
+    """The request conflicts with the current state (stale revision, a job already running)."""
+
+
+def now_iso() -> str:
+    return datetime.now(timezone.utc).isoformat(timespec="milliseconds").replace("+00:00", "Z")
+
+
+def new_id() -> str:
+    return uuid.uuid4().hex
+
+
+def check_id(value: str, what: str = "project") -> str:
+    """``value`` when it is a well-formed id, else NotFound (ids never reach the file system unchecked)."""
+    if not isinstance(value, str) or not _ID.match(value):
+        raise NotFound(f"no {what} with id {value!r}")
+    return value
+
+
+class Store:
+    """SQLite database plus the project folders under ``data_dir``."""
+
+    def __init__(self, data_dir: str | os.PathLike):
+        self.data_dir = Path(data_dir).resolve()
+        self.projects_dir = self.data_dir / "projects"
+        self.uploads_dir = self.data_dir / "uploads"
+        self.work_dir = self.data_dir / "work"
+        for d in (self.data_dir, self.projects_dir, self.uploads_dir, self.work_dir):
+            d.mkdir(parents=True, exist_ok=True)
+        self._lock = threading.RLock()
+        self._db = sqlite3.connect(self.data_dir / DB_NAME, check_same_thread=False, isolation_level=None)
+        self._db.row_factory = sqlite3.Row
+        self._db.execute("PRAGMA journal_mode=WAL")
+        self._db.execute("PRAGMA synchronous=NORMAL")
+        self._db.executescript(_SCHEMA)
+
+    def close(self) -> None:
+        with self._lock:
+            self._db.close()
+
+    # ------------------------------------------------------------------ plumbing
+    @contextlib.contextmanager
+    def _tx(self) -> Iterator[sqlite3.Connection]:
+        with self._lock:
+            self._db.execute("BEGIN IMMEDIATE")
+            try:
+                yield self._db
+            except BaseException:
+                self._db.execute("ROLLBACK")
+                raise
+            self._db.execute("COMMIT")
+
+    def _one(self, sql: str, args: tuple = ()) -> sqlite3.Row | None:
+        with self._lock:
+            return self._db.execute(sql, args).fetchone()
+
+    def _all(self, sql: str, args: tuple = ()) -> list[sqlite3.Row]:
+        with self._lock:
+            return self._db.execute(sql, args).fetchall()
+
+    # --------------------------------------------------------------------- paths
+    def project_dir(self, pid: str) -> Path:
+        return self.projects_dir / check_id(pid)
+
+    def media_path(self, project: dict) -> Path:
+        return self.project_dir(project["id"]) / project["media_file"]
+
+    def analysis_path(self, pid: str) -> Path:
+        return self.project_dir(pid) / "analysis.npz"
+
+    def generated_path(self, pid: str) -> Path:
+        return self.project_dir(pid) / "generated.json"
+
+    def waveform_path(self, pid: str, points: int) -> Path:
+        return self.project_dir(pid) / f"waveform-{int(points)}.json"
+
+    def new_upload_path(self) -> Path:
+        return self.uploads_dir / f"{new_id()}.part"
+
+    def job_work_dir(self, job_id: str) -> Path:
+        return self.work_dir / check_id(job_id, "job")
+
+    # ------------------------------------------------------------------ recovery
+    def recover(self) -> list[str]:
+        """After a (re)start: jobs left queued/running failed as interrupted; stray uploads and work
+        folders removed. Returns the ids of the interrupted jobs."""
+        with self._tx() as db:
+            rows = db.execute(f"SELECT id, project_id FROM jobs WHERE status IN {ACTIVE_JOB_STATES}").fetchall()
+            stamp = now_iso()
+            for r in rows:
+                db.execute("UPDATE jobs SET status='failed', error=?, finished_at=? WHERE id=?",
+                           (INTERRUPTED, stamp, r["id"]))
+                db.execute("UPDATE projects SET status='failed', updated_at=? WHERE id=? AND job_id=?",
+                           (stamp, r["project_id"], r["id"]))
+        for d in (self.uploads_dir, self.work_dir):
+            for p in d.iterdir():
+                if p.is_dir():
+                    shutil.rmtree(p, ignore_errors=True)
+                else:
+                    p.unlink(missing_ok=True)
+        return [r["id"] for r in rows]
+
+    # ------------------------------------------------------------------ projects
+    def create_project(self, upload: Path, *, media_file: str, media_type: str, name: str, source: dict,
+                       params: dict, n_ticks: int, duration_s: float) -> dict:
+        """Move an accepted upload into a new project folder and record the project."""
+        pid = new_id()
+        pdir = self.projects_dir / pid
+        pdir.mkdir()
+        try:
+            os.replace(upload, pdir / media_file)
+            stamp = now_iso()
+            with self._tx() as db:
+                db.execute(
+                    "INSERT INTO projects (id, name, created_at, updated_at, status, media_file, media_type, source,"
+                    " params, n_ticks, duration_s) VALUES (?, ?, ?, ?, 'new', ?, ?, ?, ?, ?, ?)",
+                    (pid, name, stamp, stamp, media_file, media_type, json.dumps(source), json.dumps(params),
+                     int(n_ticks), float(duration_s)))
+        except BaseException:
+            shutil.rmtree(pdir, ignore_errors=True)
+            raise
+        return self.get_project(pid)
+
+    def get_project(self, pid: str) -> dict:
+        row = self._one("SELECT * FROM projects WHERE id=?", (check_id(pid),))
+        if row is None:
+            raise NotFound(f"no project with id {pid!r}")
+        return self._project_dict(row)
+
+    def list_projects(self) -> list[dict]:
+        return [self._project_dict(r) for r in self._all("SELECT * FROM projects ORDER BY created_at DESC, id")]
+
+    def _project_dict(self, row: sqlite3.Row) -> dict:
+        d = dict(row)
+        for key in ("source", "params", "view"):
+            d[key] = json.loads(d[key])
+        d["has_timeline"] = bool(d["has_timeline"])
+        d["job"] = self.get_job(d["job_id"]) if d["job_id"] else None
+        return d
+
+    def update_project(self, pid: str, *, name: str | None = None, view: dict | None = None) -> dict:
+        with self._tx() as db:
+            self._require(db, pid)
+            if name is not None:
+                db.execute("UPDATE projects SET name=? WHERE id=?", (name, pid))
+            if view is not None:
+                db.execute("UPDATE projects SET view=? WHERE id=?", (json.dumps(view), pid))
+            db.execute("UPDATE projects SET updated_at=? WHERE id=?", (now_iso(), pid))
+        return self.get_project(pid)
+
+    def set_params(self, pid: str, params: dict) -> None:
+        with self._tx() as db:
+            self._require(db, pid)
+            db.execute("UPDATE projects SET params=?, updated_at=? WHERE id=?", (json.dumps(params), now_iso(), pid))
+
+    def delete_project(self, pid: str) -> None:
+        """Remove the project's rows and folder (its job must have been cancelled by the caller)."""
+        with self._tx() as db:
+            self._require(db, pid)
+            db.execute("DELETE FROM edits WHERE project_id=?", (pid,))
+            db.execute("DELETE FROM jobs WHERE project_id=?", (pid,))
+            db.execute("DELETE FROM projects WHERE id=?", (pid,))
+        shutil.rmtree(self.project_dir(pid), ignore_errors=True)
+
+    def duplicate_project(self, pid: str, *, name: str) -> dict:
+        """A new project with the same media (hard link when possible), caches, params, edits, view."""
+        src = self.get_project(pid)
+        new = new_id()
+        sdir, ndir = self.project_dir(pid), self.projects_dir / new
+        ndir.mkdir()
+        try:
+            for p in sdir.iterdir():
+                if not p.is_file() or p.name.endswith(".part"):
+                    continue
+                try:
+                    os.link(p, ndir / p.name)  # files are only ever replaced, never rewritten in place
+                except OSError:
+                    shutil.copy2(p, ndir / p.name)
+            stamp = now_iso()
+            with self._tx() as db:
+                row = self._require(db, pid)
+                has_tl = (ndir / "generated.json").is_file()
+                status = row["status"] if row["status"] != "running" else ("ready" if has_tl else "new")
+                db.execute(
+                    "INSERT INTO projects (id, name, created_at, updated_at, status, media_file, media_type, source,"
+                    " params, view, revision, cursor, n_ticks, duration_s, has_timeline)"
+                    " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                    (new, name, stamp, stamp, status, row["media_file"], row["media_type"], row["source"],
+                     row["params"], row["view"], row["revision"], row["cursor"], row["n_ticks"], row["duration_s"],
+                     int(has_tl)))
+                db.execute("INSERT INTO edits (project_id, seq, op, created_at) "
+                           "SELECT ?, seq, op, created_at FROM edits WHERE project_id=?", (new, pid))
+        except BaseException:
+            shutil.rmtree(ndir, ignore_errors=True)
+            raise
+        del src
+        return self.get_project(new)
+
+    @staticmethod
+    def _require(db: sqlite3.Connection, pid: str) -> sqlite3.Row:
+        row = db.execute("SELECT * FROM projects WHERE id=?", (check_id(pid),)).fetchone()
+        if row is None:
+            raise NotFound(f"no project with id {pid!r}")
+        return row
+
+    # ---------------------------------------------------------------------- jobs
+    def create_job(self, pid: str, params: dict) -> dict:
+        """A queued job for ``pid``; Conflict when one of its jobs is still queued or running."""
+        jid = new_id()
+        with self._tx() as db:
+            self._require(db, pid)
+            busy = db.execute(f"SELECT id FROM jobs WHERE project_id=? AND status IN {ACTIVE_JOB_STATES}",
+                              (pid,)).fetchone()
+            if busy is not None:
+                raise Conflict(f"a generation job ({busy['id']}) of this project is already running")
+            stamp = now_iso()
+            db.execute("INSERT INTO jobs (id, project_id, status, params, created_at) VALUES (?, ?, 'queued', ?, ?)",
+                       (jid, pid, json.dumps(params), stamp))
+            db.execute("UPDATE projects SET status='running', job_id=?, updated_at=? WHERE id=?", (jid, stamp, pid))
+        self.job_work_dir(jid).mkdir()
+        return self.get_job(jid)
+
+    def get_job(self, job_id: str) -> dict:
+        row = self._one("SELECT * FROM jobs WHERE id=?", (check_id(job_id, "job"),))
+        if row is None:
+            raise NotFound(f"no job with id {job_id!r}")
+        d = dict(row)
+        d["params"] = json.loads(d["params"])
+        return d
+
+    def job_started(self, job_id: str, started_at: str) -> None:
+        with self._tx() as db:
+            db.execute("UPDATE jobs SET status='running', started_at=? WHERE id=? AND status='queued'",
+                       (started_at, job_id))
+
+    def job_progress(self, job_id: str, progress: float, stage: str) -> None:
+        with self._tx() as db:
+            db.execute("UPDATE jobs SET progress=?, stage=? WHERE id=? AND status IN ('queued', 'running')",
+                       (float(progress), stage, job_id))
+
+    def finish_job(self, job_id: str, status: str, *, error: str | None = None, started_at: str | None = None,
+                   params: dict | None = None) -> dict | None:
+        """Record a job's end. ``done``: its work folder's analysis.npz and generated.json replace the
+        project's, the revision increases and ``params`` (what the timeline was derived with) are
+        stored. Returns the job, or None when its project was deleted meanwhile. The work folder
+        is removed in every case."""
+        work = self.job_work_dir(job_id)
+        try:
+            with self._tx() as db:
+                row = db.execute("SELECT project_id FROM jobs WHERE id=?", (job_id,)).fetchone()
+                if row is None:
+                    return None
+                pid = row["project_id"]
+                stamp = now_iso()
+                progress_sql = ", progress=1" if status == "done" else ""
+                db.execute(f"UPDATE jobs SET status=?, error=?, finished_at=?, started_at=COALESCE(started_at, ?)"
+                           f"{progress_sql} WHERE id=?", (status, error, stamp, started_at, job_id))
+                project_status = {"done": "ready", "failed": "failed", "cancelled": "cancelled"}[status]
+                if status == "done":
+                    pdir = self.project_dir(pid)
+                    for name in ("analysis.npz", "generated.json"):
+                        os.replace(work / name, pdir / name)
+                    db.execute("UPDATE projects SET revision=revision+1, has_timeline=1 WHERE id=?", (pid,))
+                    if params is not None:
+                        db.execute("UPDATE projects SET params=? WHERE id=?", (json.dumps(params), pid))
+                db.execute("UPDATE projects SET status=?, updated_at=? WHERE id=? AND job_id=?",
+                           (project_status, stamp, pid, job_id))
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+        return self.get_job(job_id)
+
+    def active_jobs(self) -> list[dict]:
+        return [self.get_job(r["id"]) for r in
+                self._all(f"SELECT id FROM jobs WHERE status IN {ACTIVE_JOB_STATES} ORDER BY created_at")]
+
+    # ------------------------------------------------------------ generated data
+    def replace_generated(self, pid: str, write_to: Path, *, params: dict) -> int:
+        """Move a freshly written ``generated.json`` (``write_to``, in the project folder) into place,
+        store ``params`` and bump the revision; returns the new revision."""
+        with self._tx() as db:
+            self._require(db, pid)
+            os.replace(write_to, self.generated_path(pid))
+            stamp = now_iso()
+            db.execute("UPDATE projects SET revision=revision+1, has_timeline=1, params=?, updated_at=?,"
+                       " status=CASE WHEN status='running' THEN status ELSE 'ready' END WHERE id=?",
+                       (json.dumps(params), stamp, pid))
+            return int(db.execute("SELECT revision FROM projects WHERE id=?", (pid,)).fetchone()[0])
+
+    # --------------------------------------------------------------------- edits
+    def edits(self, pid: str) -> dict:
+        """``{revision, cursor, ops}``: ops[:cursor] are applied, ops[cursor:] can be redone."""
+        with self._lock:
+            row = self._require(self._db, pid)
+            ops = [json.loads(r["op"]) for r in self._db.execute(
+                "SELECT op FROM edits WHERE project_id=? ORDER BY seq", (pid,))]
+        return {"revision": row["revision"], "cursor": row["cursor"], "ops": ops}
+
+    def append_edit(self, pid: str, base_revision: int, op: dict) -> dict:
+        """Append ``op`` at the cursor (dropping the redo tail); Conflict when ``base_revision`` is stale."""
+        with self._tx() as db:
+            row = self._check_revision(db, pid, base_revision)
+            cursor = row["cursor"]
+            db.execute("DELETE FROM edits WHERE project_id=? AND seq>=?", (pid, cursor))
+            db.execute("INSERT INTO edits (project_id, seq, op, created_at) VALUES (?, ?, ?, ?)",
+                       (pid, cursor, json.dumps(op), now_iso()))
+            return self._move_cursor(db, pid, cursor + 1)
+
+    def undo(self, pid: str, base_revision: int) -> dict:
+        with self._tx() as db:
+            row = self._check_revision(db, pid, base_revision)
+            if row["cursor"] == 0:
+                raise Conflict("nothing to undo")
+            return self._move_cursor(db, pid, row["cursor"] - 1)
+
+    def redo(self, pid: str, base_revision: int) -> dict:
+        with self._tx() as db:
+            row = self._check_revision(db, pid, base_revision)
+            count = db.execute("SELECT COUNT(*) FROM edits WHERE project_id=?", (pid,)).fetchone()[0]
+            if row["cursor"] >= count:
+                raise Conflict("nothing to redo")
+            return self._move_cursor(db, pid, row["cursor"] + 1)
+
+    def _check_revision(self, db: sqlite3.Connection, pid: str, base_revision: int) -> sqlite3.Row:
+        row = self._require(db, pid)
+        if int(base_revision) != row["revision"]:
+            raise Conflict(f"the timeline changed meanwhile (revision {row['revision']}, the request was based "
+                           f"on {base_revision}); reload and try again")
+        return row
+
+    @staticmethod
+    def _move_cursor(db: sqlite3.Connection, pid: str, cursor: int) -> dict:
+        db.execute("UPDATE projects SET cursor=?, revision=revision+1, updated_at=? WHERE id=?",
+                   (cursor, now_iso(), pid))
+        row = db.execute("SELECT revision, cursor FROM projects WHERE id=?", (pid,)).fetchone()
+        return {"revision": row["revision"], "cursor": row["cursor"]}
+
+    # ------------------------------------------------------------------ snapshot
+    def snapshot(self, pid: str) -> tuple[int, list[dict], dict]:
+        """(revision, applied ops, project) read together, for composing the timeline."""
+        with self._lock:
+            project = self.get_project(pid)
+            ops = [json.loads(r["op"]) for r in self._db.execute(
+                "SELECT op FROM edits WHERE project_id=? AND seq<? ORDER BY seq", (pid, project["cursor"]))]
+        return project["revision"], ops, project
+
+    def read_json(self, path: Path) -> Any:
+        with open(path, encoding="utf-8") as fh:
+            return json.load(fh)
