@@ -71,6 +71,8 @@ export class EditorPage {
     /** @type {Array<[number, number]>} */
     this.points = [];
     this.lastTick = -1;
+    /** @type {number|null} revision of the timeline last drawn on the lanes */
+    this.drawnRevision = null;
     this.disposed = false;
     /** @type {Array<() => void>} */
     this.cleanups = [];
@@ -333,7 +335,9 @@ export class EditorPage {
     this.lastTick = -1;
     this._onTime(this.player.currentTime, this.player.playing);
     this._updateToolbar();
-    this.loop.request("first-render", () => {
+    // Runs after the lanes' redraw in the same frame: this revision is now on screen.
+    this.loop.request("drawn", () => {
+      this.drawnRevision = data.revision;
       if (Number.isNaN(this.timing.firstRender)) this.timing.firstRender = performance.now() - this.timing.start;
       this.host.dataset.ready = "true";
     });
@@ -866,6 +870,8 @@ export class EditorPage {
       cursor: this.session ? this.session.cursor : null,
       nOps: this.session ? this.session.nOps : null,
       ready: !!this.data,
+      dataRevision: this.data ? this.data.revision : null,
+      drawnRevision: this.drawnRevision ?? null,
       nTicks: this.data ? this.data.nTicks : null,
       playing: this.player ? this.player.playing : false,
       currentTime: this.player ? this.player.currentTime : 0,

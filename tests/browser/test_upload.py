@@ -1,0 +1,100 @@
+"""Projects screen: upload with progress, generation with progress, open; rename, duplicate, delete."""
+
+from __future__ import annotations
+
+import pytest
+
+from conftest import media_clip, screenshot, state, upload
+
+pytestmark = pytest.mark.browser
+
+
+def test_upload_shows_upload_and_generation_progress_then_opens(page, api):
+    clip = media_clip("bbb_1s_1280x720_vp8_vorbis.webm")
+    page.goto("/")
+    page.wait_for_selector("[data-testid=projects-page]")
+    screenshot(page, "projects-empty-or-list")
+    # Progress values as the user sees them (aria-valuenow), recorded from the first change on.
+    page.evaluate("""() => {
+        window.__seen = {upload: [], generation: []};
+        const watch = (testid, key) => new MutationObserver(() => {
+            const el = document.querySelector(`[data-testid=upload-box] [data-testid=${testid}]`);
+            if (el) window.__seen[key].push(Number(el.getAttribute('aria-valuenow')));
+        }).observe(document.body, {subtree: true, attributes: true, attributeFilter: ['aria-valuenow'], childList: true});
+        watch('upload-progress', 'upload');
+        watch('generation-progress', 'generation');
+    }""")
+    page.set_input_files("[data-testid=file-input]", str(clip))
+    box = page.locator("[data-testid=upload-box]")
+    page.wait_for_function(
+        "() => document.querySelector('[data-testid=upload-box] [data-testid=upload-progress]')"
+        ".getAttribute('aria-valuenow') === '100'")
+    page.wait_for_function(
+        "() => { const el = document.querySelector('[data-testid=upload-box] [data-testid=generation-progress]');"
+        " return el && el.getAttribute('aria-valuenow') === '100'; }", timeout=90_000)
+    page.wait_for_function(
+        "() => document.querySelector('[data-testid=upload-status]').textContent.startsWith('Ready')")
+    screenshot(page, "projects-upload-done")
+    seen = page.evaluate("() => window.__seen")
+    assert seen["upload"] and seen["upload"][-1] == 100
+    assert seen["generation"] and max(seen["generation"]) == 100
+    assert seen["generation"] == sorted(seen["generation"]), "generation progress went backwards"
+
+    row = page.locator("[data-testid=project-row]", has_text=clip.stem)
+    assert row.get_attribute("data-status") == "ready"
+    project_id = row.get_attribute("data-id")
+    box.locator("[data-testid=open-uploaded]").click()
+    page.wait_for_selector("#app[data-ready='true']")
+    s = state(page)
+    assert s["projectId"] == project_id
+    assert s["nTicks"] == api.get(f"/api/projects/{project_id}").json()["n_ticks"]
+    page.wait_for_function("() => document.querySelector('[data-testid=video]').readyState >= 1")
+
+
+def test_rejected_upload_shows_the_servers_reason(page, tmp_path):
+    bogus = tmp_path / "notes.mp4"
+    bogus.write_text("this is not a video\n" * 50)
+    page.goto("/")
+    page.set_input_files("[data-testid=file-input]", str(bogus))
+    status = page.locator("[data-testid=upload-status]")
+    page.wait_for_function("() => document.querySelector('[data-testid=upload-status]').classList.contains('error')")
+    assert "notes.mp4: not a readable media file" in status.text_content()
+    assert page.locator("[data-testid=project-row]", has_text="notes").count() == 0
+
+
+def test_rename_duplicate_and_delete_with_confirmation(page, api):
+    project = upload(api, media_clip("bbb_1s_1280x720_vp8_vorbis.webm"), name="list-ops", generate=False)
+    pid = project["id"]
+    page.goto("/")
+    row = page.locator(f"[data-testid=project-row][data-id='{pid}']")
+    row.wait_for()
+
+    row.locator("[data-testid=project-rename]").click()
+    page.fill("[data-testid=dialog-input]", "renamed clip")
+    page.click("[data-testid=dialog-ok]")
+    page.wait_for_function(
+        f"() => document.querySelector(\"[data-id='{pid}'] [data-testid=project-open]\").textContent === 'renamed clip'")
+    assert api.get(f"/api/projects/{pid}").json()["name"] == "renamed clip"
+
+    before = {p["id"] for p in api.get("/api/projects").json()}
+    row.locator("[data-testid=project-duplicate]").click()
+    page.locator("[data-testid=project-row]", has_text="renamed clip (copy)").wait_for()
+    copies = [p for p in api.get("/api/projects").json() if p["id"] not in before]
+    assert [c["name"] for c in copies] == ["renamed clip (copy)"]
+
+    row.locator("[data-testid=project-delete]").click()
+    screenshot(page, "projects-delete-confirmation")
+    page.click("[data-testid=dialog-cancel]")
+    assert api.get(f"/api/projects/{pid}").status_code == 200
+    assert row.count() == 1
+
+    row.locator("[data-testid=project-delete]").click()
+    page.click("[data-testid=dialog-ok]")
+    row.wait_for(state="detached")
+    assert api.get(f"/api/projects/{pid}").status_code == 404
+    api.delete(f"/api/projects/{copies[0]['id']}")
+
+
+def test_open_unknown_project_says_so(page):
+    page.goto("/#/project/" + "0" * 32)
+    assert "does not exist" in page.locator("[data-testid=editor-error]").text_content()
