@@ -4,6 +4,7 @@ errors, reconnect after the chair dies, the watchdog, and a corrupted byte strea
 from __future__ import annotations
 
 import os
+import signal
 import random
 import time
 import uuid
@@ -14,7 +15,7 @@ import serial
 
 from autohaptics.chair import ChairLink, ChairPlayer, VirtualChair, build_simulator, list_ports
 from autohaptics.chair.protocol import Frame, HelloRequest, Parser, Status, StatusRequest, encode
-from autohaptics.errors import DeviceError
+from autohaptics.errors import DeviceError, ParameterError
 from autohaptics.timeline import Timeline
 
 
@@ -205,3 +206,37 @@ def test_corrupted_byte_stream_is_dropped_whole_and_counted(chair):
     assert status.frames_ok == len(applied) > 0
     logged = [e["status"] for e in chair.read_log() if e["ev"] == "rx_error"]
     assert logged == [p.status.label for p in expected if p.status != Status.OK]
+
+
+def test_a_hung_chair_is_detected_by_silence_and_reconnected(chair):
+    link = ChairLink(chair.device, status_interval_s=0.1, silence_timeout_s=0.5, handshake_timeout_s=0.3,
+                     backoff_s=(0.02, 0.1))
+    try:
+        link.connect()
+        os.kill(chair.pid, signal.SIGSTOP)  # firmware hang: the port stays, the chair says nothing
+        try:
+            deadline = time.monotonic() + 5.0
+            while link.connected and time.monotonic() < deadline:
+                time.sleep(0.02)
+            assert not link.connected and "no reply from the chair" in link.status().last_error
+        finally:
+            os.kill(chair.pid, signal.SIGCONT)
+        assert link.wait_connected(5.0)
+        assert link.status().reconnects == 1 and link.request_status() is not None
+    finally:
+        link.close()
+
+
+def test_a_failing_listener_does_not_break_the_link(link, chair):
+    def broken(*args):
+        raise RuntimeError("listener bug")
+
+    unsubscribe = link.on("sent", broken)
+    assert link.send_frame(Frame(tick=1))
+    assert "listener bug" in link.status().last_error
+    unsubscribe()
+    assert link.send_frame(Frame(tick=2))
+    chair.wait_for(lambda e: e["ev"] == "frame" and e["tick"] == 2)
+    assert [e["tick"] for e in chair.frames()] == [1, 2]
+    with pytest.raises(ParameterError, match="unknown link event"):
+        link.on("exploded", broken)

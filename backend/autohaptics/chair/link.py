@@ -208,16 +208,18 @@ class ChairLink:
             t_ns = time.monotonic_ns()  # the send time: CLOCK_MONOTONIC as the frame goes to the OS
             try:
                 ser.write(wire)
+                failure = None
             except (serial.SerialException, OSError) as exc:
                 self._frames_dropped += 1
-                self._lose(ser, f"write failed: {exc}")
-                return False
-            self._seq = seq
-            self._frames_sent += 1
-            self._last_tick = frame.tick
-            listeners = list(self._listeners["sent"])
-        for fn in listeners:
-            fn(frame.tick, seq, t_ns)
+                failure = f"write failed: {exc}"
+            else:
+                self._seq = seq
+                self._frames_sent += 1
+                self._last_tick = frame.tick
+        if failure is not None:
+            self._lose(ser, failure)  # outside the lock: "disconnected" listeners may take their own locks
+            return False
+        self._emit("sent", frame.tick, seq, t_ns)
         return True
 
     def send_stop(self) -> bool:
@@ -348,8 +350,9 @@ class ChairLink:
                 ser.write(data)
                 return True
             except (serial.SerialException, OSError) as exc:
-                self._lose(ser, f"write failed: {exc}")
-                return False
+                failure = f"write failed: {exc}"
+        self._lose(ser, failure)
+        return False
 
     def _lose(self, ser: serial.Serial, reason: str) -> None:
         """Mark ``ser`` dead; the I/O thread closes it and reconnects."""
@@ -376,7 +379,11 @@ class ChairLink:
         with self._lock:
             listeners = list(self._listeners[event])
         for fn in listeners:
-            fn(*args)
+            try:
+                fn(*args)
+            except Exception as exc:  # a faulty listener must not take the link down
+                self._note_error(f"{event} listener {getattr(fn, '__qualname__', fn)!s} failed: "
+                                 f"{type(exc).__name__}: {exc}")
 
 
 def _check_capabilities(port: str, hello: Hello) -> None:

@@ -49,6 +49,7 @@ class PlayerStatus:
     ticks_skipped: int
     latency_offset_ms: float
     comfort: dict
+    error: str | None  # why playback stopped on its own, if it did
     link: dict
 
     def to_dict(self) -> dict:
@@ -97,6 +98,7 @@ class ChairPlayer:
         self._frames_sent = 0
         self._frames_dropped = 0
         self._skipped = 0
+        self._error: str | None = None
         self._closed = False
         self._unsubscribe = link.on("connected", self._on_connected)
         self._thread = threading.Thread(target=self._run, name=f"chair-player {link.port}", daemon=True)
@@ -210,14 +212,15 @@ class ChairPlayer:
             return self._position_at(time.monotonic())
 
     def status(self) -> PlayerStatus:
+        link = self._link.status().to_dict()  # not under our lock: the link's listeners take it
         with self._cv:
             tl = self._timeline
             return PlayerStatus(
                 state=self._state, position_s=self._position_at(time.monotonic()),
                 duration_s=tl.duration_s if tl is not None else None, tick=self._last_tick,
                 frames_sent=self._frames_sent, frames_dropped=self._frames_dropped, ticks_skipped=self._skipped,
-                latency_offset_ms=self._offset_s * 1000.0, comfort=self._comfort.to_dict(),
-                link=self._link.status().to_dict())
+                latency_offset_ms=self._offset_s * 1000.0, comfort=self._comfort.to_dict(), error=self._error,
+                link=link)
 
     # ---------------------------------------------------------------- private
     def _position_at(self, now: float) -> float:
@@ -262,7 +265,14 @@ class ChairPlayer:
                         self._cv.wait(min(wait, 0.25))
                         continue
                     break
-            self._tick()
+            try:
+                self._tick()
+            except Exception as exc:  # never die silently with the chair running
+                with self._cv:
+                    self._error = f"{type(exc).__name__}: {exc}"
+                    self._state = "stopped"
+                    self._cv.notify_all()
+                self._link.send_stop()
 
     def _tick(self) -> None:
         with self._send_lock:
