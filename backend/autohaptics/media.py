@@ -195,7 +195,7 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
             yield out.astype(np.float32, copy=False)
 
     def to_out_rate(mono: np.ndarray) -> np.ndarray:
-        if resampler is None:
+        if resampler is None or mono.size == 0:
             return mono
         frame = av.AudioFrame.from_ndarray(mono[None, :], format="flt", layout="mono")
         frame.sample_rate = sr_in
