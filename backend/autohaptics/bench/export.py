@@ -2,13 +2,17 @@
 
 The timeline (default 2 hours = 72,000 ticks) comes from :func:`synthetic_timeline`: film-like
 scenes of silence, held levels, ramps and busy per-tick action on the motors, slow temperature
-drifts, and bursts of fans. Figures are printed, never asserted.
+drifts, and bursts of fans. Each format is measured in its own fresh process (so one export's
+freed memory does not hide the next one's peak). Figures are printed, never asserted.
 """
 
 from __future__ import annotations
 
 import argparse
 import gc
+import json
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -16,6 +20,7 @@ import numpy as np
 import psutil
 
 from autohaptics.bench.common import measure, table
+from autohaptics.errors import AutohapticsError
 from autohaptics.export import FORMATS, export_timeline, get_format
 from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS, TEMP_HIGH_C, TEMP_LOW_C
 from autohaptics.timebase import n_ticks as ticks_for
@@ -84,22 +89,41 @@ def run(args: argparse.Namespace) -> int:
     specs = [get_format(f.strip()) for f in args.formats.split(",") if f.strip()]
     n = ticks_for(args.hours * 3600.0)
     built = measure(lambda: synthetic_timeline(n, seed=args.seed))
-    tl = built.result
-    proc = psutil.Process()
-    print(f"timeline: {n} ticks ({args.hours:g} h), generated in {built.wall_s:.2f} s; "
-          f"RSS {proc.memory_info().rss / 2**20:.1f} MiB")
+    print(f"timeline: {n} ticks ({args.hours:g} h), generated in {built.wall_s:.2f} s; each format is "
+          "exported in a fresh process that first generates the same timeline")
+    del built
     rows = []
     with tempfile.TemporaryDirectory(prefix="autohaptics-bench-") as tmp:
         out_dir = Path(args.keep) if args.keep else Path(tmp)
         out_dir.mkdir(parents=True, exist_ok=True)
         for spec in specs:
             path = out_dir / f"bench-{args.hours:g}h-{spec.name}{spec.suffix}"
-            gc.collect()
-            rss0 = proc.memory_info().rss / 2**20
-            m = measure(lambda: export_timeline(tl, spec.name, path))
-            rows.append([spec.name, m.wall_s, m.cpu_s, m.peak_rss_mb, m.peak_rss_mb - rss0,
-                         path.stat().st_size / 2**20])
-    print(table(rows, ["format", "wall_s", "cpu_s", "peak_rss_MiB", "peak_above_start_MiB", "size_MiB"]))
+            r = _run_child(spec.name, n, args.seed, path)
+            rows.append([spec.name, r["wall_s"], r["cpu_s"], r["rss_before_MiB"], r["peak_rss_MiB"],
+                         r["peak_rss_MiB"] - r["rss_before_MiB"], path.stat().st_size / 2**20])
+    print(table(rows, ["format", "wall_s", "cpu_s", "rss_before_MiB", "peak_rss_MiB", "peak_increase_MiB",
+                       "size_MiB"]))
     if args.keep:
         print(f"files kept in {args.keep}")
     return 0
+
+
+def _run_child(fmt: str, n: int, seed: int, path: Path) -> dict:
+    cmd = [sys.executable, "-m", "autohaptics.bench.export", fmt, str(n), str(seed), str(path)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    if proc.returncode != 0:
+        raise AutohapticsError(f"bench export: exporting {fmt} failed: {proc.stderr.strip()[-400:]}")
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def _child(fmt: str, n: int, seed: int, path: str) -> dict:
+    """Generate the timeline, then export it once, measured (runs in a fresh process)."""
+    tl = synthetic_timeline(n, seed=seed)
+    gc.collect()
+    before = psutil.Process().memory_info().rss / 2**20
+    m = measure(lambda: export_timeline(tl, fmt, path))
+    return {"wall_s": m.wall_s, "cpu_s": m.cpu_s, "rss_before_MiB": before, "peak_rss_MiB": m.peak_rss_mb}
+
+
+if __name__ == "__main__":  # the measured child of run(): FORMAT N_TICKS SEED PATH
+    print(json.dumps(_child(sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4])))
