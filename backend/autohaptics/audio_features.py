@@ -256,7 +256,10 @@ def _frames(n_steps: np.ndarray, spec_steps: np.ndarray, low_energy: np.ndarray,
         loud = n_steps.max(axis=1) if k else np.zeros(0)
     else:
         loud = n_steps.mean(axis=1) if k else np.zeros(0)
-    spec = spec_steps.mean(axis=1) if k else np.zeros((0, spec_steps.shape[-1]))
+    spec = np.zeros((k, spec_steps.shape[-1]))
+    for i in range(spec_steps.shape[1]):  # sequential sum: the same bits whatever k (chunked == whole)
+        spec += spec_steps[:, i]
+    spec /= max(1, spec_steps.shape[1])
     return AudioFeatures(
         t_s=np.arange(first_frame, first_frame + k, dtype=np.float64) * FRAME_S,
         loudness=np.maximum(loud, 0.0),

@@ -94,12 +94,12 @@ def booming(*, specific: np.ndarray, params: BoomingParams = BoomingParams()) ->
     loud = area >= max(float(params.min_loudness_sone), np.finfo(float).tiny)
     out = np.zeros_like(area)
     if params.variant == "hatano":
-        low = bark_to_hz(Z_BARK) < params.lf_cutoff_hz
-        weighted = (n_spec @ _HATANO_W) * T.BARK_STEP
-        n_lf = n_spec[..., low].sum(axis=-1) * T.BARK_STEP
+        low = (bark_to_hz(Z_BARK) < params.lf_cutoff_hz).astype(np.float64)
+        weighted = (n_spec * _HATANO_W).sum(axis=-1) * T.BARK_STEP
+        n_lf = (n_spec * low).sum(axis=-1) * T.BARK_STEP  # row by row: the same result whatever the batch
         ratio = np.zeros_like(area)
         np.divide(n_lf, area, out=ratio, where=loud)
         out = np.where(loud, weighted * ratio, 0.0)
     else:
-        np.divide((n_spec @ _PAPER_W) * T.BARK_STEP, area, out=out, where=loud)
+        np.divide((n_spec * _PAPER_W).sum(axis=-1) * T.BARK_STEP, area, out=out, where=loud)
     return out

@@ -59,7 +59,7 @@ def sharpness(*, specific: np.ndarray, params: SharpnessParams = SharpnessParams
     """
     n_spec = _check_specific(specific)
     area = n_spec.sum(axis=-1)  # sone / 0.1 Bark: the dz factors cancel in the ratio
-    moment = n_spec @ _MOMENT
+    moment = (n_spec * _MOMENT).sum(axis=-1)  # row by row: the same result whatever the batch
     out = np.zeros_like(area)
     loud = area * T.BARK_STEP >= max(float(params.min_loudness_sone), np.finfo(float).tiny)
     np.divide(moment, area, out=out, where=loud)
