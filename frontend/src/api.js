@@ -11,9 +11,10 @@
  *   overrides?: Record<string, any>}} Params
  * @typedef {{id: string, name: string, created_at?: string, updated_at?: string,
  *   status: "new"|"running"|"ready"|"failed"|"cancelled", duration_s?: number|null, n_ticks?: number|null,
- *   source?: any, job?: Job|null, params?: Params, revision?: number, view?: Record<string, any>|null}} Project
+ *   source?: any, job?: Job|null, params?: Params, revision?: number, cursor?: number, has_timeline?: boolean,
+ *   media_type?: string, view?: Record<string, any>|null}} Project
  * @typedef {{revision: number, cursor: number, ops: Array<Record<string, any>>}} EditList
- * @typedef {{points: number, duration_s: number, min: number[], max: number[]}} Waveform
+ * @typedef {{points: number, duration_s: number, has_audio?: boolean, min: number[], max: number[]}} Waveform
  */
 
 export class ApiError extends Error {

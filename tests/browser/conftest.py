@@ -6,13 +6,13 @@ Debian's Chromium driven by Playwright (never a downloaded browser).
 - ``sintel_project``: a generated project of the sintel trailer (once per session); tests work on
   copies from ``project_copy`` so they never see each other's edits.
 - ``page``: a fresh browser context and page per test; an uncaught page error fails the test.
-- ``screenshot(page, name)``: saves test-artifacts/screenshots/<name>.png.
+
+The helpers the tests import live in browser_support.py.
 """
 
 from __future__ import annotations
 
 import os
-import shutil
 import signal
 import socket
 import subprocess
@@ -23,25 +23,13 @@ from pathlib import Path
 import httpx
 import pytest
 
-REPO = Path(__file__).resolve().parents[2]
-SHARED = Path(os.environ.get("AUTOHAPTICS_SHARED", REPO.parent / "shared")).resolve()
-MEDIA = SHARED / "media"
-ARTIFACTS = REPO / "test-artifacts" / "screenshots"
+from browser_support import REPO, media_clip, upload
+
 CHROMIUM = Path(os.environ.get("AUTOHAPTICS_CHROMIUM", "/usr/bin/chromium"))
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
                  "--disable-sync", "--no-first-run", "--disable-quic"]
 VIEWPORT = {"width": 1440, "height": 900}
 SERVER_START_S = 60.0
-JOB_TIMEOUT_S = 120.0
-
-
-def media_clip(name: str) -> Path:
-    """A clip of ../shared/media; the test is skipped with the reason when it is absent."""
-    path = MEDIA / name
-    if not path.is_file():
-        pytest.skip(f"shared clip {name} not found at {path}: it comes from the project's shared folder "
-                    "(../shared next to the repository, or set AUTOHAPTICS_SHARED)")
-    return path
 
 
 def _free_port() -> int:
@@ -58,7 +46,7 @@ def server(tmp_path_factory) -> str:
     log = open(log_path, "w")
     proc = subprocess.Popen(
         [sys.executable, "-m", "autohaptics.cli.main", "serve", "--host", "127.0.0.1", "--port", str(port),
-         "--data", str(data / "projects-data"), "--frontend", str(REPO / "frontend")],
+         "--data", str(data / "data"), "--frontend", str(REPO / "frontend")],
         stdout=log, stderr=subprocess.STDOUT, cwd=REPO, start_new_session=True)
     url = f"http://127.0.0.1:{port}"
     deadline = time.monotonic() + SERVER_START_S
@@ -72,7 +60,7 @@ def server(tmp_path_factory) -> str:
         except httpx.HTTPError:
             pass
         if time.monotonic() > deadline:
-            proc.kill()
+            os.killpg(proc.pid, signal.SIGKILL)
             log.close()
             pytest.fail(f"autohaptics serve did not answer /health within {SERVER_START_S} s:\n"
                         f"{log_path.read_text()[-3000:]}")
@@ -91,32 +79,6 @@ def server(tmp_path_factory) -> str:
 def api(server) -> httpx.Client:
     with httpx.Client(base_url=server, timeout=60.0) as client:
         yield client
-
-
-def wait_job(api: httpx.Client, job_id: str, timeout: float = JOB_TIMEOUT_S) -> dict:
-    """Poll a job until it ends; returns it (fails the test on timeout)."""
-    deadline = time.monotonic() + timeout
-    while True:
-        job = api.get(f"/api/jobs/{job_id}").json()
-        if job["status"] in ("done", "failed", "cancelled"):
-            return job
-        if time.monotonic() > deadline:
-            pytest.fail(f"job {job_id} still {job['status']} after {timeout} s")
-        time.sleep(0.2)
-
-
-def upload(api: httpx.Client, path: Path, *, name: str | None = None, generate: bool = True) -> dict:
-    """Upload through the API; with ``generate`` waits for the job and checks it finished."""
-    with open(path, "rb") as fh:
-        r = api.post("/api/projects", files={"file": (path.name, fh)},
-                     data={"name": name or path.stem, "generate": str(generate).lower()})
-    assert r.status_code == 201, r.text
-    project = r.json()
-    if generate:
-        job = wait_job(api, project["job"]["id"])
-        assert job["status"] == "done", job
-        project = api.get(f"/api/projects/{project['id']}").json()
-    return project
 
 
 @pytest.fixture(scope="session")
@@ -157,51 +119,3 @@ def page(browser, server):
     yield pg
     context.close()
     assert not errors, f"uncaught errors in the page: {errors}"
-
-
-def screenshot(pg, name: str) -> Path:
-    ARTIFACTS.mkdir(parents=True, exist_ok=True)
-    path = ARTIFACTS / f"{name}.png"
-    pg.screenshot(path=str(path))
-    return path
-
-
-def open_editor(pg, project_id: str) -> None:
-    """Open the editor on a project and wait until its timeline is drawn."""
-    pg.goto(f"/#/project/{project_id}")
-    pg.wait_for_selector("#app[data-ready='true']")
-    pg.wait_for_function("() => window.autohaptics.state() && window.autohaptics.state().revision !== null")
-
-
-def state(pg) -> dict:
-    return pg.evaluate("() => window.autohaptics.state()")
-
-
-def lane_pixels(pg, lane: str) -> list[int]:
-    """RGBA bytes of a lane's canvas (what the user sees, at device resolution)."""
-    return pg.evaluate(
-        """(lane) => {
-            const c = document.querySelector(`canvas[data-lane="${lane}"]`);
-            return Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data);
-        }""",
-        lane,
-    )
-
-
-def wait_revision_above(pg, revision: int) -> dict:
-    """Wait until the editor saved past ``revision`` and drew the composed timeline of the new revision."""
-    pg.wait_for_function(
-        """(rev) => {
-            const s = window.autohaptics.state();
-            return s && s.revision > rev && s.drawnRevision === s.revision && s.saveState === 'saved';
-        }""",
-        arg=revision)
-    return state(pg)
-
-
-def copy_to_docs(src: Path, name: str) -> None:
-    """Refresh a README screenshot in docs/img (only when AUTOHAPTICS_UPDATE_DOCS_IMG=1)."""
-    if os.environ.get("AUTOHAPTICS_UPDATE_DOCS_IMG") == "1":
-        dest = REPO / "docs" / "img" / name
-        dest.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(src, dest)

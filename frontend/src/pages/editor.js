@@ -12,7 +12,7 @@ import { ApiError } from "../api.js";
 import { ChairDiagram } from "../chair.js";
 import { FrameLoop } from "../core/frameloop.js";
 import { TimelineView } from "../core/timeline.js";
-import { confirmDialog, h, promptDialog, toast } from "../dom.js";
+import { h, promptDialog, toast } from "../dom.js";
 import { Clipboard, clearOp, fadeOp, markerAddOp, markerDeleteOp, markerUpdateOp, scaleOp, setOp, tempPointsOp } from "../editing.js";
 import { FanOverlay } from "../fan-overlay.js";
 import { formatTime } from "../format.js";
@@ -381,7 +381,7 @@ export class EditorPage {
     try {
       const wf = await this.api.waveform(this.projectId, points);
       if (this.disposed) return;
-      if (/** @type {any} */ (wf).has_audio === false) this.waveformLane.setStatus("No audio stream");
+      if (wf.has_audio === false) this.waveformLane.setStatus("No audio stream");
       else this.waveformLane.setPeaks(wf);
     } catch (err) {
       this.waveformLane.setStatus(`Waveform unavailable: ${errorText(err)}`);
@@ -766,6 +766,7 @@ export class EditorPage {
     // Text fields keep every key (their own undo included); sliders keep their arrow keys.
     if (t && (t.isContentEditable || tag === "TEXTAREA" || tag === "SELECT" || (tag === "INPUT" && !["range", "checkbox", "button"].includes(inputType)))) return;
     if (inputType === "range" && /^(Arrow|Home|End|Page)/.test(e.key)) return;
+    const mod = e.ctrlKey || e.metaKey;
     const tl = this.timeline;
     const tick = this.tickS;
     let handled = true;

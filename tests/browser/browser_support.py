@@ -1,0 +1,125 @@
+"""Helpers of the browser tests, kept apart from conftest.py so test modules import them by a name
+no other folder uses: paths, the shared clips, API set-up, and reading the editor's state."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time
+from pathlib import Path
+
+import httpx
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+SHARED = Path(os.environ.get("AUTOHAPTICS_SHARED", REPO.parent / "shared")).resolve()
+MEDIA = SHARED / "media"
+ARTIFACTS = REPO / "test-artifacts" / "screenshots"
+JOB_TIMEOUT_S = 120.0
+
+
+def media_clip(name: str) -> Path:
+    """A clip of ../shared/media; the test is skipped with the reason when it is absent."""
+    path = MEDIA / name
+    if not path.is_file():
+        pytest.skip(f"shared clip {name} not found at {path}: it comes from the project's shared folder "
+                    "(../shared next to the repository, or set AUTOHAPTICS_SHARED)")
+    return path
+
+
+def wait_until(check, what: str, timeout: float = 20.0) -> None:
+    """Poll ``check()`` until it is true; fail naming ``what`` on timeout."""
+    deadline = time.monotonic() + timeout
+    while not check():
+        if time.monotonic() > deadline:
+            pytest.fail(f"timed out after {timeout} s waiting until {what}")
+        time.sleep(0.1)
+
+
+def wait_job(api: httpx.Client, job_id: str, timeout: float = JOB_TIMEOUT_S) -> dict:
+    """Poll a job until it ends; returns it (fails the test on timeout)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        job = api.get(f"/api/jobs/{job_id}").json()
+        if job["status"] in ("done", "failed", "cancelled"):
+            return job
+        if time.monotonic() > deadline:
+            pytest.fail(f"job {job_id} still {job['status']} after {timeout} s")
+        time.sleep(0.2)
+
+
+def upload(api: httpx.Client, path: Path, *, name: str | None = None, generate: bool = True) -> dict:
+    """Upload through the API; with ``generate`` waits for the job and checks it finished."""
+    with open(path, "rb") as fh:
+        r = api.post("/api/projects", files={"file": (path.name, fh)},
+                     data={"name": name or path.stem, "generate": str(generate).lower()})
+    assert r.status_code == 201, r.text
+    project = r.json()
+    if generate:
+        job = wait_job(api, project["job"]["id"])
+        assert job["status"] == "done", job
+        project = api.get(f"/api/projects/{project['id']}").json()
+    return project
+
+
+def screenshot(pg, name: str) -> Path:
+    """Save test-artifacts/screenshots/<name>.png."""
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    path = ARTIFACTS / f"{name}.png"
+    pg.screenshot(path=str(path))
+    return path
+
+
+def copy_to_docs(src: Path, name: str) -> None:
+    """Refresh a README screenshot in docs/img (only when AUTOHAPTICS_UPDATE_DOCS_IMG=1)."""
+    if os.environ.get("AUTOHAPTICS_UPDATE_DOCS_IMG") == "1":
+        dest = REPO / "docs" / "img" / name
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(src, dest)
+
+
+def open_editor(pg, project_id: str) -> None:
+    """Open the editor on a project and wait until its timeline is drawn and its history loaded."""
+    pg.goto(f"/#/project/{project_id}")
+    pg.wait_for_selector("#app[data-ready='true']")
+    pg.wait_for_function("() => { const s = window.autohaptics.state(); return s && s.revision !== null; }")
+
+
+def state(pg) -> dict:
+    """The editor's debug snapshot (window.autohaptics.state())."""
+    return pg.evaluate("() => window.autohaptics.state()")
+
+
+def values_at(pg, tick: int) -> dict:
+    """Composed values at one tick as the editor holds them."""
+    return pg.evaluate("(t) => window.autohaptics.valuesAt(t)", tick)
+
+
+def lane_pixels(pg, lane: str) -> list[int]:
+    """RGBA bytes of a lane's canvas (what the user sees, at device resolution)."""
+    return pg.evaluate(
+        """(lane) => {
+            const c = document.querySelector(`canvas[data-lane="${lane}"]`);
+            return Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data);
+        }""",
+        lane,
+    )
+
+
+def lane_rect(pg, lane: str) -> dict:
+    return pg.evaluate("(id) => window.autohaptics.laneRect(id)", lane)
+
+
+def client_x(pg, time_s: float) -> float:
+    return pg.evaluate("(t) => window.autohaptics.clientXOf(t)", time_s)
+
+
+def wait_revision_above(pg, revision: int) -> dict:
+    """Wait until the editor saved past ``revision`` and drew the composed timeline of the new revision."""
+    pg.wait_for_function(
+        """(rev) => {
+            const s = window.autohaptics.state();
+            return s && s.revision > rev && s.drawnRevision === s.revision && s.saveState === 'saved';
+        }""",
+        arg=revision)
+    return state(pg)
