@@ -248,6 +248,8 @@ def default_generator(**overrides: Any) -> dict:
 
 # ---------------------------------------------------------------------- private
 def _as_array(name: str, value: Any) -> np.ndarray:
+    if isinstance(value, np.ndarray) and value.dtype in (np.float32, np.float64):
+        return value  # no copy: a 2-hour fan track is 44 MB
     try:
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
@@ -272,8 +274,9 @@ def _check_track(name: str, values: Any, shape: tuple[int, ...], lo: float, hi: 
             idx = tuple(int(i) for i in np.argwhere(arr == bad)[0])
             raise ParameterError(
                 f"track '{name}' value {bad:g} at index {idx} is outside [{lo:g}, {hi:g}] (shape {shape})")
-        arr = np.clip(arr, lo, hi)
-    return arr.astype(np.float32)
+        if amin < lo or amax > hi:
+            arr = np.clip(arr, lo, hi)
+    return arr.astype(np.float32, copy=False)
 
 
 def _fmt(v: float) -> str:
@@ -285,12 +288,13 @@ def _fmt(v: float) -> str:
 
 def _write_rows(fh: IO[str], arr: np.ndarray, *, flat: bool = False) -> None:
     """Write ``arr`` as nested JSON lists, one tick per line, rounded to 4 decimals."""
-    arr = np.asarray(arr, dtype=np.float64)
     fh.write("[")
     zero_cache: dict[tuple, str] = {}
-    rounded = np.round(arr, _DECIMALS)
+    block = 4096
     for k in range(arr.shape[0]):
-        row = rounded[k]
+        if k % block == 0:
+            rounded = np.round(np.asarray(arr[k:k + block], dtype=np.float64), _DECIMALS)
+        row = rounded[k % block]
         if flat:
             text = _fmt(float(row[0]))
         elif not row.any():
