@@ -45,6 +45,7 @@ def test_push_stop_and_status(chair, tmp_path, capsys):
     assert run_cli("chair", "push", str(path), "--port", chair.device, "--start", "0.2", "--intensity", "0.5",
                    "--mute", "seat") == 0
     assert "pushed 4 frames" in capsys.readouterr().out
+    chair.wait_for(lambda e: e["ev"] == "stop")  # everything before the final STOP is logged
     frames = chair.frames()
     assert [e["tick"] for e in frames] == [2, 3, 4, 5]
     assert all(e["motors"][4] == 64 for e in frames)  # floor(0.5 * 0.5 * 255 + 0.5)

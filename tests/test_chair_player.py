@@ -58,6 +58,11 @@ def _ticks(chair: VirtualChair) -> list[int]:
     return [e["tick"] for e in chair.frames()]
 
 
+def _wait_stops(chair: VirtualChair, n: int) -> None:
+    """The chair has processed everything up to the n-th STOP (frames before it are logged)."""
+    chair.wait_for(lambda e: e["ev"] == "stop", count=n)
+
+
 def _consecutive(ticks: list[int]) -> bool:
     return ticks == list(range(ticks[0], ticks[0] + len(ticks)))
 
@@ -86,10 +91,12 @@ def test_heat_mute_sends_neutral_and_full_scale_is_exact(link, chair):
     tl.vibration[0] = 1.0
     tl.temperature_c[:] = 55.0
     push(link, tl, comfort=Comfort(mute=frozenset({"heat", "fans"})))
+    _wait_stops(chair, 1)
     frames = chair.frames()
     assert frames[0]["motors"] == [255] * 9
     assert all(e["temp_target_cc"] == 3300 and e["fans"] == [0] * 153 for e in frames)
     push(link, tl)  # unmuted: 55 C is clamped to the chair's 40 C maximum
+    _wait_stops(chair, 2)
     assert [e["temp_target_cc"] for e in chair.frames()[4:]] == [4000] * 4
 
 
@@ -103,6 +110,7 @@ def test_seek_jumps_and_ticks_stay_consecutive(link, chair):
         player.seek(2.0)  # backwards
         chair.wait_for(lambda e: e["ev"] == "frame" and 22 <= e["tick"] < 100)
         player.pause()
+    _wait_stops(chair, 1)
     ticks = _ticks(chair)
     jump = ticks.index(120)
     back = ticks.index(20)
@@ -147,13 +155,14 @@ def test_stop_turns_everything_off_at_once(link, chair):
         player.stop()
         assert player.state == "stopped"
         stop = chair.wait_for(lambda e: e["ev"] == "stop")
+        threading.Event().wait(0.25)  # more than two ticks: a frame sent after STOP would show
+    st = link.request_status()  # answered after every earlier byte: the log is complete up to here
+    assert st.safe and st.stopped
     log = chair.read_log()
     i = log.index(stop)
     assert log[i - 1]["ev"] == "frame" and log[i - 1]["motors"] == [255] * 9  # on until the STOP ...
     assert stop["motors"] == [0] * 9 and stop["fans"] == [0] * 153 and stop["temp_target_cc"] == 3300
     assert all(e["ev"] != "frame" for e in log[i:])  # ... and nothing after it
-    st = link.request_status()
-    assert st.safe and st.stopped
 
 
 @pytest.mark.parametrize("offset_ms,first_tick", [(300, 23), (-300, 17), (0, 20)])
@@ -183,11 +192,13 @@ def test_push_range_and_end_of_timeline(link, chair):
     tl = _timeline(20, seed=5)
     status = push(link, tl, start_s=0.5, end_s=1.2)
     assert status.state == "ended" and status.frames_sent == 7
+    _wait_stops(chair, 1)
     assert _ticks(chair) == list(range(5, 12))
     with ChairPlayer(link, tl) as player:
         player.play(1.5)
         assert player.wait(3.0) and player.state == "ended"
         assert player.position_s == pytest.approx(2.0)
+    _wait_stops(chair, 2)
     assert _ticks(chair)[7:] == list(range(15, 20))
     assert chair.read_log()[-1]["ev"] == "stop"
 

@@ -99,6 +99,7 @@ class ChairPlayer:
         self._frames_dropped = 0
         self._skipped = 0
         self._error: str | None = None
+        self._gen = 0  # bumped by every command, so the clock thread never overrides a newer one
         self._closed = False
         self._unsubscribe = link.on("connected", self._on_connected)
         self._thread = threading.Thread(target=self._run, name=f"chair-player {link.port}", daemon=True)
@@ -127,6 +128,7 @@ class ChairPlayer:
             self._anchor_pos, self._anchor_t = pos, now
             self._state = "playing"
             self._next_tick = max(0, self._tick_at(now))
+            self._gen += 1
             self._cv.notify_all()
 
     def pause(self, position_s: float | None = None) -> None:
@@ -139,6 +141,7 @@ class ChairPlayer:
                 was_playing = self._state == "playing"
                 if self._state in ("playing", "idle", "ended", "stopped"):
                     self._state = "paused"
+                self._gen += 1
                 self._cv.notify_all()
             if was_playing:
                 self._link.send_stop()
@@ -160,6 +163,7 @@ class ChairPlayer:
                 now = time.monotonic()
                 self._anchor_pos, self._anchor_t = self._position_at(now), now
                 self._state = "stopped"
+                self._gen += 1
                 self._cv.notify_all()
             self._link.send_stop()
 
@@ -245,6 +249,7 @@ class ChairPlayer:
         if self._state == "playing":
             self._anchor_pos, self._anchor_t = self._position_at(now), now
             self._next_tick = max(0, self._tick_at(now))
+        self._gen += 1
         self._cv.notify_all()
 
     def _on_connected(self, hello) -> None:
@@ -287,16 +292,19 @@ class ChairPlayer:
                 if current - k > MAX_CATCH_UP_TICKS:
                     self._skipped += current - k
                     k = current
+                gen = self._gen
                 if k >= self._end_tick():
-                    self._state = "ended"
-                    self._anchor_pos, self._anchor_t = self._end_tick() * TICK_S, now
-                    self._cv.notify_all()
                     frame = None
                 else:
                     frame = compose_frame(self._timeline, k, comfort=self._comfort, profile=self._link.profile)
                     self._next_tick = k + 1
-            if frame is None:
+            if frame is None:  # the end: STOP goes out before anyone sees "ended"
                 self._link.send_stop()
+                with self._cv:
+                    if self._gen == gen and self._state == "playing":
+                        self._state = "ended"
+                        self._anchor_pos, self._anchor_t = self._end_tick() * TICK_S, time.monotonic()
+                        self._cv.notify_all()
                 return
             ok = self._link.send_frame(frame)
             with self._cv:

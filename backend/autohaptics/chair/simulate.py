@@ -198,15 +198,16 @@ class VirtualChair:
         """The applied-frame entries of the log, in order."""
         return [e for e in self.read_log() if e.get("ev") == "frame"]
 
-    def wait_for(self, predicate: Callable[[dict], bool], timeout_s: float = 3.0, *, after: int = 0) -> dict:
-        """Poll the log until an entry (at index >= ``after``) satisfies ``predicate``; return it."""
+    def wait_for(self, predicate: Callable[[dict], bool], timeout_s: float = 3.0, *, count: int = 1) -> dict:
+        """Poll the log until ``count`` entries satisfy ``predicate``; return the count-th one."""
         deadline = time.monotonic() + timeout_s
         while True:
-            for entry in self.read_log()[after:]:
-                if predicate(entry):
-                    return entry
+            matches = [entry for entry in self.read_log() if predicate(entry)]
+            if len(matches) >= count:
+                return matches[count - 1]
             if time.monotonic() > deadline:
-                raise DeviceError(f"virtual chair log {self.log_path} has no matching entry after {timeout_s} s")
+                raise DeviceError(f"virtual chair log {self.log_path} has {len(matches)} of {count} matching "
+                                  f"entries after {timeout_s} s")
             time.sleep(0.01)
 
     def __enter__(self) -> "VirtualChair":
