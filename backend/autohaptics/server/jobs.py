@@ -30,7 +30,7 @@ import logging
 import multiprocessing
 import queue as queue_mod
 import threading
-import time
+from collections import deque
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
@@ -138,6 +138,8 @@ class JobRunner:
         self.timelines = timelines
         self._lock = threading.RLock()
         self._live: dict[str, _Live] = {}
+        self._pending: deque[tuple[_Live, dict]] = deque()  # waiting for a free worker
+        self._in_pool = 0  # jobs handed to the pool and not finished
         self._manager = None
         self._events = None
         self._pool: ProcessPoolExecutor | None = None
@@ -167,6 +169,8 @@ class JobRunner:
         with self._lock:
             self._stopping = True
             live = list(self._live.values())
+        with self._lock:
+            self._pending.clear()
         for job in live:
             job.cancel_requested = True
             if job.future is not None:
@@ -208,13 +212,24 @@ class JobRunner:
                 "params": params, "name": project["name"]}
         with self._lock:
             self._live[job["id"]] = live
+            self._pending.append((live, spec))
+            self._dispatch()
+        return job
+
+    def _dispatch(self) -> None:
+        """Hand waiting jobs to the pool while fewer than ``workers`` are in it (call with the lock held).
+
+        Jobs wait here rather than in the pool's own queue, so a queued job is cancelled at once."""
+        while self._pending and self._in_pool < self.workers and not self._stopping:
+            live, spec = self._pending.popleft()
             try:
                 live.future = self._pool.submit(run_job, spec, self._events, live.cancel)
-            except (BrokenProcessPool, RuntimeError):
+            except (BrokenProcessPool, RuntimeError):  # a worker died: the pool is unusable, replace it
+                self._pool.shutdown(wait=False, cancel_futures=True)
                 self._pool = self._new_pool()
                 live.future = self._pool.submit(run_job, spec, self._events, live.cancel)
-        live.future.add_done_callback(lambda f, jid=job["id"]: self._finished.put((jid, f)))
-        return job
+            self._in_pool += 1
+            live.future.add_done_callback(lambda f, jid=live.job_id: self._finished.put((jid, f)))
 
     def cancel(self, job_id: str) -> dict:
         """Ask a job to stop (202); Conflict when it has already finished."""
@@ -225,8 +240,12 @@ class JobRunner:
             raise Conflict(f"job {job_id} has already finished ({job['status']})")
         live.cancel_requested = True
         live.cancel.set()
-        if live.future is not None:
-            live.future.cancel()  # succeeds only while it waits in the pool's queue
+        with self._lock:
+            waiting = [item for item in self._pending if item[0] is live]
+            for item in waiting:
+                self._pending.remove(item)
+        if waiting:
+            self._finished.put((job_id, None))  # never reached the pool: ends now
         return self.job(job_id)
 
     def cancel_project(self, project_id: str) -> None:
@@ -345,9 +364,12 @@ class JobRunner:
             except Exception:
                 log.exception("finishing job %s", job_id)
 
-    def _finish(self, job_id: str, future: Future) -> None:
+    def _finish(self, job_id: str, future: Future | None) -> None:
         with self._lock:
             live = self._live.get(job_id)
+            if future is not None:
+                self._in_pool -= 1
+                self._dispatch()
         if live is None:
             return
         status, error, result = _outcome(future, live)
@@ -371,10 +393,6 @@ class JobRunner:
             live.status = job["status"] if job else "cancelled"
             self._live.pop(job_id, None)
         self._publish_final(live, job)
-        if isinstance(future.exception() if not future.cancelled() else None, BrokenProcessPool):
-            with self._lock:
-                if not self._stopping:
-                    self._pool = self._new_pool()
 
     def _current_params(self, live: _Live) -> dict:
         """Parameters to derive with at the end of a job: the project's current ones when they changed
@@ -397,9 +415,9 @@ class JobRunner:
         return current
 
 
-def _outcome(future: Future, live: _Live) -> tuple[str, str | None, dict | None]:
-    """(status, error, result) of a finished future."""
-    if future.cancelled():
+def _outcome(future: Future | None, live: _Live) -> tuple[str, str | None, dict | None]:
+    """(status, error, result) of a finished future (None: cancelled before it reached the pool)."""
+    if future is None or future.cancelled():
         return "cancelled", None, None
     exc = future.exception()
     if exc is None:
