@@ -29,10 +29,10 @@ def bank_square_smooth(x, sos, gain, smooth_a, zi_sos, zi_smooth, first_out, ste
     """Band-pass, square and smooth ``x`` for every band of one filter-bank group.
 
     x : float64 [shape=(n,)], Pa, at the group's rate.
-    sos : float64 [shape=(n_bands, n_sections, 6)], second-order sections (b0 b1 b2 1 a1 a2).
+    sos : float64 [shape=(n_bands, 3, 6)], three second-order sections (b0 b1 b2 1 a1 a2) per band.
     gain : float64 [shape=(n_bands,)], applied after the sections.
     smooth_a : float64 [shape=(n_bands,)], pole of the three cascaded first-order smoothers.
-    zi_sos : float64 [shape=(n_bands, n_sections, 2)], transposed direct form II state (in/out).
+    zi_sos : float64 [shape=(n_bands, 3, 2)], transposed direct form II state (in/out).
     zi_smooth : float64 [shape=(n_bands, 3)], smoother state (in/out).
     first_out, step : the smoothed mean square is written for local samples
         first_out, first_out + step, ... into ``out[b, k]``.
@@ -40,7 +40,6 @@ def bank_square_smooth(x, sos, gain, smooth_a, zi_sos, zi_smooth, first_out, ste
     """
     n = x.shape[0]
     n_bands = sos.shape[0]
-    n_sec = sos.shape[1]
     for b in range(n_bands):
         a = smooth_a[b]
         c = 1.0 - a
@@ -50,53 +49,35 @@ def bank_square_smooth(x, sos, gain, smooth_a, zi_sos, zi_smooth, first_out, ste
         y3 = zi_smooth[b, 2]
         k = 0
         nxt = first_out
-        if n_sec == 3:
-            b00 = sos[b, 0, 0]; b01 = sos[b, 0, 1]; b02 = sos[b, 0, 2]; a01 = sos[b, 0, 4]; a02 = sos[b, 0, 5]
-            b10 = sos[b, 1, 0]; b11 = sos[b, 1, 1]; b12 = sos[b, 1, 2]; a11 = sos[b, 1, 4]; a12 = sos[b, 1, 5]
-            b20 = sos[b, 2, 0]; b21 = sos[b, 2, 1]; b22 = sos[b, 2, 2]; a21 = sos[b, 2, 4]; a22 = sos[b, 2, 5]
-            s01 = zi_sos[b, 0, 0]; s02 = zi_sos[b, 0, 1]
-            s11 = zi_sos[b, 1, 0]; s12 = zi_sos[b, 1, 1]
-            s21 = zi_sos[b, 2, 0]; s22 = zi_sos[b, 2, 1]
-            for i in range(n):
-                v = x[i]
-                w = b00 * v + s01
-                s01 = b01 * v - a01 * w + s02
-                s02 = b02 * v - a02 * w
-                v = b10 * w + s11
-                s11 = b11 * w - a11 * v + s12
-                s12 = b12 * w - a12 * v
-                w = b20 * v + s21
-                s21 = b21 * v - a21 * w + s22
-                s22 = b22 * v - a22 * w
-                w = g * w
-                e = w * w
-                y1 = c * e + a * y1
-                y2 = c * y1 + a * y2
-                y3 = c * y2 + a * y3
-                if i == nxt:
-                    out[b, k] = y3
-                    k += 1
-                    nxt += step
-            zi_sos[b, 0, 0] = s01; zi_sos[b, 0, 1] = s02
-            zi_sos[b, 1, 0] = s11; zi_sos[b, 1, 1] = s12
-            zi_sos[b, 2, 0] = s21; zi_sos[b, 2, 1] = s22
-        else:
-            for i in range(n):
-                v = x[i]
-                for s in range(n_sec):
-                    w = sos[b, s, 0] * v + zi_sos[b, s, 0]
-                    zi_sos[b, s, 0] = sos[b, s, 1] * v - sos[b, s, 4] * w + zi_sos[b, s, 1]
-                    zi_sos[b, s, 1] = sos[b, s, 2] * v - sos[b, s, 5] * w
-                    v = w
-                v = g * v
-                e = v * v
-                y1 = c * e + a * y1
-                y2 = c * y1 + a * y2
-                y3 = c * y2 + a * y3
-                if i == nxt:
-                    out[b, k] = y3
-                    k += 1
-                    nxt += step
+        b00 = sos[b, 0, 0]; b01 = sos[b, 0, 1]; b02 = sos[b, 0, 2]; a01 = sos[b, 0, 4]; a02 = sos[b, 0, 5]
+        b10 = sos[b, 1, 0]; b11 = sos[b, 1, 1]; b12 = sos[b, 1, 2]; a11 = sos[b, 1, 4]; a12 = sos[b, 1, 5]
+        b20 = sos[b, 2, 0]; b21 = sos[b, 2, 1]; b22 = sos[b, 2, 2]; a21 = sos[b, 2, 4]; a22 = sos[b, 2, 5]
+        s01 = zi_sos[b, 0, 0]; s02 = zi_sos[b, 0, 1]
+        s11 = zi_sos[b, 1, 0]; s12 = zi_sos[b, 1, 1]
+        s21 = zi_sos[b, 2, 0]; s22 = zi_sos[b, 2, 1]
+        for i in range(n):
+            v = x[i]
+            w = b00 * v + s01
+            s01 = b01 * v - a01 * w + s02
+            s02 = b02 * v - a02 * w
+            v = b10 * w + s11
+            s11 = b11 * w - a11 * v + s12
+            s12 = b12 * w - a12 * v
+            w = b20 * v + s21
+            s21 = b21 * v - a21 * w + s22
+            s22 = b22 * v - a22 * w
+            w = g * w
+            e = w * w
+            y1 = c * e + a * y1
+            y2 = c * y1 + a * y2
+            y3 = c * y2 + a * y3
+            if i == nxt:
+                out[b, k] = y3
+                k += 1
+                nxt += step
+        zi_sos[b, 0, 0] = s01; zi_sos[b, 0, 1] = s02
+        zi_sos[b, 1, 0] = s11; zi_sos[b, 1, 1] = s12
+        zi_sos[b, 2, 0] = s21; zi_sos[b, 2, 1] = s22
         zi_smooth[b, 0] = y1
         zi_smooth[b, 1] = y2
         zi_smooth[b, 2] = y3
@@ -281,10 +262,16 @@ def slopes(core, zup, rns, usl, spec_row, total, spec):
             zu = zup[i]
             while z1 < zu:
                 if n1 <= nm:
-                    if n1 < nm:
-                        j = 0
-                        while rns[j] > nm and j < n_rns - 1:
-                            j += 1
+                    if n1 < nm:  # first j with rns[j] <= nm (rns falls; its last entry is 0)
+                        lo = 0
+                        hi = n_rns - 1
+                        while lo < hi:
+                            mid = (lo + hi) // 2
+                            if rns[mid] > nm:
+                                lo = mid + 1
+                            else:
+                                hi = mid
+                        j = lo
                     z2 = zu
                     n2 = nm
                     acc += n2 * (z2 - z1)
