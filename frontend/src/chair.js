@@ -44,7 +44,7 @@ export class ChairDiagram {
       svg("rect", { x: 164, y: 92, width: 28, height: 74, rx: 10, class: "chair-part" }),
       svg("rect", { x: 38, y: 140, width: 124, height: 70, rx: 14, class: "chair-part" }),
     );
-    /** @type {Map<string, {dot: SVGCircleElement, title: SVGTitleElement, body: string}>} */
+    /** @type {Map<string, {dot: SVGCircleElement, label: SVGElement, title: SVGTitleElement, body: string}>} */
     this.dots = new Map();
     for (const a of actuators) {
       const [cx, cy] = place(a);
@@ -56,7 +56,7 @@ export class ChairDiagram {
       const title = /** @type {SVGTitleElement} */ (svg("title", {}));
       g.append(title, dot, label);
       root.append(g);
-      this.dots.set(a.id, { dot, title, body: a.body || a.zone });
+      this.dots.set(a.id, { dot, label, title, body: a.body || a.zone });
     }
     this.tempRect = svg("rect", { x: 38, y: 220, width: 124, height: 24, rx: 6, class: "chair-temp" });
     this.tempText = svg("text", { x: 100, y: 236, "text-anchor": "middle", class: "chair-temp-text" });
@@ -80,6 +80,7 @@ export class ChairDiagram {
       const value = v ? v.vibration[i] : 0;
       d.dot.setAttribute("fill", heatColor(value));
       d.dot.setAttribute("r", String(8 + 7 * value));
+      d.label.classList.toggle("chair-label-dark", value > 0.55);
       d.dot.parentElement?.setAttribute("data-value", value.toFixed(3));
       d.title.textContent = `${id} (${d.body}): ${value.toFixed(2)}`;
     });

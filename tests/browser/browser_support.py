@@ -95,14 +95,24 @@ def values_at(pg, tick: int) -> dict:
     return pg.evaluate("(t) => window.autohaptics.valuesAt(t)", tick)
 
 
-def lane_pixels(pg, lane: str) -> list[int]:
-    """RGBA bytes of a lane's canvas (what the user sees, at device resolution)."""
+def next_frame(pg) -> None:
+    """Let the page draw: resolves after two animation frames."""
+    pg.evaluate("() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)))")
+
+
+def lane_pixels(pg, lane: str, background: tuple[int, int, int] = (18, 21, 28)) -> dict:
+    """What a lane's canvas shows, summarised in the page: a hash of its RGBA bytes and the number
+    of pixels that differ from the lane background (``lit``)."""
     return pg.evaluate(
-        """(lane) => {
+        """([lane, bg]) => {
             const c = document.querySelector(`canvas[data-lane="${lane}"]`);
-            return Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data);
+            const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+            let h = 0x811c9dc5, lit = 0;
+            for (let i = 0; i < d.length; i++) h = Math.imul(h ^ d[i], 0x01000193) >>> 0;
+            for (let i = 0; i < d.length; i += 4) if (d[i] !== bg[0] || d[i + 1] !== bg[1] || d[i + 2] !== bg[2]) lit++;
+            return {hash: h.toString(16), lit};
         }""",
-        lane,
+        [lane, list(background)],
     )
 
 

@@ -886,6 +886,7 @@ export class EditorPage {
       thresholds: { ...this.thresholds },
       markers: this.markers.map((m) => ({ ...m })),
       timing: { ...this.timing },
+      waveformReady: !Number.isNaN(this.timing.waveformLoaded),
       saveState: this.saveEl ? this.saveEl.dataset.state || "" : "",
     };
   }
