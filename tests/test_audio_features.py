@@ -158,3 +158,34 @@ def test_iso_method_and_diffuse_field_run():
     p = af.AudioFeatureParams(loudness_method="iso", field="diffuse", booming_variant="paper")
     f = af.compute_audio_features([tone(500, 60, 1.0)], params=p)
     assert f.n_frames == 50 and steady(f.loudness) > 1.0 and 1.5 < steady(f.booming) < 2.05
+
+
+def test_features_command_writes_json(tmp_path):
+    import scipy.io.wavfile
+
+    from autohaptics.cli.main import main
+
+    wav = tmp_path / "tone.wav"
+    x = np.concatenate([tone(60, 80, 0.5), tone(4000, 70, 0.5)])
+    scipy.io.wavfile.write(wav, FS, (x * 32767).astype(np.int16))
+    out = tmp_path / "features.json"
+    assert main(["features", str(wav), "-o", str(out), "--step-ms", "2", "--method", "iso"]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["params"]["loudness_method"] == "iso" and doc["params"]["pa_per_unit"] == PA
+    frames = doc["frames"]
+    assert frames["n"] == 50 and len(frames["t_s"]) == 50 and frames["step_s"] == FRAME_S
+    for name in af.FEATURE_NAMES:
+        assert len(frames[name]) == 50 and min(frames[name]) >= 0
+    assert doc["units"]["loudness"] == "sone" and doc["units"]["low_energy"] == "Pa^2"
+    assert np.median(frames["booming"][5:25]) > 1.0 > np.median(frames["booming"][30:])
+    assert np.median(frames["sharpness"][30:]) > 2.5
+    assert doc["loudness_iso"]["n"] == 500 and doc["loudness_iso"]["step_s"] == 0.002
+    assert main(["features", str(tmp_path / "missing.wav"), "-o", str(out)]) == 2
+
+
+def test_bench_audio_prints_figures(capsys):
+    from autohaptics.cli.main import main
+
+    assert main(["bench", "audio", "--seconds", "2", "--no-conformance"]) == 0
+    text = capsys.readouterr().out
+    assert "all four" in text and "s_per_s_audio" in text and "where the time goes" in text

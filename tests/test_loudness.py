@@ -138,6 +138,12 @@ def test_loudness_from_levels_validates():
         L.loudness_from_levels(np.zeros(27))
     with pytest.raises(ParameterError, match="non-finite"):
         L.loudness_from_levels(np.full(28, np.nan))
+    with pytest.raises(ParameterError, match="not sound levels"):
+        L.loudness_from_levels(np.full(28, 4000.0))
+    with pytest.raises(ParameterError, match="field"):
+        L.loudness_from_levels(np.zeros(28), field="near")
+    with pytest.raises(ParameterError, match="field"):
+        L.loudness_stationary(np.zeros(100), field="near")
     n, spec = L.loudness_from_levels(np.full(28, -10.0))
     assert n == 0.0 and not spec.any()
 

@@ -10,7 +10,7 @@ Recipe (one named private step each, ISO 532-1 clause 6 / Annex A):
    adaptation (DCB) and Zwicker's power law -> core loudness of 21 critical bands, sone/Bark.
    (Computed on intensities: every dB comparison of the standard is exact in that domain.)
 3. ``_nonlinear_decay``: the two-capacitor decay network (time constants 5, 15, 75 ms), run on
-   a 24x virtual rate with the input interpolated linearly between 0.5 ms samples.
+   24 virtual sub-steps per 0.5 ms sample ("fast": 2) with the input interpolated linearly.
 4. ``_slopes``: the upper slopes (USL/RNS tables) -> specific loudness N'(z) on the 240-point
    grid z = 0.1 .. 24 Bark and its area, the total loudness N, sone.
 5. ``_temporal_weighting``: 0.47 x (3.5 ms low-pass) + 0.53 x (70 ms low-pass) of N, again on a
@@ -69,6 +69,7 @@ SAMPLES_PER_STEP = SAMPLE_RATE_HZ // T.LOUDNESS_RATE_HZ  # 96 input samples per 
 Z_BARK = T.BARK_AXIS.copy()  # [shape=(240,)], Bark: 0.1, 0.2, ..., 24.0
 BARK_STEP = T.BARK_STEP
 MAX_PRESSURE_PA = 1.0e9  # sanity bound on |p|: 1e4 atmospheres; beyond that the input is not sound
+_MAX_LEVEL_DB = 20.0 * math.log10(MAX_PRESSURE_PA / 2e-5)  # ~274 dB, the same bound for band levels
 
 _LEVEL_STEP = SAMPLE_RATE_HZ // T.LEVEL_RATE_HZ  # 24 input samples per 0.5 ms level sample
 _TW_STEP = T.LEVEL_RATE_HZ // T.LOUDNESS_RATE_HZ  # 4 level samples per 2 ms output
@@ -193,6 +194,7 @@ def loudness_stationary(p: np.ndarray, *, field: str = "free", skip_s: float = 0
     Returns (N in sone, N'(z) [shape=(240,)] in sone/Bark).
     """
     p = check_pressure(p)
+    LoudnessParams(field=field)  # validates the field
     skip = int(round(max(0.0, float(skip_s)) * SAMPLE_RATE_HZ))
     if p.shape[0] - skip < 1:
         raise ParameterError(f"stationary loudness needs samples after skip_s={skip_s} s; got {p.shape[0]} samples")
@@ -214,8 +216,10 @@ def loudness_from_levels(levels_db: np.ndarray, *, field: str = "free") -> tuple
         raise ParameterError(f"levels_db must have shape (28,), got {levels.shape}")
     if not np.isfinite(levels).all():
         raise ParameterError(f"levels_db holds {int((~np.isfinite(levels)).sum())} non-finite value(s)")
-    if field not in FIELDS:
-        raise ParameterError(f"loudness field must be one of {FIELDS}, got {field!r}")
+    if levels.max() > _MAX_LEVEL_DB:
+        raise ParameterError(f"levels_db reaches {levels.max():.1f} dB; band levels above {_MAX_LEVEL_DB:.0f} dB "
+                             "are not sound levels")
+    LoudnessParams(field=field)  # validates the field
     ms = T.INTENSITY_REF * 10.0 ** (levels[:, None] / 10.0) - T.TINY_INTENSITY
     core = _core_loudness(np.maximum(ms, 0.0), diffuse=field == "diffuse")
     total, specific = _slopes(core, np.zeros(1, dtype=np.int64))
