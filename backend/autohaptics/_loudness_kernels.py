@@ -3,12 +3,14 @@
 Why compiled: the nonlinear decay and the slope construction are sequential, state-dependent
 recursions (a branch per band and per 0.5 ms sample, 24 virtual sub-steps each) that numpy cannot
 vectorise, and scipy's ``sosfilt`` runs a float64 biquad at about 5.9 ns per sample on the
-benchmark machine, which alone puts the 28-band ISO filter bank at 0.05 s per second of audio.
-Figures before/after are recorded in :mod:`autohaptics.bench.audio`.
+benchmark machine, which alone puts the 28-band ISO filter bank (with its smoothers, via
+``lfilter``) at ~0.03 s per second of audio, three times the whole budget. Figures before/after
+are recorded in :mod:`autohaptics.bench.audio`.
 
 Every kernel is a plain loop over numpy arrays: with ``NUMBA_DISABLE_JIT=1`` the same source runs
-as pure Python (the slow reference path). Kernels never allocate their state: the caller passes
-copies of the state arrays, the kernel updates them in place and the caller returns them.
+as pure Python (the slow reference path). Streaming kernels never allocate their state: the
+caller passes copies of the state arrays, the kernel updates them in place and the caller
+returns them.
 
 Layouts: band-major ``[shape=(n_bands, n_samples)]`` so that each band's recursion walks
 contiguous memory.
