@@ -13,7 +13,6 @@ import csv
 from pathlib import Path
 
 import numpy as np
-import pytest
 import scipy.io.wavfile
 
 from autohaptics import audio_features as af

@@ -246,12 +246,12 @@ def check_pressure(p) -> np.ndarray:
     if p.dtype.kind not in "fiu":
         raise ParameterError(f"sound pressure must be real numbers, got dtype {p.dtype}")
     p = p.astype(np.float64, copy=False)
-    finite = np.isfinite(p)
-    if not finite.all():
-        raise ParameterError(f"sound pressure holds {int((~finite).sum())} non-finite sample(s) "
+    peak = float(np.max(np.abs(p))) if p.size else 0.0  # NaN or inf if any sample is
+    if not math.isfinite(peak):
+        raise ParameterError(f"sound pressure holds {int((~np.isfinite(p)).sum())} non-finite sample(s) "
                              f"(NaN or inf) in an array of shape {p.shape}")
-    if p.size and float(np.max(np.abs(p))) > MAX_PRESSURE_PA:
-        raise ParameterError(f"sound pressure exceeds {MAX_PRESSURE_PA:g} Pa (max |p| = {float(np.max(np.abs(p))):.3g} Pa): "
+    if peak > MAX_PRESSURE_PA:
+        raise ParameterError(f"sound pressure exceeds {MAX_PRESSURE_PA:g} Pa (max |p| = {peak:.3g} Pa): "
                              "check the calibration (pa_per_unit)")
     return p
 
