@@ -28,11 +28,14 @@ from __future__ import annotations
 import asyncio
 import logging
 import multiprocessing
+import os
 import queue as queue_mod
 import threading
+import time
 from collections import deque
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
+from multiprocessing.managers import SyncManager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -70,6 +73,18 @@ def _send(events, message: tuple) -> None:
         events.put(message)
     except Exception:  # the server is shutting down: progress no longer matters
         pass
+
+
+def exit_with_parent(parent_pid: int) -> None:
+    """Initializer of the pool workers and the Manager: exit once the server process is gone (killed
+    hard), instead of lingering as orphans. A restarted server records their jobs as interrupted."""
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(1.0)
+        os._exit(0)
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
 
 
 def warm_up() -> None:
@@ -149,7 +164,8 @@ class JobRunner:
 
     # ---------------------------------------------------------------- lifecycle
     def start(self) -> None:
-        self._manager = self.ctx.Manager()
+        self._manager = SyncManager(ctx=self.ctx)
+        self._manager.start(exit_with_parent, (os.getpid(),))
         self._events = self._manager.Queue()
         self._pool = self._new_pool()
         self._stopping = False
@@ -159,7 +175,8 @@ class JobRunner:
             self._threads.append(t)
 
     def _new_pool(self) -> ProcessPoolExecutor:
-        pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=self.ctx)
+        pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=self.ctx,
+                                   initializer=exit_with_parent, initargs=(os.getpid(),))
         pool.submit(warm_up)
         return pool
 
