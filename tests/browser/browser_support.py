@@ -117,6 +117,8 @@ def lane_pixels(pg, lane: str, background: tuple[int, int, int] = (18, 21, 28)) 
 
 
 def lane_rect(pg, lane: str) -> dict:
+    """Client rectangle of a lane's canvas, scrolled into view first (the timeline scrolls vertically)."""
+    pg.evaluate("(id) => document.querySelector(`canvas[data-lane=\"${id}\"]`).scrollIntoView({block: 'nearest'})", lane)
     return pg.evaluate("(id) => window.autohaptics.laneRect(id)", lane)
 
 
