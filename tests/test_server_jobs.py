@@ -162,13 +162,21 @@ def test_restart_while_running_fails_the_job_and_it_can_be_rerun(tmp_path, long_
         assert list((data / "work").iterdir()) == []
         rerun = client.post(f"/api/projects/{project['id']}/generate")
         assert rerun.status_code == 202
-        assert sse(client, rerun.json()["job"]["id"])[-1][0] == "done"
+        rerun_id = rerun.json()["job"]["id"]
+        wait_running(client, rerun_id)
+        # New thresholds while the analysis runs: stored now, derived with when the job ends.
+        off = {"loudness": 1.0, "sharpness": 1.0, "booming": 1.0, "low_energy": 1.0}
+        r = client.put(f"/api/projects/{project['id']}/params", json={"thresholds": off})
+        assert r.status_code == 202 and r.json()["job"]["id"] == rerun_id and r.json()["derived"] is False
+        assert sse(client, rerun_id)[-1][0] == "done"
         p = client.get(f"/api/projects/{project['id']}").json()
-        assert p["status"] == "ready" and p["n_ticks"] == 1800
+        assert p["status"] == "ready" and p["n_ticks"] == 1800 and p["params"]["thresholds"] == off
+        doc = client.get(f"/api/projects/{project['id']}/timeline").json()
+        assert doc["generator"]["params"]["thresholds"] == off and np.asarray(doc["tracks"]["vibration"]).max() == 0
         before = client.get(f"/api/projects/{project['id']}/timeline").content
         assert json.loads(before)["n_ticks"] == 1800
         # A cancelled regeneration keeps the previous timeline (and its revision).
-        job = client.post(f"/api/projects/{project['id']}/generate", json={"thresholds": {"loudness": 1.0}}).json()["job"]
+        job = client.post(f"/api/projects/{project['id']}/generate", json={"thresholds": {"loudness": 0.5}}).json()["job"]
         wait_running(client, job["id"])
         assert client.post(f"/api/jobs/{job['id']}/cancel").status_code == 202
         assert sse(client, job["id"])[-1][0] == "cancelled"

@@ -221,10 +221,11 @@ class JobRunner:
         """Queue a generation job for ``project`` with stored parameters ``params``; Conflict when one runs."""
         if self._pool is None or self._stopping:
             raise Conflict("the job runner is not running")
+        cancel = self._manager.Event()
         job = self.store.create_job(project["id"], params)
         media_path = str(self.store.media_path(project))
         live = _Live(job_id=job["id"], project_id=project["id"], params=params, name=project["name"],
-                     media_path=media_path, cancel=self._manager.Event())
+                     media_path=media_path, cancel=cancel)
         spec = {"job_id": job["id"], "media_path": media_path, "work_dir": str(self.store.job_work_dir(job["id"])),
                 "params": params, "name": project["name"]}
         with self._lock:

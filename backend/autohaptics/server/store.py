@@ -31,7 +31,6 @@ import uuid
 from collections.abc import Iterator
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any
 
 from autohaptics.errors import AutohapticsError
 
@@ -252,7 +251,7 @@ class Store:
 
     def duplicate_project(self, pid: str, *, name: str) -> dict:
         """A new project with the same media (hard link when possible), caches, params, edits, view."""
-        src = self.get_project(pid)
+        self.get_project(pid)
         new = new_id()
         sdir, ndir = self.project_dir(pid), self.projects_dir / new
         ndir.mkdir()
@@ -281,7 +280,6 @@ class Store:
         except BaseException:
             shutil.rmtree(ndir, ignore_errors=True)
             raise
-        del src
         return self.get_project(new)
 
     @staticmethod
@@ -431,6 +429,3 @@ class Store:
                 "SELECT op FROM edits WHERE project_id=? AND seq<? ORDER BY seq", (pid, project["cursor"]))]
         return project["revision"], ops, project
 
-    def read_json(self, path: Path) -> Any:
-        with open(path, encoding="utf-8") as fh:
-            return json.load(fh)

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from autohaptics import pipeline
+from autohaptics.importers import parse_timeline
 from autohaptics.server import edits as edit_ops
 from autohaptics.server.store import Conflict, NotFound, Store, new_id
 from autohaptics.server.waveform import cached_peaks
@@ -85,7 +86,7 @@ class Derived:
 class Timelines:
     """Loads, derives and composes timelines for the routes; caches by file identity and revision."""
 
-    def __init__(self, store: Store, *, cache_size: int = 4):
+    def __init__(self, store: Store, *, cache_size: int = 2):
         self.store = store
         self._lock = threading.Lock()
         self._files: OrderedDict[Path, tuple[tuple, Any]] = OrderedDict()
@@ -187,6 +188,27 @@ class Timelines:
                            f"based on {base_revision}); reload and try again")
         edit_ops.apply_ops(composed.timeline, [normalised], strict=True, markers=composed.markers)
         return normalised
+
+    def append(self, pid: str, base_revision: int | None, op: Any) -> dict:
+        """Validate ``op`` and append it at the cursor: ``{revision, cursor, op}`` (the op as stored).
+
+        ``base_revision`` None appends on top of the current revision."""
+        normalised = self.check_op(pid, op, base_revision=base_revision)
+        if base_revision is None:
+            base_revision = self.store.get_project(pid)["revision"]
+        return {**self.store.append_edit(pid, base_revision, normalised), "op": normalised}
+
+    def import_file(self, pid: str, data: bytes, *, name: str, base_revision: int | None) -> dict:
+        """Append an ``import`` op built from an uploaded timeline file (our JSON or CSV).
+
+        The format comes from ``name``'s suffix (.json / .csv), else from the content; the
+        document's own ``edits`` / ``markers`` / ``revision`` keys are not imported."""
+        suffix = Path(name).suffix.lower()
+        fmt = suffix[1:] if suffix in (".json", ".csv") else None
+        doc = parse_timeline(data, fmt=fmt, name=name).to_dict()
+        for key in ("edits", "markers", "revision"):
+            doc.pop(key, None)
+        return self.append(pid, base_revision, {"op": "import", "timeline": doc})
 
     def timeline_json(self, pid: str) -> bytes:
         """The composed timeline document as UTF-8 JSON (TIMELINE.md plus revision/edits/markers)."""

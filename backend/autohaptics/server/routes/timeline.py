@@ -13,7 +13,6 @@ from fastapi import APIRouter, Query, Request, Response
 
 from autohaptics.errors import ParameterError
 from autohaptics.export import export_timeline, get_format
-from autohaptics.importers import parse_timeline
 from autohaptics.server import binary
 from autohaptics.server.deps import SettingsDep, StoreDep, TimelinesDep
 from autohaptics.server.schemas import EditIn, EditOut, EditsOut, RevisionIn, RevisionOut
@@ -32,7 +31,6 @@ _IMPORT_BODY = {
             }}}},
     }
 }
-_DROP_ON_IMPORT = ("edits", "markers", "revision")
 
 
 @router.get("/api/projects/{project_id}/timeline", response_class=Response,
@@ -57,9 +55,8 @@ def get_edits(project_id: str, store: StoreDep) -> dict:
 
 @router.post("/api/projects/{project_id}/edits", response_model=EditOut,
              responses={409: {"description": "stale base_revision, or no timeline yet"}})
-def post_edit(project_id: str, body: EditIn, store: StoreDep, timelines: TimelinesDep) -> dict:
-    op = timelines.check_op(project_id, body.op, base_revision=body.base_revision)
-    return {**store.append_edit(project_id, body.base_revision, op), "op": op}
+def post_edit(project_id: str, body: EditIn, timelines: TimelinesDep) -> dict:
+    return timelines.append(project_id, body.base_revision, body.op)
 
 
 @router.post("/api/projects/{project_id}/undo", response_model=RevisionOut,
@@ -110,18 +107,5 @@ async def import_file(project_id: str, request: Request, store: StoreDep, settin
     base = upload.fields.get("base_revision", "").strip()
     if base and not re.fullmatch(r"\d+", base):
         raise ParameterError(f"form field 'base_revision' must be an integer, got {base!r}")
-    base_revision = int(base) if base else None
-    name = display_name(upload.filename)
-    suffix = PurePosixPath(name).suffix.lower()
-    fmt = suffix[1:] if suffix in (".json", ".csv") else None
-
-    def apply() -> dict:
-        tl = parse_timeline(data, fmt=fmt, name=name)
-        doc = tl.to_dict()
-        for key in _DROP_ON_IMPORT:
-            doc.pop(key, None)
-        op = timelines.check_op(project_id, {"op": "import", "timeline": doc}, base_revision=base_revision)
-        revision = base_revision if base_revision is not None else store.get_project(project_id)["revision"]
-        return {**store.append_edit(project_id, revision, op), "op": op}
-
-    return await to_thread.run_sync(apply)
+    return await to_thread.run_sync(lambda: timelines.import_file(
+        project_id, data, name=display_name(upload.filename), base_revision=int(base) if base else None))
