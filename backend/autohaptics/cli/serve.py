@@ -54,7 +54,9 @@ def run(args) -> int:
           file=sys.stderr)
     if args.open_sample:
         threading.Thread(target=_open_sample, args=(url,), name="open-sample", daemon=True).start()
-    uvicorn.run(app, host=args.host, port=args.port, log_level="info")
+    # Open progress streams would hold a graceful stop until their jobs end: give them 5 s, then the
+    # running jobs are recorded as interrupted (re-runnable).
+    uvicorn.run(app, host=args.host, port=args.port, log_level="info", timeout_graceful_shutdown=5)
     return 0
 
 
@@ -88,4 +90,4 @@ def _open_sample(url: str) -> None:
         except urllib.error.HTTPError as exc:
             print(f"autohaptics: adding the sample failed: {exc.read().decode(errors='replace')}", file=sys.stderr)
             return
-    webbrowser.open(f"{url}?project={project['id']}")
+    webbrowser.open(f"{url}#/project/{project['id']}")

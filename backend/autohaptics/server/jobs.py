@@ -186,7 +186,6 @@ class JobRunner:
         with self._lock:
             self._stopping = True
             live = list(self._live.values())
-        with self._lock:
             self._pending.clear()
         for job in live:
             job.cancel_requested = True
