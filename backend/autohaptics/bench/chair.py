@@ -11,7 +11,10 @@ same machine, so:
 - end-to-end latency: chair applied time - host send time, per tick (pyserial write, the pty,
   the chair's parser and apply).
 
-Target: chair-side tick jitter and latency p99 <= 2 ms. Figures depend on the machine's load.
+Target: chair-side tick jitter and latency p99 <= 2 ms. Figures depend on the machine's load,
+so the same window also measures a scheduler baseline: a plain 10 Hz timer thread in this
+process (the player's wait primitive, half a tick out of phase), and prints how late it woke.
+When the baseline's p99 is far above 2 ms, the machine, not the link, sets the tail.
 Also prints the Cortex-M4 flash/RAM of the core when arm-none-eabi-gcc and make are present.
 """
 
@@ -21,6 +24,8 @@ import re
 import shutil
 import subprocess
 import tempfile
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -50,11 +55,13 @@ def run(args) -> int:
     print(f"streaming {args.seconds:g} s ({int(np.ceil(args.seconds * 10))} ticks) to a virtual chair ...", flush=True)
     r = measure_stream(args.seconds, seed=args.seed)
     print(f"frames: sent {r['sent']}, applied {r['applied']}, duplicates {r['duplicates']}, "
-          f"gaps {r['gaps']}, ticks skipped by the player {r['skipped']}")
+          f"gaps {r['gaps']}, ticks skipped by the player {r['skipped']}; player clock {r['clock_priority']}, "
+          f"virtual chair nice {r['chair_nice']}")
     rows = []
     for label, values in (("chair tick vs 100 ms grid", r["chair_grid"]), ("chair interval - 100 ms", r["chair_interval"]),
                           ("host send vs 100 ms grid", r["host_grid"]), ("host interval - 100 ms", r["host_interval"]),
-                          ("latency send -> applied", r["latency"])):
+                          ("latency send -> applied", r["latency"]),
+                          ("baseline: plain timer lateness", r["baseline"])):
         rows.append([label, *_percentiles(values)])
     print(table(rows, ["ms", "p50", "p99", "max"]))
     for label, values in (("chair tick jitter", r["chair_grid"]), ("latency", r["latency"])):
@@ -80,12 +87,22 @@ def measure_stream(seconds: float, *, seed: int = 0) -> dict:
     tl.fans[:] = rng.random((n, 9, 17))
     tl.temperature_c[:] = rng.uniform(30.0, 40.0, n)
     sent: dict[int, float] = {}
+    baseline: list[float] = []
+    stop = threading.Event()
+    timer = threading.Thread(target=_timer_baseline, args=(stop, baseline), daemon=True)
     with tempfile.TemporaryDirectory(prefix="autohaptics-bench-chair-") as tmp:
         with VirtualChair(link_path=Path(tmp) / "chair", log_path=Path(tmp) / "chair.jsonl") as chair:
             with ChairLink(chair.device) as link:
                 link.on("sent", lambda tick, seq, t_ns: sent.__setitem__(tick, t_ns / 1e6))
-                status = push(link, tl)
+                timer.start()
+                try:
+                    status = push(link, tl)
+                finally:
+                    stop.set()
+                    timer.join()
+            chair.wait_for(lambda e: e["ev"] == "stop")
             frames = chair.frames()
+            nice = chair.read_log()[0].get("nice")
     ticks = np.array([e["tick"] for e in frames], dtype=np.int64)
     if len(ticks) < 2:
         raise DeviceError(f"the virtual chair applied only {len(ticks)} frames")
@@ -97,7 +114,21 @@ def measure_stream(seconds: float, *, seed: int = 0) -> dict:
         "chair_grid": _grid_deviation(ticks, applied), "host_grid": _grid_deviation(ticks, send),
         "chair_interval": _interval_deviation(ticks, applied), "host_interval": _interval_deviation(ticks, send),
         "latency": applied - send,
+        "baseline": np.array(baseline), "clock_priority": status.clock_priority, "chair_nice": nice,
     }
+
+
+def _timer_baseline(stop: threading.Event, out: list[float]) -> None:
+    """Lateness (ms) of a plain 10 Hz timer thread, offset by half a tick from the player."""
+    t0 = time.monotonic() + 0.05
+    k = 0
+    while not stop.is_set():
+        k += 1
+        due = t0 + k * 0.1
+        while (wait := due - time.monotonic()) > 0:
+            if stop.wait(wait):
+                return
+        out.append((time.monotonic() - due) * 1000.0)
 
 
 def _grid_deviation(ticks: np.ndarray, t_ms: np.ndarray) -> np.ndarray:

@@ -21,6 +21,7 @@ position in seconds); between reports the player extrapolates the position with
 from __future__ import annotations
 
 import math
+import os
 import threading
 import time
 from collections.abc import Callable
@@ -34,6 +35,7 @@ from autohaptics.timebase import TICK_S
 from autohaptics.timeline import Timeline
 
 MAX_CATCH_UP_TICKS = 2
+CLOCK_NICE = -10  # the clock thread's nice value when the process may raise it (CAP_SYS_NICE)
 LATENCY_OFFSET_RANGE_MS = (-500.0, 500.0)
 _EPS = 1e-9
 
@@ -50,6 +52,7 @@ class PlayerStatus:
     latency_offset_ms: float
     comfort: dict
     error: str | None  # why playback stopped on its own, if it did
+    clock_priority: str  # "nice -10" when the clock thread could raise its priority, else "normal"
     link: dict
 
     def to_dict(self) -> dict:
@@ -82,11 +85,13 @@ class ChairPlayer:
     :meth:`close` (or use ``with``) to stop its thread."""
 
     def __init__(self, link: ChairLink, timeline: Timeline | None = None, *, comfort: Comfort | None = None,
-                 latency_offset_ms: float = 0.0):
+                 latency_offset_ms: float = 0.0, clock_nice: int | None = CLOCK_NICE):
         self._link = link
         self._timeline = timeline.validate() if timeline is not None else None
         self._comfort = comfort if comfort is not None else Comfort()
         self._offset_s = check_latency_offset_ms(latency_offset_ms) / 1000.0
+        self._clock_nice = clock_nice
+        self._clock_priority = "normal"
         self._cv = threading.Condition()
         self._send_lock = threading.Lock()  # one frame or STOP on the wire at a time, in decision order
         self._state = "idle"
@@ -224,7 +229,7 @@ class ChairPlayer:
                 duration_s=tl.duration_s if tl is not None else None, tick=self._last_tick,
                 frames_sent=self._frames_sent, frames_dropped=self._frames_dropped, ticks_skipped=self._skipped,
                 latency_offset_ms=self._offset_s * 1000.0, comfort=self._comfort.to_dict(), error=self._error,
-                link=link)
+                clock_priority=self._clock_priority, link=link)
 
     # ---------------------------------------------------------------- private
     def _position_at(self, now: float) -> float:
@@ -257,6 +262,7 @@ class ChairPlayer:
             self._resync()
 
     def _run(self) -> None:
+        self._clock_priority = _raise_thread_priority(self._clock_nice)
         while True:
             with self._cv:
                 while True:
@@ -313,6 +319,19 @@ class ChairPlayer:
                     self._last_tick = frame.tick
                 else:
                     self._frames_dropped += 1
+
+
+def _raise_thread_priority(nice: int | None) -> str:
+    """Best effort: give the calling thread nice value ``nice`` so a busy machine (a browser
+    decoding video) delays the 10 Hz clock less. Needs CAP_SYS_NICE for negative values; without
+    it the thread keeps its priority. Linux applies the nice value of a thread id to that thread."""
+    if nice is None or not hasattr(os, "setpriority"):
+        return "normal"
+    try:
+        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), int(nice))
+    except OSError:
+        return "normal"
+    return f"nice {int(nice)}"
 
 
 def push(link: ChairLink, timeline: Timeline, *, start_s: float = 0.0, end_s: float | None = None,
