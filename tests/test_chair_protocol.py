@@ -28,6 +28,7 @@ from autohaptics.chair.protocol import (
     decode,
     encode,
 )
+from autohaptics.errors import ParameterError
 
 VECTORS = Path(__file__).resolve().parents[1] / "firmware" / "test" / "vectors.txt"
 
@@ -133,17 +134,17 @@ def test_decode_names_the_reason():
 
 
 def test_messages_validate_their_fields():
-    with pytest.raises(ProtocolError, match="9 motor values"):
+    with pytest.raises(ParameterError, match="9 motor values"):
         Frame(tick=0, motors=bytes(8))
-    with pytest.raises(ProtocolError, match="153 fan values"):
+    with pytest.raises(ParameterError, match="153 fan values"):
         Frame(tick=0, fans=bytes(152))
-    with pytest.raises(ProtocolError, match="tick"):
+    with pytest.raises(ParameterError, match="tick"):
         Frame(tick=-1)
-    with pytest.raises(ProtocolError, match="temp_cc"):
+    with pytest.raises(ParameterError, match="temp_cc"):
         Frame(tick=0, temp_cc=40000)
-    with pytest.raises(ProtocolError, match="name"):
+    with pytest.raises(ParameterError, match="name"):
         Hello(name="x" * 17)
-    with pytest.raises(ProtocolError, match="frames_ok"):
+    with pytest.raises(ParameterError, match="frames_ok"):
         ChairStatus(frames_ok=2**32)
 
 

@@ -11,7 +11,8 @@ vectors (``firmware/test/vectors.txt``).
 Public pieces: the message dataclasses (:class:`HelloRequest`, :class:`Hello`,
 :class:`StatusRequest`, :class:`ChairStatus`, :class:`Frame`, :class:`Stop`), :func:`encode`
 (message -> wire bytes), :func:`decode` (one wire frame -> message, raising
-:class:`ProtocolError`), the incremental :class:`Parser`, and :func:`crc16` / :func:`cobs_encode` /
+:class:`ProtocolError`; building a message with a value its field cannot hold raises
+ParameterError), the incremental :class:`Parser`, and :func:`crc16` / :func:`cobs_encode` /
 :func:`cobs_decode`.
 """
 
@@ -21,7 +22,7 @@ import enum
 from dataclasses import asdict, dataclass, field
 from typing import Union
 
-from autohaptics.errors import DeviceError
+from autohaptics.errors import DeviceError, ParameterError
 
 PROTOCOL_VERSION = 1
 
@@ -123,7 +124,7 @@ class Hello:
         for key in ("protocol_version", "n_actuators", "fan_rows", "fan_cols"):
             _check_int(key, getattr(self, key), 0, 0xFF)
         if len(self.firmware_version) != 3:
-            raise ProtocolError(Status.LENGTH_ERROR, f"firmware_version needs 3 numbers, got {self.firmware_version!r}")
+            raise ParameterError(f"firmware_version needs 3 numbers, got {self.firmware_version!r}")
         for v in self.firmware_version:
             _check_int("firmware_version", v, 0, 0xFF)
         for key in ("temp_min_cc", "temp_max_cc", "temp_neutral_cc"):
@@ -132,7 +133,7 @@ class Hello:
             _check_int(key, getattr(self, key), 0, 0xFFFF)
         raw = self.name.encode("ascii", "replace")
         if len(raw) > NAME_LEN or b"\x00" in raw:
-            raise ProtocolError(Status.LENGTH_ERROR, f"device name {self.name!r} must be at most {NAME_LEN} ASCII bytes")
+            raise ParameterError(f"device name {self.name!r} must be at most {NAME_LEN} ASCII bytes")
 
     @property
     def temp_min_c(self) -> float:
@@ -239,9 +240,9 @@ class Frame:
         object.__setattr__(self, "motors", bytes(self.motors))
         object.__setattr__(self, "fans", bytes(self.fans))
         if len(self.motors) != N_MOTORS:
-            raise ProtocolError(Status.LENGTH_ERROR, f"a frame has {N_MOTORS} motor values, got {len(self.motors)}")
+            raise ParameterError(f"a frame has {N_MOTORS} motor values, got {len(self.motors)}")
         if len(self.fans) != N_FANS:
-            raise ProtocolError(Status.LENGTH_ERROR, f"a frame has {N_FANS} fan values (9 x 17), got {len(self.fans)}")
+            raise ParameterError(f"a frame has {N_FANS} fan values (9 x 17), got {len(self.fans)}")
 
 
 Message = Union[HelloRequest, Hello, StatusRequest, ChairStatus, Frame, Stop]
@@ -249,7 +250,7 @@ Message = Union[HelloRequest, Hello, StatusRequest, ChairStatus, Frame, Stop]
 
 def _check_int(name: str, v: object, lo: int, hi: int) -> None:
     if not isinstance(v, int) or isinstance(v, bool) or not lo <= v <= hi:
-        raise ProtocolError(Status.LENGTH_ERROR, f"field {name}={v!r} does not fit its wire type ({lo}..{hi})")
+        raise ParameterError(f"field {name}={v!r} does not fit its wire type ({lo}..{hi})")
 
 
 # ------------------------------------------------------------------------- field access

@@ -8,7 +8,7 @@ import signal
 import sys
 import threading
 
-from autohaptics.errors import ParameterError
+from autohaptics.errors import DeviceError
 from autohaptics.progress import ProgressBar
 
 
@@ -101,7 +101,6 @@ def _push(args) -> int:
     comfort = Comfort(intensity=args.intensity, mute=frozenset(args.mute))
     with ChairLink(args.port) as link, ProgressBar("push") as bar:
         status = push(link, timeline, start_s=args.start, end_s=args.end, comfort=comfort, progress=bar)
-    bar.close()
     print(f"pushed {status.frames_sent} frames to {args.port} (last tick {status.tick}, "
           f"{status.frames_dropped} dropped while disconnected, {status.ticks_skipped} skipped)")
     return 0
@@ -112,7 +111,7 @@ def _stop(args) -> int:
 
     with ChairLink(args.port, stop_on_close=False) as link:
         if not link.send_stop():
-            raise ParameterError(f"could not send STOP to {args.port}")
+            raise DeviceError(f"could not send STOP to {args.port}: the chair went away")
         chair = link.request_status(1.0)
     state = "safe" if chair is not None and chair.safe else "unknown"
     print(f"STOP sent to {args.port}; chair state: {state}")
