@@ -30,6 +30,7 @@ import logging
 import multiprocessing
 import os
 import queue as queue_mod
+import signal
 import threading
 import time
 from collections import deque
@@ -77,7 +78,9 @@ def _send(events, message: tuple) -> None:
 
 def exit_with_parent(parent_pid: int) -> None:
     """Initializer of the pool workers and the Manager: exit once the server process is gone (killed
-    hard), instead of lingering as orphans. A restarted server records their jobs as interrupted."""
+    hard), instead of lingering as orphans; ignore Ctrl+C (the terminal sends SIGINT to the whole
+    process group), so the server's own shutdown cancels and records the running jobs."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
     def watch() -> None:
         while os.getppid() == parent_pid:

@@ -11,7 +11,9 @@ import os
 from pathlib import Path
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from autohaptics.errors import ParameterError
 
 MIB = 1024 * 1024
 GIB = 1024 * MIB
@@ -47,15 +49,24 @@ class Settings(BaseModel):
 
     @classmethod
     def from_env(cls, **overrides) -> "Settings":
-        """Settings from the environment, then ``overrides`` (None values are ignored)."""
+        """Settings from the environment, then ``overrides`` (None values are ignored).
+
+        Raises ParameterError naming the variable or setting that is invalid."""
         env: dict = {}
-        if os.environ.get("AUTOHAPTICS_DATA"):
-            env["data_dir"] = Path(os.environ["AUTOHAPTICS_DATA"])
-        if os.environ.get("AUTOHAPTICS_JOBS"):
-            env["jobs"] = int(os.environ["AUTOHAPTICS_JOBS"])
-        if os.environ.get("AUTOHAPTICS_MAX_UPLOAD_MB"):
-            env["max_upload_bytes"] = int(float(os.environ["AUTOHAPTICS_MAX_UPLOAD_MB"]) * MIB)
+        try:
+            if os.environ.get("AUTOHAPTICS_DATA"):
+                env["data_dir"] = Path(os.environ["AUTOHAPTICS_DATA"])
+            if os.environ.get("AUTOHAPTICS_JOBS"):
+                env["jobs"] = int(os.environ["AUTOHAPTICS_JOBS"])
+            if os.environ.get("AUTOHAPTICS_MAX_UPLOAD_MB"):
+                env["max_upload_bytes"] = int(float(os.environ["AUTOHAPTICS_MAX_UPLOAD_MB"]) * MIB)
+        except ValueError as exc:
+            raise ParameterError(f"invalid AUTOHAPTICS_JOBS or AUTOHAPTICS_MAX_UPLOAD_MB: {exc}") from None
         if os.environ.get("AUTOHAPTICS_FRONTEND"):
             env["frontend_dir"] = Path(os.environ["AUTOHAPTICS_FRONTEND"])
         env.update({k: v for k, v in overrides.items() if v is not None})
-        return cls(**env)
+        try:
+            return cls(**env)
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            raise ParameterError(f"invalid setting {'.'.join(map(str, first['loc']))}: {first['msg']}") from None
