@@ -50,19 +50,25 @@ def upload(client: TestClient, path: Path, **fields) -> dict:
     return r.json()
 
 
+def read_events(lines, *, stage: str | None = None) -> list[tuple[str, dict]]:
+    """SSE events from an iterator of lines, up to the terminal event or the first progress of ``stage``."""
+    out, event = [], None
+    for line in lines:
+        if line.startswith("event: "):
+            event = line[7:]
+        elif line.startswith("data: "):
+            data = json.loads(line[6:])
+            out.append((event, data))
+            if event in TERMINAL or (event == "progress" and data["stage"] == stage):
+                break
+    return out
+
+
 def sse(client: TestClient, job_id: str, *, stage: str | None = None) -> list[tuple[str, dict]]:
     """Events of a job's stream up to its terminal event, or the first progress event of ``stage``."""
-    out, event = [], None
     with client.stream("GET", f"/api/jobs/{job_id}/events") as resp:
-        for line in resp.iter_lines():
-            if line.startswith("event: "):
-                event = line[7:]
-            elif line.startswith("data: "):
-                data = json.loads(line[6:])
-                out.append((event, data))
-                if event in TERMINAL or (event == "progress" and data["stage"] == stage):
-                    break
-    return out
+        assert resp.status_code == 200, resp.read()
+        return read_events(resp.iter_lines(), stage=stage)
 
 
 def wait_running(client: TestClient, job_id: str) -> None:
@@ -122,12 +128,17 @@ def test_delete_while_running_touches_nothing_else(tmp_path, long_wav):
 
         doomed = upload(client, long_wav)
         job_id = doomed["job"]["id"]
-        wait_running(client, job_id)
-        assert client.delete(f"/api/projects/{doomed['id']}").status_code == 204
-        assert not (data / "projects" / doomed["id"]).exists()
-        assert client.get(f"/api/projects/{doomed['id']}").status_code == 404
-        assert client.post(f"/api/projects/{doomed['id']}/generate").status_code == 404
-        assert sse(client, job_id)[-1][0] == "cancelled"
+        # Follow the job's stream across the deletion: it ends with "cancelled".
+        with client.stream("GET", f"/api/jobs/{job_id}/events") as resp:
+            lines = resp.iter_lines()
+            events = read_events(lines, stage="audio")
+            assert events[-1][0] == "progress" and events[-1][1]["stage"] == "audio"
+            assert client.delete(f"/api/projects/{doomed['id']}").status_code == 204
+            assert not (data / "projects" / doomed["id"]).exists()
+            assert client.get(f"/api/projects/{doomed['id']}").status_code == 404
+            assert client.post(f"/api/projects/{doomed['id']}/generate").status_code == 404
+            final = read_events(lines)[-1]
+        assert final[0] == "cancelled" and final[1]["id"] == job_id
         assert client.get(f"/api/jobs/{job_id}").status_code == 404
 
         assert tree(other_dir) == other_files
