@@ -78,9 +78,11 @@ def _send(events, message: tuple) -> None:
 
 def exit_with_parent(parent_pid: int) -> None:
     """Initializer of the pool workers and the Manager: exit once the server process is gone (killed
-    hard), instead of lingering as orphans; ignore Ctrl+C (the terminal sends SIGINT to the whole
-    process group), so the server's own shutdown cancels and records the running jobs."""
+    hard), instead of lingering as orphans; ignore SIGINT and SIGTERM (Ctrl+C in a terminal and
+    process managers signal the whole process group), so the server's own shutdown cancels and
+    records the running jobs as interrupted."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
 
     def watch() -> None:
         while os.getppid() == parent_pid:
