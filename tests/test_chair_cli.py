@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import signal
 import subprocess
 import sys
@@ -44,10 +45,12 @@ def test_push_stop_and_status(chair, tmp_path, capsys):
     path = tl.save(tmp_path / "t.json")
     assert run_cli("chair", "push", str(path), "--port", chair.device, "--start", "0.2", "--intensity", "0.5",
                    "--mute", "seat") == 0
-    assert "pushed 4 frames" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    sent, skipped = map(int, re.search(r"pushed (\d+) frames .* (\d+) skipped", out).groups())
+    assert sent + skipped == 4  # 4 frames, 0 skipped, unless the host stalled
     chair.wait_for(lambda e: e["ev"] == "stop")  # everything before the final STOP is logged
     frames = chair.frames()
-    assert [e["tick"] for e in frames] == [2, 3, 4, 5]
+    assert len(frames) == sent and all(2 <= e["tick"] <= 5 for e in frames)
     assert all(e["motors"][4] == 64 for e in frames)  # floor(0.5 * 0.5 * 255 + 0.5)
     assert run_cli("chair", "stop", "--port", chair.device) == 0
     assert "chair state: safe" in capsys.readouterr().out

@@ -295,9 +295,10 @@ class ChairPlayer:
                 if self._due(k) > now:  # moved by a seek in the meantime
                     return
                 current = self._tick_at(now)
-                if current - k > MAX_CATCH_UP_TICKS:
-                    self._skipped += current - k
-                    k = current
+                if current - k > MAX_CATCH_UP_TICKS:  # stalled: jump to now, count what was not sent
+                    target = max(k, min(current, self._end_tick()))
+                    self._skipped += target - k
+                    k = target
                 gen = self._gen
                 if k >= self._end_tick():
                     frame = None
