@@ -320,3 +320,21 @@ def test_frontend_is_served_without_stale_caches(tmp_path):
         assert "cache-control" not in c.get("/logo.png").headers
         assert c.get("/health").json()["status"] == "ok"
         assert c.get("/../settings.py").status_code == 404
+
+
+def test_dependencies_can_be_swapped(client, data_dir):
+    """Routes take their settings through ``get_settings``: a test can swap them (a tiny upload limit)."""
+    from autohaptics.server.deps import get_settings
+
+    small = Settings(data_dir=data_dir, frontend_dir=None, max_upload_bytes=1000)
+    client.app.dependency_overrides[get_settings] = lambda: small
+    try:
+        assert client.get("/api/config").json()["upload_limit_bytes"] == 1000
+        before = sorted(p.name for p in (data_dir / "projects").iterdir())
+        r = client.post("/api/projects", files={"file": (CLIP, shared_clip(CLIP).read_bytes(), "video/webm")})
+        assert r.status_code == 413 and "limit of 1000 bytes" in r.json()["detail"]
+        assert sorted(p.name for p in (data_dir / "projects").iterdir()) == before
+        assert list((data_dir / "uploads").iterdir()) == []
+    finally:
+        client.app.dependency_overrides.clear()
+    assert client.get("/api/config").json()["upload_limit_bytes"] == 4 * 1024 ** 3

@@ -2,9 +2,11 @@
 
 Life of a job:
 
-1. :meth:`JobRunner.submit` records it (``queued``), creates ``work/<job id>/`` and submits
-   :func:`run_job` to the pool (``ProcessPoolExecutor`` with ``Settings.jobs`` workers and the
-   spawn or forkserver context), so at most N jobs run at once and the rest wait in its queue.
+1. :meth:`JobRunner.submit` records it (``queued``) and creates ``work/<job id>/``; the job waits
+   in the runner's own queue until fewer than ``Settings.jobs`` jobs are in the pool, then
+   :func:`run_job` is submitted to it (one ``ProcessPoolExecutor`` with that many workers, spawn
+   or forkserver context). Waiting here rather than in the pool makes cancelling a queued job
+   immediate.
 2. In the worker, :func:`run_job` sends ``("started", id, time)`` then ``("progress", id, stage,
    fraction)`` messages on the Manager queue, runs :func:`pipeline.analyse` with the job's Manager
    Event as the cancel token, derives the timeline, and writes ``analysis.npz`` and
