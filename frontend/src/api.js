@@ -56,16 +56,30 @@ export class Api {
       init.body = JSON.stringify(body);
       init.headers = { ...init.headers, "Content-Type": "application/json" };
     }
-    let res;
-    try {
-      res = await fetch(this.base + path, init);
-    } catch (err) {
-      throw new ApiError(0, `The server could not be reached (${method} ${path}).`);
-    }
-    if (!res.ok) throw await errorFrom(res, method, path);
+    return this.readJson(fetch(this.base + path, init), `${method} ${path}`);
+  }
+
+  /**
+   * Read a JSON response (a request made here, or one index.html started early).
+   * @param {Promise<Response>} pending
+   * @param {string} what "METHOD path", for messages
+   * @returns {Promise<any>}
+   */
+  async readJson(pending, what) {
+    const res = await reach(pending, what);
     if (res.status === 204) return null;
     const type = res.headers.get("Content-Type") || "";
     return type.includes("json") ? res.json() : res.text();
+  }
+
+  /**
+   * Read a binary response.
+   * @param {Promise<Response>} pending
+   * @param {string} what
+   * @returns {Promise<ArrayBuffer>}
+   */
+  async readBuffer(pending, what) {
+    return (await reach(pending, what)).arrayBuffer();
   }
 
   /** @returns {Promise<Record<string, any>>} */
@@ -143,16 +157,14 @@ export class Api {
    * @param {"composed"|"generated"} [layer]
    * @returns {Promise<ArrayBuffer>}
    */
-  async timelineBin(id, layer = "composed") {
-    const path = `/api/projects/${enc(id)}/timeline.bin?layer=${layer}`;
-    let res;
-    try {
-      res = await fetch(this.base + path);
-    } catch (err) {
-      throw new ApiError(0, `The server could not be reached (GET ${path}).`);
-    }
-    if (!res.ok) throw await errorFrom(res, "GET", path);
-    return res.arrayBuffer();
+  timelineBin(id, layer = "composed") {
+    const path = this.timelineBinPath(id, layer);
+    return this.readBuffer(fetch(this.base + path), `GET ${path}`);
+  }
+
+  /** @param {string} id @param {"composed"|"generated"} [layer] */
+  timelineBinPath(id, layer = "composed") {
+    return `/api/projects/${enc(id)}/timeline.bin?layer=${layer}`;
   }
 
   /** @param {string} id @returns {Promise<EditList>} */
@@ -310,6 +322,22 @@ function enc(s) {
   return encodeURIComponent(s);
 }
 
+/**
+ * The response of a request, or ApiError when it never arrived or failed.
+ * @param {Promise<Response>} pending
+ * @param {string} what
+ */
+async function reach(pending, what) {
+  let res;
+  try {
+    res = await pending;
+  } catch (err) {
+    throw new ApiError(0, `The server could not be reached (${what}).`);
+  }
+  if (!res.ok) throw await errorFrom(res, what);
+  return res;
+}
+
 /** @param {string} text */
 function parse(text) {
   try {
@@ -321,17 +349,16 @@ function parse(text) {
 
 /**
  * @param {Response} res
- * @param {string} method
- * @param {string} path
+ * @param {string} what
  */
-async function errorFrom(res, method, path) {
+async function errorFrom(res, what) {
   let body = null;
   try {
     body = await res.json();
   } catch (err) {
     body = null;
   }
-  return new ApiError(res.status, detailOf(body, res.status, `${method} ${path}`));
+  return new ApiError(res.status, detailOf(body, res.status, what));
 }
 
 /**

@@ -8,7 +8,7 @@
 import { Api } from "./api.js";
 import { h } from "./dom.js";
 import { errorText } from "./history.js";
-import { EditorPage } from "./pages/editor.js";
+import { EditorPage, startEditorLoads } from "./pages/editor.js";
 import { ProjectsPage } from "./pages/projects.js";
 
 const api = new Api("");
@@ -18,15 +18,22 @@ let page = null;
 /** @type {Record<string, any>} */
 let config = {};
 
-async function route() {
+/** The project id of an editor URL (#/project/<id>), else null. */
+function editorRoute() {
+  const m = location.hash.match(/^#\/project\/([^/?#]+)/);
+  return m ? decodeURIComponent(m[1]) : null;
+}
+
+/** @param {import("./pages/editor.js").EditorLoads} [loads] requests already started for this route */
+async function route(loads) {
   if (page) page.destroy();
   page = null;
   delete app.dataset.ready;
-  const m = location.hash.match(/^#\/project\/([^/?#]+)/);
-  if (m) {
-    const editor = new EditorPage(app, { api, config }, decodeURIComponent(m[1]));
+  const id = editorRoute();
+  if (id) {
+    const editor = new EditorPage(app, { api, config }, id);
     page = editor;
-    await editor.open();
+    await editor.open(loads);
   } else {
     const list = new ProjectsPage(app, { api, config });
     page = list;
@@ -85,8 +92,12 @@ async function start() {
   // `autohaptics serve --open-sample` opens /?project=<id>: turn it into the editor's route.
   const asked = new URLSearchParams(location.search).get("project");
   if (asked) history.replaceState(null, "", `${location.pathname}#/project/${encodeURIComponent(asked)}`);
+  const id = editorRoute();
+  // index.html started the first requests while the modules loaded (window.autohapticsEarly).
+  const early = /** @type {any} */ (window).autohapticsEarly || null;
+  const loads = id ? startEditorLoads(api, id, early && early.id === id ? early : null) : undefined;
   try {
-    config = await api.config();
+    config = await (early ? api.readJson(early.config, "GET /api/config") : api.config());
   } catch (err) {
     app.replaceChildren(h("div", { class: "empty", role: "alert", "data-testid": "fatal" }, `The autohaptics server is not answering: ${errorText(err)}`));
     return;
@@ -94,7 +105,7 @@ async function start() {
   window.addEventListener("hashchange", () => {
     route();
   });
-  await route();
+  await route(loads);
 }
 
 start();

@@ -12,67 +12,22 @@ The helpers the tests import live in browser_support.py.
 
 from __future__ import annotations
 
-import os
-import signal
-import socket
-import subprocess
-import sys
-import time
-from pathlib import Path
-
 import httpx
 import pytest
 
-from browser_support import REPO, media_clip, upload
+from browser_support import CHROMIUM, CHROMIUM_ARGS, ServerError, media_clip, start_server, stop_server, upload
 
-CHROMIUM = Path(os.environ.get("AUTOHAPTICS_CHROMIUM", "/usr/bin/chromium"))
-CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
-                 "--disable-sync", "--no-first-run", "--disable-quic"]
 VIEWPORT = {"width": 1440, "height": 900}
-SERVER_START_S = 60.0
-
-
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @pytest.fixture(scope="session")
 def server(tmp_path_factory) -> str:
-    data = tmp_path_factory.mktemp("autohaptics-data")
-    port = _free_port()
-    log_path = data / "server.log"
-    log = open(log_path, "w")
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "autohaptics.cli.main", "serve", "--host", "127.0.0.1", "--port", str(port),
-         "--data", str(data / "data"), "--frontend", str(REPO / "frontend")],
-        stdout=log, stderr=subprocess.STDOUT, cwd=REPO, start_new_session=True)
-    url = f"http://127.0.0.1:{port}"
-    deadline = time.monotonic() + SERVER_START_S
-    while True:
-        if proc.poll() is not None:
-            log.close()
-            pytest.fail(f"autohaptics serve exited with {proc.returncode}:\n{log_path.read_text()[-3000:]}")
-        try:
-            if httpx.get(f"{url}/health", timeout=1.0).status_code == 200:
-                break
-        except httpx.HTTPError:
-            pass
-        if time.monotonic() > deadline:
-            os.killpg(proc.pid, signal.SIGKILL)
-            log.close()
-            pytest.fail(f"autohaptics serve did not answer /health within {SERVER_START_S} s:\n"
-                        f"{log_path.read_text()[-3000:]}")
-        time.sleep(0.2)
-    yield url
-    os.killpg(proc.pid, signal.SIGTERM)
     try:
-        proc.wait(timeout=15)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait()
-    log.close()
+        proc, url = start_server(tmp_path_factory.mktemp("autohaptics-server"))
+    except ServerError as exc:
+        pytest.fail(str(exc))
+    yield url
+    stop_server(proc)
 
 
 @pytest.fixture(scope="session")

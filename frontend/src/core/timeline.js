@@ -152,22 +152,25 @@ export class TimelineView extends Emitter {
     this._setStart(this.startS + dx / this.pxPerS);
   }
 
-  /** @param {number} startS */
-  _setStart(startS) {
+  /**
+   * @param {number} startS
+   * @param {boolean} [silent] no `view` event (layout changes and restoring are not the user's doing)
+   */
+  _setStart(startS, silent = false) {
     const max = Math.max(0, this.durationS - this.visibleS);
     const s = Math.min(max, Math.max(0, startS));
     this.startS = s;
     this._updateScrollbar();
     this._placePlayhead();
     this.invalidate();
-    this.emit("view", { pxPerS: this.pxPerS, startS: this.startS });
+    if (!silent) this.emit("view", { pxPerS: this.pxPerS, startS: this.startS });
   }
 
   /** Restore saved view settings (clamped to this timeline and width). @param {{pxPerS?: number, startS?: number}} v */
   restoreView(v) {
     this._fitted = true;
     if (typeof v.pxPerS === "number" && v.pxPerS > 0) this.pxPerS = Math.min(MAX_PX_PER_S, Math.max(this.minPxPerS, v.pxPerS));
-    this._setStart(typeof v.startS === "number" ? v.startS : 0);
+    this._setStart(typeof v.startS === "number" ? v.startS : 0, true);
   }
 
   // --------------------------------------------------------------- playhead
@@ -409,10 +412,11 @@ export class TimelineView extends Emitter {
     for (const entry of this.lanes) this._sizeCanvas(entry);
     if (!this._fitted) {
       this._fitted = true;
-      this.fit();
+      this.pxPerS = this.minPxPerS;
+      this._setStart(0, true);
     } else if (changed) {
       this.pxPerS = Math.max(this.minPxPerS, this.pxPerS);
-      this._setStart(this.startS);
+      this._setStart(this.startS, true);
     }
     this._resizePlayhead();
     this.invalidate();

@@ -42,6 +42,37 @@ const ZOOM_STEP = 1.5;
  *   api: import("../api.js").Api,
  * }} EditorContext
  */
+/**
+ * @template T
+ * @typedef {Promise<{value: T}|{error: unknown}>} Settled
+ */
+/**
+ * @typedef {{project: Settled<import("../api.js").Project>, edits: Settled<import("../api.js").EditList>,
+ *   bin: Settled<ArrayBuffer>|null}} EditorLoads
+ */
+
+/**
+ * The requests the editor needs first, all at once. `early` holds the same requests when
+ * index.html started them before the modules loaded. Failures are kept, not thrown, until the
+ * editor reads them.
+ * @param {import("../api.js").Api} api
+ * @param {string} projectId
+ * @param {{project: Promise<Response>, edits: Promise<Response>, bin: Promise<Response>}|null} [early]
+ * @returns {EditorLoads}
+ */
+export function startEditorLoads(api, projectId, early = null) {
+  /** @template T @param {Promise<T>} p @returns {Settled<T>} */
+  const settle = (p) => p.then((value) => ({ value }), (error) => ({ error }));
+  if (early) {
+    const base = `/api/projects/${encodeURIComponent(projectId)}`;
+    return {
+      project: settle(api.readJson(early.project, `GET ${base}`)),
+      edits: settle(api.readJson(early.edits, `GET ${base}/edits`)),
+      bin: settle(api.readBuffer(early.bin, `GET ${api.timelineBinPath(projectId)}`)),
+    };
+  }
+  return { project: settle(api.project(projectId)), edits: settle(api.edits(projectId)), bin: settle(api.timelineBin(projectId, "composed")) };
+}
 
 export class EditorPage {
   /**
@@ -76,23 +107,29 @@ export class EditorPage {
     this.disposed = false;
     /** @type {Array<() => void>} */
     this.cleanups = [];
-    this.timing = { start: performance.now(), firstRender: NaN, dataLoaded: NaN, waveformLoaded: NaN };
+    /** Milliseconds from `start` (performance.now() when the editor began opening) to each step. */
+    this.timing = { start: performance.now(), projectLoaded: NaN, binFetched: NaN, dataLoaded: NaN, firstRender: NaN, waveformLoaded: NaN };
     /** @type {ReturnType<typeof setTimeout>|null} */
     this._viewTimer = null;
     this._restoringView = false;
   }
 
   // ------------------------------------------------------------------- open
-  async open() {
+  /**
+   * @param {EditorLoads} [loads] the first requests, when the caller started them already
+   */
+  async open(loads = startEditorLoads(this.api, this.projectId)) {
+    this._firstLoads = loads;
     this._buildShell();
-    let project;
-    try {
-      project = await this.api.project(this.projectId);
-    } catch (err) {
+    const got = await loads.project;
+    if ("error" in got) {
+      const err = got.error;
       this._fatal(err instanceof ApiError && err.status === 404 ? "This project does not exist (it may have been deleted)." : errorText(err));
       return;
     }
+    const project = got.value;
     this.project = project;
+    this.timing.projectLoaded = performance.now() - this.timing.start;
     this.nameEl.textContent = project.name;
     document.title = `${project.name} · autohaptics`;
     if (project.params && project.params.thresholds) this.thresholds = { ...project.params.thresholds };
@@ -100,8 +137,12 @@ export class EditorPage {
     this._buildWorkspace(durationS);
     this._restoreView(project.view || {});
     const tasks = [this._loadEdits(), this._loadWaveform(project)];
-    if (project.has_timeline) tasks.push(this.reloadTimeline());
-    else this._setNoTimeline(project);
+    if (project.has_timeline) {
+      tasks.push(this.reloadTimeline());
+    } else {
+      this._setNoTimeline(project);
+      this._attachMedia();
+    }
     await Promise.all(tasks);
     if (project.job && (project.job.status === "queued" || project.job.status === "running")) this._followJob(project.job);
   }
@@ -156,8 +197,9 @@ export class EditorPage {
 
   /** @param {number} durationS */
   _buildWorkspace(durationS) {
-    const api = this.api;
-    this.video = h("video", { class: "video", preload: "auto", playsinline: true, "data-testid": "video", src: api.mediaUrl(this.projectId) });
+    // The media source is set once the timeline is drawn (_attachMedia), so the video's first range
+    // requests do not compete with timeline.bin for the server.
+    this.video = h("video", { class: "video", preload: "auto", playsinline: true, "data-testid": "video" });
     this.overlayCanvas = h("canvas", { class: "fan-overlay", hidden: true, "data-testid": "fan-overlay", "aria-label": "Fan grid at the playhead" });
     const videoWrap = h("div", { class: "video-wrap" }, this.video, this.overlayCanvas);
     this.fanOverlay = new FanOverlay(this.overlayCanvas, this.video);
@@ -313,16 +355,31 @@ export class EditorPage {
   }
 
   // ---------------------------------------------------------------- loading
+  _attachMedia() {
+    if (this.video.getAttribute("src")) return;
+    this.video.src = this.api.mediaUrl(this.projectId);
+  }
+
   async reloadTimeline() {
     const seq = (this._loadSeq = (this._loadSeq || 0) + 1);
+    const first = this._firstLoads && this._firstLoads.bin;
+    if (this._firstLoads) this._firstLoads.bin = null;
     let buf;
     try {
-      buf = await this.api.timelineBin(this.projectId, "composed");
+      if (first) {
+        const got = await first;
+        if ("error" in got) throw got.error;
+        buf = got.value;
+      } else {
+        buf = await this.api.timelineBin(this.projectId, "composed");
+      }
     } catch (err) {
+      this._attachMedia();
       if (err instanceof ApiError && err.status === 404 && this.project && !this.project.has_timeline) return;
       this._showNotice(`Could not load the timeline: ${errorText(err)}`);
       return;
     }
+    if (Number.isNaN(this.timing.binFetched)) this.timing.binFetched = performance.now() - this.timing.start;
     if (this.disposed || seq !== this._loadSeq) return; // a newer load is under way
     const data = TimelineData.fromBuffer(buf);
     this.data = data;
@@ -338,19 +395,19 @@ export class EditorPage {
     // Runs after the lanes' redraw in the same frame: this revision is now on screen.
     this.loop.request("drawn", () => {
       this.drawnRevision = data.revision;
+      this._attachMedia();
       if (Number.isNaN(this.timing.firstRender)) this.timing.firstRender = performance.now() - this.timing.start;
       this.host.dataset.ready = "true";
     });
   }
 
   async _loadEdits() {
-    try {
-      const edits = await this.api.edits(this.projectId);
-      this.session = new EditSession(this.api, this.projectId, edits);
-    } catch (err) {
-      this._showNotice(`Could not load the edit history: ${errorText(err)}`);
+    const got = await this._firstLoads.edits;
+    if ("error" in got) {
+      this._showNotice(`Could not load the edit history: ${errorText(got.error)}`);
       return;
     }
+    this.session = new EditSession(this.api, this.projectId, got.value);
     const s = this.session;
     this.cleanups.push(
       s.on("changed", ({ reason }) => {
