@@ -62,7 +62,11 @@ def run(args) -> int:
 
 def _open_sample(url: str) -> None:
     """Write the sample clip, upload it through the API once /health answers, open the editor on it."""
-    from autohaptics.synth import sample_clip
+    try:
+        from autohaptics.synth import sample_clip
+    except ImportError as exc:
+        print(f"autohaptics: no sample clip generator ({exc}); open {url} and upload a film", file=sys.stderr)
+        return
 
     with tempfile.TemporaryDirectory(prefix="autohaptics-sample-") as tmp:
         clip = sample_clip(Path(tmp) / "sample.mp4")
