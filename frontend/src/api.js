@@ -209,13 +209,15 @@ export class Api {
   }
 
   /**
-   * Import our JSON or CSV as an undoable `import` op.
+   * Import our JSON or CSV as an undoable `import` op, refused (409) unless the project is still
+   * at `baseRevision`.
    * @param {string} id
    * @param {File} file
-   * @returns {{promise: Promise<any>, abort: () => void}}
+   * @param {number} baseRevision
+   * @returns {{promise: Promise<{revision: number, cursor: number, op: Record<string, any>}>, abort: () => void}}
    */
-  importFile(id, file) {
-    return this._multipart(`/api/projects/${enc(id)}/import`, file, {}, () => {});
+  importFile(id, file, baseRevision) {
+    return this._multipart(`/api/projects/${enc(id)}/import`, file, { base_revision: String(baseRevision) }, () => {});
   }
 
   /**

@@ -68,6 +68,18 @@ export class EditSession extends Emitter {
     });
   }
 
+  /**
+   * Replace every track by an imported timeline file (our JSON or CSV): one undoable `import` op.
+   * @param {File} file
+   */
+  importFile(file) {
+    return this.run(async () => {
+      const res = await this.api.importFile(this.projectId, file, this.revision).promise;
+      this.ops = [...this.ops.slice(0, res.cursor - 1), res.op];
+      this._apply(res, "edit");
+    });
+  }
+
   undo() {
     return this.run(async () => {
       if (!this.canUndo) return;

@@ -234,3 +234,34 @@ def test_main_screen_screenshot(page, project_copy):
     assert float(page.get_attribute("[data-testid=chair-A1]", "data-value")) == pytest.approx(a1[tick], abs=1e-3)
     select_rows(page, 30.0, 34.0, 0, 4)
     copy_to_docs(screenshot(page, "editor"), "editor.png")
+
+
+def test_import_a_timeline_file_and_undo_it(page, api, project_copy, tmp_path):
+    pid = project_copy["id"]
+    doc = api.get(f"/api/projects/{pid}/timeline").json()
+    tl = Timeline.from_dict(doc)
+    tl.vibration[:, 8] = 0.5  # A9, off in the generated audio-mode timeline
+    tl.extra = {}
+    path = tl.save(tmp_path / "designed.timeline.json")
+    open_editor(page, pid)
+    assert values_at(page, 100)["vibration"][8] == 0
+    s0 = state(page)
+    page.set_input_files("[data-testid=import-input]", str(path))
+    s1 = wait_revision_above(page, s0["revision"])
+    assert s1["cursor"] == 1
+    assert [values_at(page, k)["vibration"][8] for k in (0, 100, s1["nTicks"] - 1)] == pytest.approx([0.5] * 3, abs=1 / 255)
+    assert "Imported designed.timeline.json" in page.text_content("[data-testid=toast-info]")
+    page.click("[data-testid=undo]")
+    wait_revision_above(page, s1["revision"])
+    assert values_at(page, 100)["vibration"][8] == 0
+
+
+def test_importing_a_broken_file_says_why(page, project_copy, tmp_path):
+    bad = tmp_path / "broken.csv"
+    bad.write_text("time_s,A1\n0.0,not-a-number\n")
+    open_editor(page, project_copy["id"])
+    page.set_input_files("[data-testid=import-input]", str(bad))
+    page.wait_for_selector("[data-testid=toast-error]")
+    assert page.text_content("[data-testid=toast-error]").startswith("Not saved: ")
+    assert page.get_attribute("[data-testid=save-state]", "data-state") == "error"
+    assert state(page)["cursor"] == 0

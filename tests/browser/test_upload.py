@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from browser_support import media_clip, screenshot, state, upload
+from browser_support import media_clip, screenshot, state, upload, wait_job
 
 pytestmark = pytest.mark.browser
 
@@ -98,3 +98,25 @@ def test_rename_duplicate_and_delete_with_confirmation(page, api):
 def test_open_unknown_project_says_so(page):
     page.goto("/#/project/" + "0" * 32)
     assert "does not exist" in page.locator("[data-testid=editor-error]").text_content()
+
+
+def test_cancel_a_queued_generation(page, api, project_copy):
+    # One job runs at a time: keep the worker busy with another project so the upload's job waits
+    # in the queue, where cancelling it is certain to take effect.
+    busy = api.post(f"/api/projects/{project_copy['id']}/generate", json={}).json()["job"]
+    clip = media_clip("bbb_1s_1280x720_vp8_vorbis.webm")
+    page.goto("/")
+    page.set_input_files("[data-testid=file-input]", str(clip))
+    cancel = page.locator("[data-testid=upload-box] [data-testid=generation-cancel]")
+    cancel.wait_for()
+    page.wait_for_function("() => { const b = document.querySelector('[data-testid=upload-box] [data-testid=generation-cancel]');"
+                           " return b && !b.disabled; }")
+    cancel.click()
+    page.wait_for_function(
+        "() => document.querySelector('[data-testid=upload-status]').textContent === 'Generation cancelled.'")
+    pid = page.get_attribute("[data-testid=open-uploaded]", "href").rsplit("/", 1)[-1]
+    page.wait_for_function(f"() => document.querySelector(\"[data-id='{pid}']\").dataset.status === 'cancelled'")
+    project = api.get(f"/api/projects/{pid}").json()
+    assert project["job"]["status"] == "cancelled" and not project["has_timeline"]
+    assert wait_job(api, busy["id"])["status"] == "done"
+    api.delete(f"/api/projects/{project['id']}")

@@ -166,6 +166,13 @@ export class EditorPage {
     this.undoBtn = h("button", { class: "btn", type: "button", disabled: true, title: "Undo (Ctrl+Z)", "data-testid": "undo", onclick: () => this.undo() }, "Undo");
     this.redoBtn = h("button", { class: "btn", type: "button", disabled: true, title: "Redo (Ctrl+Shift+Z)", "data-testid": "redo", onclick: () => this.redo() }, "Redo");
     this.regenBtn = h("button", { class: "btn", type: "button", "data-testid": "regenerate", onclick: () => this.regenerate() }, "Regenerate…");
+    this.importInput = h("input", { type: "file", accept: ".json,.csv,application/json,text/csv", class: "visually-hidden", "data-testid": "import-input", "aria-label": "Timeline file to import" });
+    this.importInput.addEventListener("change", () => {
+      const f = this.importInput.files && this.importInput.files[0];
+      this.importInput.value = "";
+      if (f) this.importTimeline(f);
+    });
+    this.importBtn = h("button", { class: "btn", type: "button", "data-testid": "import", title: "Replace the tracks by a timeline file (JSON or CSV); undoable", onclick: () => this.importInput.click() }, "Import…");
     this.exportSlot = h("div", { class: "export-slot" });
     const header = h(
       "header",
@@ -177,6 +184,8 @@ export class EditorPage {
       this.undoBtn,
       this.redoBtn,
       this.regenBtn,
+      this.importBtn,
+      this.importInput,
       this.exportSlot,
     );
     this.main = h("main", { class: "editor", "data-testid": "editor" });
@@ -622,6 +631,15 @@ export class EditorPage {
       lane.clearStroke();
       this.timeline.invalidate();
     }
+  }
+
+  /** @param {File} file */
+  async importTimeline(file) {
+    if (!this.session || !this.data) {
+      toast("Generate a timeline before importing one over it.", "warn");
+      return;
+    }
+    if (await this.session.importFile(file)) toast(`Imported ${file.name}; Undo brings the previous tracks back.`);
   }
 
   async undo() {
