@@ -5,11 +5,6 @@
 
 /** @typedef {import("./core/timeline.js").Selection} Selection */
 
-/** Lanes that hold intensities 0..1 (everything but temperature). @param {string} lane */
-export function isIntensityLane(lane) {
-  return lane !== "temperature";
-}
-
 /**
  * `set`: one value on every selected lane. Temperature values are in C, the others 0..1, so a
  * selection mixing both cannot take one value.

@@ -36,21 +36,6 @@ export class Emitter {
   }
 
   /**
-   * Subscribe for one event only.
-   * @template {keyof M} K
-   * @param {K} type
-   * @param {(payload: M[K]) => void} fn
-   * @returns {() => void}
-   */
-  once(type, fn) {
-    const off = this.on(type, (payload) => {
-      off();
-      fn(payload);
-    });
-    return off;
-  }
-
-  /**
    * @template {keyof M} K
    * @param {K} type
    * @param {M[K]} payload

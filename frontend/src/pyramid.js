@@ -75,22 +75,6 @@ export class MinMaxPyramid {
       outMax[i] = hi;
     }
   }
-
-  /**
-   * Min and max over samples [a, b) (clamped); [NaN, NaN] when empty.
-   * @param {number} a
-   * @param {number} b
-   * @returns {[number, number]}
-   */
-  range(a, b) {
-    a = Math.max(0, Math.floor(a));
-    b = Math.min(this.length, Math.ceil(b));
-    if (b <= a) return [NaN, NaN];
-    const lo = new Float32Array(1);
-    const hi = new Float32Array(1);
-    this.fillColumns(a, b - a, 1, lo, hi);
-    return [lo[0], hi[0]];
-  }
 }
 
 /**

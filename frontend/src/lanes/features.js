@@ -17,6 +17,7 @@ const GRAB_PX = 6;
  *   threshold: (name: string) => number|null,
  *   onInput: (name: string, value: number) => void,
  *   onCommit: (name: string, value: number) => void,
+ *   onCancel: (name: string) => void,
  * }} FeatureLaneHooks
  */
 
@@ -140,7 +141,6 @@ export class FeatureLane {
 
   pointerCancel() {
     this.draft = null;
-    const thr = this.hooks.threshold(this.name);
-    if (thr !== null) this.hooks.onInput(this.name, thr);
+    this.hooks.onCancel(this.name);
   }
 }

@@ -236,6 +236,19 @@ export class EditorPage {
     const zoomFit = h("button", { class: "btn", type: "button", "aria-label": "Show the whole timeline (0)", "data-testid": "zoom-fit", onclick: () => this.timeline.fit() }, "Fit");
     const zoomIn = h("button", { class: "btn", type: "button", "aria-label": "Zoom in (+)", "data-testid": "zoom-in", onclick: () => this.timeline.zoomBy(ZOOM_STEP) }, "+");
     this.lanesMenu = h("details", { class: "menu", "data-testid": "lanes-menu" }, h("summary", { class: "btn" }, "Lanes"));
+    const keys = [
+      ["Space", "play / pause"], ["← →", "step one tick (Shift: one second)"], ["Home / End", "start / end"],
+      ["+ / − / 0", "zoom in / out / whole film"], ["Ctrl+wheel, pinch", "zoom at the pointer"], ["Wheel", "pan"],
+      ["Alt+drag, middle drag", "pan"], ["Drag on lanes", "select a range (across heat-map rows: several actuators)"],
+      ["Ctrl+Z / Ctrl+Shift+Z", "undo / redo"], ["Ctrl+C / Ctrl+V", "copy / paste at the playhead"],
+      ["Delete", "clear the selection, or delete the selected marker"], ["Escape", "drop the selection or the points"],
+    ];
+    const keysMenu = h(
+      "details",
+      { class: "menu", "data-testid": "keys-menu" },
+      h("summary", { class: "btn", "aria-label": "Keyboard and mouse shortcuts" }, "Keys"),
+      h("dl", { class: "menu-list keys-list" }, ...keys.flatMap(([k, what]) => [h("dt", {}, k), h("dd", {}, what)])),
+    );
     const transport = h(
       "div",
       { class: "transport", role: "group", "aria-label": "Playback and view" },
@@ -245,6 +258,7 @@ export class EditorPage {
       this.followBtn,
       this.overlayBtn,
       this.lanesMenu,
+      keysMenu,
     );
 
     this.toolbar = new EditToolbar({
@@ -293,6 +307,7 @@ export class EditorPage {
         threshold: (n) => (n in this.thresholds ? this.thresholds[n] : null),
         onInput: (n, v) => this._thresholdInput(n, v),
         onCommit: (n, v) => this.commitThreshold(n, v),
+        onCancel: (n) => this._thresholdCancel(n),
       }));
     for (const lane of this.featureLanes) tl.addLane(lane);
     const zones = /** @type {Record<string, string>} */ ({});
@@ -484,8 +499,8 @@ export class EditorPage {
     this.timeline.setPlayhead(timeS, { page: playing });
     const dur = this.timeline.durationS;
     this.timeEl.textContent = `${formatTime(timeS)} / ${formatTime(dur)}`;
-    const tick = Math.min(this.timeline.nTicks - 1, Math.max(0, Math.floor(timeS / this.tickS + 1e-9)));
-    if (tick === this.lastTick) return;
+    const tick = this.data ? this.data.tickAt(timeS) : -1;
+    if (this.data && tick === this.lastTick) return;
     this.lastTick = tick;
     const v = this.data ? this.data.valuesAt(tick) : null;
     this.chair.update(v, ACTUATOR_IDS);
@@ -660,8 +675,8 @@ export class EditorPage {
 
   paste() {
     if (!this.clipboard.content) return Promise.resolve(false);
-    const t0 = Math.min(this.timeline.nTicks - 1, Math.floor(this.player.currentTime / this.tickS + 1e-9));
-    return this.submit(this.clipboard.pasteOp(t0));
+    if (!this.data) return Promise.resolve(false);
+    return this.submit(this.clipboard.pasteOp(this.data.tickAt(this.player.currentTime)));
   }
 
   /** @param {Array<[number, number]>} points */
@@ -733,6 +748,16 @@ export class EditorPage {
       this.timeline.invalidate(lane.id);
     }
     this.thresholdPanel.set(name, value);
+  }
+
+  /** A threshold drag was cancelled: show the committed value again. @param {string} name */
+  _thresholdCancel(name) {
+    const lane = this.featureLanes.find((l) => l.name === name);
+    if (lane) {
+      lane.draft = null;
+      this.timeline.invalidate(lane.id);
+    }
+    if (name in this.thresholds) this.thresholdPanel.set(name, this.thresholds[name]);
   }
 
   /**
