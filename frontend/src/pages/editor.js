@@ -140,6 +140,7 @@ export class EditorPage {
     if (project.has_timeline) {
       tasks.push(this.reloadTimeline());
     } else {
+      loads.bin = null; // a 404 now; the timeline is fetched when a job makes one
       this._setNoTimeline(project);
       this._attachMedia();
     }
@@ -405,9 +406,14 @@ export class EditorPage {
     }
     if (Number.isNaN(this.timing.binFetched)) this.timing.binFetched = performance.now() - this.timing.start;
     if (this.disposed || seq !== this._loadSeq) return; // a newer load is under way
-    const data = TimelineData.fromBuffer(buf);
+    let data;
+    try {
+      data = TimelineData.fromBuffer(buf);
+    } catch (err) {
+      this._showNotice(`The timeline could not be read: ${errorText(err)}`);
+      return;
+    }
     this.data = data;
-    if (this.session && data.revision > this.session.revision) this.session.revision = data.revision;
     if (Number.isNaN(this.timing.dataLoaded)) this.timing.dataLoaded = performance.now() - this.timing.start;
     this.chair.temperature = this.tempRange();
     this.detailLane.clearStroke();
