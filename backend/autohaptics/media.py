@@ -23,7 +23,6 @@ import math
 import os
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field, replace
-from fractions import Fraction
 from pathlib import Path
 
 import av
@@ -345,6 +344,30 @@ def check_truncation(info: MediaInfo, decoded_s: float, stream: str) -> None:
         raise MediaError(
             f"{info.path}: truncated or damaged file: the {stream} stream decodes {decoded_s:.2f} s "
             f"of the {declared:.2f} s the container declares")
+
+
+def check_complete(info: MediaInfo) -> None:
+    """Raise MediaError when the file's packets end clearly before its declared duration.
+
+    Demuxes every packet of the audio and video streams once, without decoding (cheap: a few
+    ms per minute of film), and applies :func:`check_truncation` to the last packet's end time.
+    """
+    indices = {s.index for s in (info.video, info.audio) if s is not None}
+    end = None
+    with open_container(info.path) as c:
+        streams = [s for s in c.streams if s.index in indices]
+        try:
+            for pkt in c.demux(*streams):
+                if pkt.pts is None or pkt.time_base is None:
+                    continue
+                t = float((pkt.pts + (pkt.duration or 0)) * pkt.time_base)
+                end = t if end is None else max(end, t)
+        except av.error.FFmpegError as exc:
+            raise MediaError(f"{info.path}: damaged file, reading stops at "
+                             f"{0.0 if end is None else end - info.start_s:.2f} s ({_ffmpeg_reason(exc)})") from None
+    if end is None:
+        raise MediaError(f"{info.path}: no audio or video packets")
+    check_truncation(info, end - info.start_s, "video" if info.video is not None else "audio")
 
 
 # ------------------------------------------------------------------- private

@@ -21,7 +21,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import anyio
-import av
 from python_multipart.exceptions import FormParserError
 from python_multipart.multipart import MultipartParser, parse_options_header
 
@@ -216,27 +215,8 @@ def inspect_media(path: Path, *, name: str) -> Accepted:
 
 
 def check_complete(info: media.MediaInfo) -> None:
-    """Raise MediaError when the packets of the file end clearly before its declared duration.
-
-    Demuxes every packet of the audio and video streams (no decoding; reading the file once) and
-    applies :func:`media.check_truncation` to the end time of the last packet.
-    """
-    indices = {s.index for s in (info.video, info.audio) if s is not None}
-    end = None
-    with media.open_container(info.path) as c:
-        streams = [s for s in c.streams if s.index in indices]
-        try:
-            for pkt in c.demux(*streams):
-                if pkt.pts is None or pkt.time_base is None:
-                    continue
-                t = float((pkt.pts + (pkt.duration or 0)) * pkt.time_base)
-                end = t if end is None else max(end, t)
-        except av.error.FFmpegError as exc:
-            raise MediaError(f"{info.path}: damaged file, reading stops at "
-                             f"{0.0 if end is None else end - info.start_s:.2f} s ({exc})") from None
-    if end is None:
-        raise MediaError(f"{info.path}: no audio or video packets")
-    media.check_truncation(info, end - info.start_s, "video" if info.video is not None else "audio")
+    """Raise MediaError when the packets of the file end clearly before its declared duration."""
+    media.check_complete(info)
 
 
 _WEBM_CODECS = {"vp8", "vp9", "av1", "vorbis", "opus"}
