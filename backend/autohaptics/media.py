@@ -26,10 +26,13 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import av
+import cv2
 import numpy as np
 
 from autohaptics.errors import MediaError
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
+
+_PLANAR_YUV8 = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj444p", "yuv411p", "yuv440p"}
 
 # Declared vs decoded duration: beyond this shortfall the file is called truncated.
 TRUNCATION_TOLERANCE_S = 0.5
@@ -278,6 +281,26 @@ class Frame:
         if self.rotation:
             arr = np.ascontiguousarray(np.rot90(arr, k=self.rotation // 90))
         return arr
+
+    def gray(self, width: int) -> np.ndarray:
+        """Luma proxy ``width`` px wide (aspect kept), uint8 [shape=(h, w)], display orientation.
+
+        For 8-bit planar YUV (nearly every film) the Y plane is read in place and area-averaged
+        by OpenCV: no colour conversion at all, about 3x cheaper than a scaled RGB conversion.
+        """
+        f = self._frame
+        if f.format.name in _PLANAR_YUV8 and width < self.width:
+            plane = f.planes[0]
+            y = np.frombuffer(plane, np.uint8).reshape(-1, plane.line_size)[: f.height, : f.width]
+            if self.rotation:
+                y = np.rot90(y, k=self.rotation // 90)
+            height = max(1, int(round(width * self.height / max(1, self.width))))
+            small = cv2.resize(np.ascontiguousarray(y), (max(1, width), height), interpolation=cv2.INTER_AREA)
+            full_range = f.format.name.startswith("yuvj") or getattr(f, "color_range", 0) == 2
+            if not full_range:  # limited-range luma 16..235 -> 0..255, as FFmpeg's gray conversion does
+                small = cv2.convertScaleAbs(small, alpha=255.0 / 219.0, beta=-16.0 * 255.0 / 219.0)
+            return small
+        return self.proxy(min(width, self.width), fmt="gray")
 
     def full(self, *, fmt: str = "rgb24") -> np.ndarray:
         """Full-resolution copy in display orientation (the reference preset)."""
