@@ -120,3 +120,22 @@ def test_cancel_a_queued_generation(page, api, project_copy):
     assert project["job"]["status"] == "cancelled" and not project["has_timeline"]
     assert wait_job(api, busy["id"])["status"] == "done"
     api.delete(f"/api/projects/{project['id']}")
+
+
+def test_a_project_without_a_timeline_is_generated_from_the_editor(page, api):
+    project = upload(api, media_clip("bbb_1s_1280x720_vp8_vorbis.webm"), name="not yet generated", generate=False)
+    page.goto(f"/#/project/{project['id']}")
+    notice = page.locator("[data-testid=editor-notice]")
+    notice.wait_for()
+    assert "no timeline yet" in notice.text_content()
+    assert state(page)["ready"] is False
+    assert page.is_disabled("[data-testid=edit-set]")
+    page.click("[data-testid=regenerate]")
+    page.fill("[data-testid=regen-threshold-loudness]", "0.6")
+    page.click("[data-testid=regen-start]")
+    page.wait_for_selector("#app[data-ready='true']", timeout=90_000)
+    s = state(page)
+    assert s["ready"] is True and s["nTicks"] == project["n_ticks"]
+    assert notice.is_hidden()
+    assert api.get(f"/api/projects/{project['id']}").json()["params"]["thresholds"]["loudness"] == 0.6
+    api.delete(f"/api/projects/{project['id']}")
