@@ -34,14 +34,18 @@ def test_upload_shows_upload_and_generation_progress_then_opens(page, api):
         " return el && el.getAttribute('aria-valuenow') === '100'; }", timeout=90_000)
     page.wait_for_function(
         "() => document.querySelector('[data-testid=upload-status]').textContent.startsWith('Ready')")
+    row = page.locator("[data-testid=project-row]", has_text=clip.stem)
+    page.wait_for_function(
+        "(name) => [...document.querySelectorAll('[data-testid=project-row]')]"
+        ".some((r) => r.textContent.includes(name) && r.dataset.status === 'ready')", arg=clip.stem)
     screenshot(page, "projects-upload-done")
     seen = page.evaluate("() => window.__seen")
     assert seen["upload"] and seen["upload"][-1] == 100
     assert seen["generation"] and max(seen["generation"]) == 100
     assert seen["generation"] == sorted(seen["generation"]), "generation progress went backwards"
 
-    row = page.locator("[data-testid=project-row]", has_text=clip.stem)
     assert row.get_attribute("data-status") == "ready"
+    assert box.locator("[data-testid=upload-cancel]").is_hidden()
     project_id = row.get_attribute("data-id")
     box.locator("[data-testid=open-uploaded]").click()
     page.wait_for_selector("#app[data-ready='true']")
@@ -139,3 +143,27 @@ def test_a_project_without_a_timeline_is_generated_from_the_editor(page, api):
     assert notice.is_hidden()
     assert api.get(f"/api/projects/{project['id']}").json()["params"]["thresholds"]["loudness"] == 0.6
     api.delete(f"/api/projects/{project['id']}")
+
+
+def test_drag_and_drop_upload(page, api):
+    clip = media_clip("bbb_1s_1280x720_vp8_vorbis.webm")
+    page.goto("/")
+    page.wait_for_selector("[data-testid=dropzone]")
+    data = list(clip.read_bytes())
+    transfer = page.evaluate_handle(
+        """([bytes, name]) => {
+            const dt = new DataTransfer();
+            dt.items.add(new File([new Uint8Array(bytes)], name, {type: 'video/webm'}));
+            return dt;
+        }""",
+        [data, "dropped clip.webm"])
+    page.dispatch_event("[data-testid=dropzone]", "dragover", {"dataTransfer": transfer})
+    assert "dragging" in page.get_attribute("[data-testid=dropzone]", "class")
+    page.dispatch_event("[data-testid=dropzone]", "drop", {"dataTransfer": transfer})
+    page.wait_for_function(
+        "() => document.querySelector('[data-testid=upload-status]').textContent.startsWith('Ready')", timeout=90_000)
+    assert "dragging" not in page.get_attribute("[data-testid=dropzone]", "class")
+    pid = page.get_attribute("[data-testid=open-uploaded]", "href").rsplit("/", 1)[-1]
+    project = api.get(f"/api/projects/{pid}").json()
+    assert project["name"] == "dropped clip" and project["status"] == "ready"
+    api.delete(f"/api/projects/{pid}")
