@@ -117,7 +117,8 @@ def test_cancel_a_queued_generation(page, api, project_copy):
                            " return b && !b.disabled; }")
     cancel.click()
     page.wait_for_function(
-        "() => document.querySelector('[data-testid=upload-status]').textContent === 'Generation cancelled.'")
+        "() => /^(Generation (cancelled|failed)|Ready)/.test(document.querySelector('[data-testid=upload-status]').textContent)")
+    assert page.text_content("[data-testid=upload-status]") == "Generation cancelled."
     pid = page.get_attribute("[data-testid=open-uploaded]", "href").rsplit("/", 1)[-1]
     page.wait_for_function(f"() => document.querySelector(\"[data-id='{pid}']\").dataset.status === 'cancelled'")
     project = api.get(f"/api/projects/{pid}").json()
