@@ -16,7 +16,6 @@ import dataclasses
 import hashlib
 import io
 import json
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,18 +24,23 @@ from typing import Any
 import numpy as np
 
 from autohaptics import __version__
+from autohaptics import airflow, cuts, depth, fusion, saliency, thermal
 from autohaptics import audio_features as af
 from autohaptics import intensity as inten
 from autohaptics import media
 from autohaptics.errors import MediaError, ParameterError
-from autohaptics.layout import ACTUATOR_IDS, AUDIO_MODE_ACTUATORS, FAN_COLS, FAN_ROWS, N_ACTUATORS, TEMP_NEUTRAL_C
+from autohaptics.layout import ACTUATOR_IDS, AUDIO_MODE_ACTUATORS, CENTRE_ACTUATOR, N_ACTUATORS, TEMP_NEUTRAL_C
 from autohaptics.presets import DEFAULT_PRESET, apply_overrides, params_to_dict, preset_overrides
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel, null_progress
-from autohaptics.timebase import FRAMES_PER_TICK, SAMPLES_PER_FRAME, frames_to_ticks, n_ticks as ticks_for
+from autohaptics.timebase import FRAMES_PER_TICK, TICK_S, frames_to_ticks, n_ticks as ticks_for
 from autohaptics.timeline import Timeline, default_generator
+from autohaptics.vision import VideoAnalysis, VideoParams, video_pass
 
-MODES = ("audio",)
+MODES = ("multimodal", "audio", "visual", "random")
 TRACKS = ("vibration", "temperature", "fans")
+# A tick that vibrates but had no saliency computed borrows the weights of the nearest analysed
+# tick of the same shot within this many ticks; beyond, it falls back to A5.
+_BORROW_TICKS = 10
 _AUDIO_SHARE = 0.15  # share of the progress bar given to the audio pass when there is video
 
 
@@ -44,22 +48,38 @@ _AUDIO_SHARE = 0.15  # share of the progress bar given to the audio pass when th
 class GenerateParams:
     """Every parameter that shapes a timeline (recorded in ``generator.params``).
 
-    mode : vibration rendering, the thesis's study conditions: "audio" (A1, A2, A5 from the audio
-        intensity).
+    mode : vibration rendering, the thesis's study conditions (table 4.1): "multimodal" (audio
+        intensity spread by saliency fusion, the full pipeline), "audio" (A1, A2, A5 from the audio
+        intensity), "visual" (the salient area's actuators, no audio), "random" (seeded random events).
+    tracks : which tracks to compute; a track left out is still present, off (zeros / neutral).
+    seed : random generator seed of the "random" mode.
     lfe_gain_db : gain of the LFE channel in the downmix, dB (cinema playback: +10).
     allow_truncated : accept a file whose streams decode shorter than declared (the missing part
         is silence); otherwise such a file is an error.
     """
 
-    mode: str = "audio"
+    mode: str = "multimodal"
+    tracks: tuple[str, ...] = TRACKS
+    seed: int = 0
     lfe_gain_db: float = 10.0
     allow_truncated: bool = False
     audio: af.AudioFeatureParams = field(default_factory=af.AudioFeatureParams)
     intensity: inten.IntensityParams = field(default_factory=inten.IntensityParams)
+    video: VideoParams = field(default_factory=VideoParams)
+    saliency: saliency.SaliencyParams = field(default_factory=saliency.SaliencyParams)
+    fusion: fusion.FusionParams = field(default_factory=fusion.FusionParams)
+    thermal: thermal.ThermalParams = field(default_factory=thermal.ThermalParams)
+    flow: airflow.FlowParams = field(default_factory=airflow.FlowParams)
+    airflow: airflow.AirflowParams = field(default_factory=airflow.AirflowParams)
+    cuts: cuts.CutParams = field(default_factory=cuts.CutParams)
+    depth: depth.DepthParams = field(default_factory=depth.DepthParams)
 
     def __post_init__(self):
         if self.mode not in MODES:
             raise ParameterError(f"mode must be one of {MODES}, got {self.mode!r}")
+        bad = [t for t in self.tracks if t not in TRACKS]
+        if bad:
+            raise ParameterError(f"unknown track(s) {bad}; choose from {list(TRACKS)}")
         if not (-40.0 <= float(self.lfe_gain_db) <= 20.0):
             raise ParameterError(f"lfe_gain_db must lie in -40..20 dB, got {self.lfe_gain_db!r}")
 
@@ -96,13 +116,17 @@ class Analysis:
     n_ticks: int
     params: dict
     audio: dict[str, np.ndarray] | None
+    video: VideoAnalysis | None = None
     stats: dict = field(default_factory=dict)
 
     def save(self, path: str | Path) -> None:
         """Write the cache as one .npz file (arrays plus a JSON header)."""
         arrays = {f"audio_{k}": v for k, v in (self.audio or {}).items()}
+        if self.video is not None:
+            arrays.update({f"video_{k}": v for k, v in self.video.arrays().items()})
         header = {"info": self.info, "sha256": self.sha256, "n_ticks": self.n_ticks, "params": self.params,
-                  "stats": self.stats, "has_audio": self.audio is not None, "version": __version__}
+                  "stats": self.stats, "has_audio": self.audio is not None, "has_video": self.video is not None,
+                  "version": __version__}
         buf = io.BytesIO()
         np.savez(buf, header=np.frombuffer(json.dumps(header).encode(), dtype=np.uint8), **arrays)
         Path(path).write_bytes(buf.getvalue())
@@ -112,12 +136,16 @@ class Analysis:
         with np.load(path, allow_pickle=False) as z:
             header = json.loads(bytes(z["header"]).decode())
             audio = {k[len("audio_"):]: z[k] for k in z.files if k.startswith("audio_")}
+            video = {k[len("video_"):]: z[k] for k in z.files if k.startswith("video_")}
         return cls(info=header["info"], sha256=header["sha256"], n_ticks=int(header["n_ticks"]),
-                   params=header["params"], audio=audio if header["has_audio"] else None, stats=header["stats"])
+                   params=header["params"], audio=audio if header["has_audio"] else None,
+                   video=VideoAnalysis.from_arrays(video) if header.get("has_video") else None,
+                   stats=header["stats"])
 
 
 # Fields of GenerateParams that change what analyse() computes; everything else is derive-time.
-ANALYSIS_FIELDS = ("audio", "lfe_gain_db", "allow_truncated")
+ANALYSIS_FIELDS = ("audio", "lfe_gain_db", "allow_truncated", "tracks", "video", "saliency", "fusion", "flow",
+                   "cuts", "depth")
 
 
 def analysis_key(params: GenerateParams) -> dict:
@@ -160,15 +188,54 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
     stats["hash"] = {"seconds": time.perf_counter() - t0}
     check_cancel(cancel)
 
+    need_colour = "temperature" in params.tracks and info.video is not None
+    need_flow = "fans" in params.tracks and info.video is not None
+    need_vib = "vibration" in params.tracks
     audio = None
+    audio_share = _AUDIO_SHARE if info.video is not None else 1.0
     if info.audio is None:
-        if params.mode == "audio":
+        if params.mode == "audio" and need_vib:
             raise MediaError(f"{info.path}: no audio stream (mode 'audio' needs one)")
+        stats["audio"] = {"skipped": "no audio stream"}
     else:
-        audio = _audio_pass(info, params, n, stats, progress, cancel, share=1.0)
+        audio = _audio_pass(info, params, n, stats, progress, cancel, share=audio_share)
+
+    video = None
+    need_saliency = _saliency_needed(params, audio, n) if (need_vib and info.video is not None) else np.zeros(n, bool)
+    if info.video is None:
+        if params.mode == "visual" and need_vib:
+            raise MediaError(f"{info.path}: no video stream (mode 'visual' needs one)")
+        stats["video"] = {"skipped": "no video stream"}
+    elif need_colour or need_flow or need_saliency.any():
+        t0 = time.perf_counter()
+
+        def video_progress(stage: str, fraction: float) -> None:
+            progress(stage, audio_share + (1.0 - audio_share) * fraction)
+
+        video = video_pass(info, n, video=params.video, saliency_params=params.saliency,
+                           fusion_params=params.fusion, flow_params=params.flow, airflow_params=params.airflow,
+                           cut_params=params.cuts, depth_params=params.depth, need_saliency=need_saliency,
+                           need_flow=need_flow, need_colour=need_colour, progress=video_progress, cancel=cancel)
+        if not params.allow_truncated:
+            media.check_truncation(info, video.stats["frames"].get("last_time_s", info.duration_s) + TICK_S,
+                                   "video")
+        stats["video"] = {"seconds": time.perf_counter() - t0, **video.stats}
+    else:
+        stats["video"] = {"skipped": "no track needs the picture"}
     progress("done", 1.0)
     return Analysis(info=info.to_dict(), sha256=sha, n_ticks=n, params=params_to_dict(params),
-                    audio=audio, stats=stats)
+                    audio=audio, video=video, stats=stats)
+
+
+def _saliency_needed(params: GenerateParams, audio: dict | None, n: int) -> np.ndarray:
+    """Ticks whose saliency the mode needs: every tick for "visual" (and for "multimodal" without
+    skipping), the ticks with non-zero audio intensity for "multimodal", none otherwise."""
+    if params.mode == "visual" or (params.mode == "multimodal" and not params.video.skip):
+        return np.ones(n, bool)
+    if params.mode != "multimodal" or audio is None:
+        return np.zeros(n, bool)
+    norm = inten.normalise_features(audio, params=params.intensity)
+    return inten.tick_intensity(norm, n, params=params.intensity) > 0
 
 
 def _audio_pass(info: media.MediaInfo, params: GenerateParams, n: int, stats: dict,
@@ -224,18 +291,117 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
             tl.features[name] = np.zeros(n)
     tl.features["intensity"] = intensity
 
-    if params.mode == "audio":
-        cols = [ACTUATOR_IDS.index(a) for a in AUDIO_MODE_ACTUATORS]
-        tl.vibration[:, cols] = intensity[:, None]
+    video = analysis.video
+    if "vibration" in params.tracks:
+        tl.vibration[:] = _vibration(params, intensity, video, n, stats)
+    temp_low, temp_high = float(params.thermal.temp_low), float(params.thermal.temp_high)
+    neutral = float(np.clip(TEMP_NEUTRAL_C, temp_low, temp_high))
+    tl.temperature_c[:] = neutral
+    if "temperature" in params.tracks and video is not None:
+        target = thermal.temperature_target(video.mean_rgb.astype(np.float64), params=params.thermal)
+        if params.thermal.slew_c_per_s:
+            target = thermal.slew_limit(target, max_rate_c_per_s=params.thermal.slew_c_per_s, tick_s=TICK_S)
+        tl.temperature_c[:] = np.clip(target, temp_low, temp_high)
+    if video is not None:
+        peak = float(video.motion.max()) if video.motion.size else 0.0
+        tl.features["motion"] = np.clip(video.motion / peak, 0.0, 1.0) if peak > 0 else np.zeros(n)
+        tl.features["motion_fw_per_s"] = video.motion.astype(np.float64)
+        if "fans" in params.tracks:
+            tl.fans[:] = _fans(params, video, stats)
 
     gen_params = params_to_dict(params)
     gen_params["thresholds"] = dict(params.intensity.thresholds)
-    gen_params["temp_low"], gen_params["temp_high"] = 30.0, 55.0
+    gen_params["temp_low"], gen_params["temp_high"] = temp_low, temp_high
     tl.generator = default_generator(mode=params.mode, preset=preset, params=gen_params)
     stats["derive"] = {"seconds": time.perf_counter() - t0}
     stats["vibration"] = {"active_ticks": int((tl.vibration.max(axis=1) > 0).sum()), "ticks": n}
     tl.stats = stats
     return tl.validate()
+
+
+def _vibration(params: GenerateParams, intensity: np.ndarray, video: VideoAnalysis | None, n: int,
+               stats: dict) -> np.ndarray:
+    """(n, 9) vibration for the mode (thesis table 4.1)."""
+    vib = np.zeros((n, N_ACTUATORS))
+    centre = ACTUATOR_IDS.index(CENTRE_ACTUATOR)
+    if params.mode == "audio":
+        vib[:, [ACTUATOR_IDS.index(a) for a in AUDIO_MODE_ACTUATORS]] = intensity[:, None]
+    elif params.mode == "multimodal":
+        if video is None:  # no picture: the no-salient-region rule puts everything on A5
+            vib[:, centre] = intensity
+            stats["fusion"] = {"fallback": "no video stream: all weight on A5"}
+        else:
+            beta, estimated = _beta_for(video, intensity > 0)
+            vib = intensity[:, None] * beta
+            stats["fusion"] = {"ticks_estimated": int(estimated.sum())}
+            if estimated.any():
+                stats["needs_analysis"] = True
+    elif params.mode == "visual":
+        if video is not None:
+            salient = video.saliency_mask & (video.beta.sum(axis=1) > 0)
+            vib[salient] = video.beta[salient]
+    elif params.mode == "random":
+        vib = _random_vibration(n, params.seed, float((intensity > 0).mean()) if intensity.any() else 0.2)
+    return np.clip(vib, 0.0, 1.0)
+
+
+def _beta_for(video: VideoAnalysis, wanted: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Actuator weights per tick: the computed ones, else those of the nearest analysed tick of the
+    same shot (within ``_BORROW_TICKS``), else A5 only. Returns (beta (n, 9), estimated (n,) bool)."""
+    n = wanted.size
+    beta = np.array(video.beta, dtype=np.float64)
+    have = video.saliency_mask.copy()
+    missing = wanted & ~have
+    estimated = np.zeros(n, bool)
+    fallback = np.zeros(N_ACTUATORS)
+    fallback[ACTUATOR_IDS.index(CENTRE_ACTUATOR)] = 1.0
+    if missing.any():
+        shot = np.cumsum(video.cut)
+        have_idx = np.flatnonzero(have)
+        for k in np.flatnonzero(missing):
+            estimated[k] = True
+            if have_idx.size:
+                j = have_idx[np.argmin(np.abs(have_idx - k))]
+                if abs(j - k) <= _BORROW_TICKS and shot[j] == shot[k]:
+                    beta[k] = beta[j]
+                    continue
+            beta[k] = fallback
+    beta[~(have | missing)] = 0.0
+    return beta, estimated
+
+
+def _random_vibration(n: int, seed: int, active_fraction: float) -> np.ndarray:
+    """The thesis's "random" condition: events at random times on random actuators, covering about
+    ``active_fraction`` of the ticks. Events last 0.3..1.5 s with intensity 0.4..1 on 1..3 actuators."""
+    rng = np.random.default_rng(seed)
+    vib = np.zeros((n, N_ACTUATORS))
+    target = int(round(np.clip(active_fraction, 0.0, 1.0) * n))
+    active = np.zeros(n, bool)
+    guard = 0
+    while active.sum() < target and guard < 10 * n + 10:
+        guard += 1
+        length = int(rng.integers(3, 16))
+        start = int(rng.integers(0, n))
+        stop = min(n, start + length)
+        acts = rng.choice(N_ACTUATORS, size=int(rng.integers(1, 4)), replace=False)
+        vib[start:stop, acts] = np.maximum(vib[start:stop, acts], rng.uniform(0.4, 1.0))
+        active[start:stop] = True
+    return vib
+
+
+def _fans(params: GenerateParams, video: VideoAnalysis, stats: dict) -> np.ndarray:
+    """(n, 9, 17) fan levels: ticks whose motion exceeds the (manual or adaptive) threshold, not at a
+    cut, with depth computed: strong motion AND near (airflow.fan_levels)."""
+    n = video.motion.size
+    valid = ~video.cut
+    threshold = airflow.motion_threshold(video.motion[valid], params=params.airflow)
+    on = valid & (video.motion > threshold) & video.depth_mask
+    fans = np.zeros((n,) + video.cell_motion.shape[1:], np.float32)
+    for k in np.flatnonzero(on):
+        fans[k] = airflow.fan_levels(video.cell_motion[k], video.nearness[k], params=params.airflow)
+    stats["airflow"] = {"threshold_fw_per_s": float(threshold), "ticks_on": int(on.sum()),
+                        "ticks_at_cuts": int(video.cut.sum())}
+    return fans
 
 
 def generate(path: str | Path, params: GenerateParams | None = None, *, preset: str = DEFAULT_PRESET,

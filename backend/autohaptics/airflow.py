@@ -1,0 +1,195 @@
+"""Motion + depth -> the 9 x 17 fan grid (ALGORITHM.md section 5, thesis 5.3).
+
+1. Dense optical flow between consecutive frames on a gray proxy (OpenCV DIS by default, Farneback
+   as the reference variant).
+2. Motion in frame widths per second (flow px / proxy width / frame interval): the same scene gives
+   the same number at 160 px / 24 fps and at 4K / 60 fps, so one threshold transfers.
+3. Ticks whose mean motion exceeds the threshold are airflow ticks; the threshold is manual
+   (``AirflowParams.threshold``) or adaptive from the clip's own motion distribution (default):
+   ``max(floor, median + k_mad * 1.4826 * MAD)``, so a calm clip's few fast moments stand out and a
+   static clip (all motion below the floor) gets no airflow at all.
+4. Per tick the frame is split into 17 columns x 9 rows; a fan is on where its cell has strong
+   motion (at least ``cell_rel`` of the tick's strongest cell) AND is near (nearness at least
+   ``near_min``); its level is the cell's motion relative to the strongest cell, 0..1.
+
+A static pair (nothing changed beyond noise) is detected by a cheap frame difference so flow is
+not computed at all, and flow is never computed across a shot cut (see :mod:`autohaptics.cuts`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+from autohaptics.errors import ParameterError
+from autohaptics.layout import FAN_COLS, FAN_ROWS
+
+FLOW_METHODS = ("dis", "farneback")
+DIS_PRESETS = {"ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST, "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
+               "medium": cv2.DISOPTICAL_FLOW_PRESET_MEDIUM}
+_MIN_FLOW_SIDE = 16  # px; smaller proxies have no room for a flow patch: motion reads 0
+
+
+@dataclass(frozen=True)
+class FlowParams:
+    """Optical flow.
+
+    method : "dis" (OpenCV DIS, default) | "farneback" (the reference).
+    proxy_width : width of the gray proxy the flow runs on, px (default 160).
+    dis_preset : "ultrafast" | "fast" | "medium".
+    """
+
+    method: str = "dis"
+    proxy_width: int = 160
+    dis_preset: str = "fast"
+
+    def __post_init__(self):
+        if self.method not in FLOW_METHODS:
+            raise ParameterError(f"flow.method must be one of {FLOW_METHODS}, got {self.method!r}")
+        if self.dis_preset not in DIS_PRESETS:
+            raise ParameterError(f"flow.dis_preset must be one of {sorted(DIS_PRESETS)}, got {self.dis_preset!r}")
+        if not (8 <= int(self.proxy_width) <= 7680):
+            raise ParameterError(f"flow.proxy_width must lie in 8..7680 px, got {self.proxy_width!r}")
+
+
+@dataclass(frozen=True)
+class AirflowParams:
+    """Which ticks and which cells blow.
+
+    threshold : motion threshold in frame widths per second; None = adaptive (module docstring).
+    floor : motion below this never counts (frame widths/s, default 0.005); also the depth skip limit.
+    k_mad : adaptive threshold = median + k_mad robust standard deviations (default 3).
+    cell_rel : a cell is "strong motion" at this fraction of the tick's strongest cell or more.
+    near_min : a cell is "near" at this nearness or more (0..1, 1 = nearest).
+    static_level, static_fraction : a frame pair is static when fewer than ``static_fraction`` of
+        the proxy's pixels changed by more than ``static_level`` grey levels (noise tolerant, yet a
+        small moving object is seen).
+    """
+
+    threshold: float | None = None
+    floor: float = 0.005
+    k_mad: float = 3.0
+    cell_rel: float = 0.5
+    near_min: float = 0.5
+    static_level: float = 12.0
+    static_fraction: float = 0.002
+
+    def __post_init__(self):
+        if self.threshold is not None and not (math.isfinite(self.threshold) and self.threshold >= 0):
+            raise ParameterError(f"airflow.threshold must be >= 0 (frame widths/s) or None, got {self.threshold!r}")
+        if not (0.0 <= float(self.floor) < 100.0):
+            raise ParameterError(f"airflow.floor must lie in 0..100 frame widths/s, got {self.floor!r}")
+        for name in ("cell_rel", "near_min", "static_fraction"):
+            if not (0.0 <= float(getattr(self, name)) <= 1.0):
+                raise ParameterError(f"airflow.{name} must lie in 0..1, got {getattr(self, name)!r}")
+
+
+@lru_cache(maxsize=4)
+def _dis(preset: str):
+    return cv2.DISOpticalFlow_create(DIS_PRESETS[preset])
+
+
+def optical_flow(prev_gray: np.ndarray, gray: np.ndarray, *, params: FlowParams = FlowParams()) -> np.ndarray:
+    """Dense flow from ``prev_gray`` to ``gray`` (uint8 [shape=(h, w)]), px per frame interval.
+
+    Returns float32 [shape=(h, w, 2)] (dx, dy); zeros when the proxy is too small for flow.
+    """
+    a, b = _gray(prev_gray), _gray(gray)
+    if a.shape != b.shape:
+        raise ParameterError(f"flow needs two frames of one size, got {a.shape} and {b.shape}")
+    h, w = a.shape
+    if min(h, w) < _MIN_FLOW_SIDE:
+        return np.zeros((h, w, 2), np.float32)
+    if params.method == "dis":
+        flow = _dis(params.dis_preset).calc(a, b, None)
+    else:
+        win = max(5, int(round(w / 40)) | 1)
+        levels = max(1, min(5, int(math.log2(min(h, w) / 8))))
+        flow = cv2.calcOpticalFlowFarneback(a, b, None, 0.5, levels, win, 3, 5, 1.1, 0)
+    flow = np.asarray(flow, dtype=np.float32)
+    return np.where(np.isfinite(flow), flow, 0.0).astype(np.float32)
+
+
+def motion_magnitude(flow: np.ndarray, *, dt_s: float, width_px: int) -> np.ndarray:
+    """Flow magnitude in frame widths per second. flow [shape=(h, w, 2)] px -> float32 [shape=(h, w)]."""
+    if not (dt_s > 0 and width_px > 0):
+        raise ParameterError(f"motion_magnitude needs dt_s > 0 and width_px > 0, got {dt_s}, {width_px}")
+    flow = np.asarray(flow, dtype=np.float32)
+    mag = np.sqrt(flow[..., 0] ** 2 + flow[..., 1] ** 2) / (float(width_px) * float(dt_s))
+    return np.where(np.isfinite(mag), mag, 0.0).astype(np.float32)
+
+
+def motion_score(mag: np.ndarray) -> float:
+    """A frame's motion: the mean magnitude, frame widths per second (0 for an empty map)."""
+    mag = np.asarray(mag, dtype=np.float64)
+    return float(mag.mean()) if mag.size else 0.0
+
+
+def grid_means(arr: np.ndarray) -> np.ndarray:
+    """Mean of a map over the 9 x 17 fan cells (row 0 = top). [shape=(h, w)] -> float32 [shape=(9, 17)]."""
+    a = np.asarray(arr, dtype=np.float32)
+    if a.ndim != 2 or a.size == 0:
+        raise ParameterError(f"grid_means needs a non-empty 2-D map, got shape {a.shape}")
+    a = np.where(np.isfinite(a), a, 0.0).astype(np.float32)
+    h, w = a.shape
+    if h >= FAN_ROWS and w >= FAN_COLS:
+        return cv2.resize(a, (FAN_COLS, FAN_ROWS), interpolation=cv2.INTER_AREA)
+    rows = np.minimum((np.arange(FAN_ROWS) + 0.5) * h / FAN_ROWS, h - 1).astype(int)
+    cols = np.minimum((np.arange(FAN_COLS) + 0.5) * w / FAN_COLS, w - 1).astype(int)
+    return a[np.ix_(rows, cols)].astype(np.float32)
+
+
+def cell_motion(mag: np.ndarray) -> np.ndarray:
+    """Mean motion per fan cell, frame widths per second, float32 [shape=(9, 17)]."""
+    return grid_means(mag)
+
+
+def is_static(prev_gray: np.ndarray, gray: np.ndarray, *, params: AirflowParams = AirflowParams()) -> bool:
+    """True when nothing moved between two frames beyond noise (see AirflowParams)."""
+    a, b = _gray(prev_gray), _gray(gray)
+    if a.shape != b.shape:
+        return False
+    changed = cv2.absdiff(a, b) > params.static_level
+    return float(changed.mean()) < params.static_fraction
+
+
+def motion_threshold(motion: np.ndarray, *, params: AirflowParams = AirflowParams()) -> float:
+    """The airflow threshold for a clip, frame widths/s: manual, or adaptive (module docstring)."""
+    if params.threshold is not None:
+        return float(max(params.threshold, 0.0))
+    m = np.asarray(motion, dtype=np.float64)
+    m = m[np.isfinite(m)]
+    if m.size == 0:
+        return float(params.floor)
+    med = float(np.median(m))
+    mad = float(np.median(np.abs(m - med)))
+    return float(max(params.floor, med + params.k_mad * 1.4826 * mad))
+
+
+def fan_levels(cell_motion_: np.ndarray, nearness: np.ndarray, *, params: AirflowParams = AirflowParams()) -> np.ndarray:
+    """Fan levels of one airflow tick: strong motion AND near. Both [shape=(9, 17)] -> float32 [0, 1]."""
+    m = np.nan_to_num(np.asarray(cell_motion_, dtype=np.float64))
+    near = np.nan_to_num(np.asarray(nearness, dtype=np.float64))
+    if m.shape != (FAN_ROWS, FAN_COLS) or near.shape != (FAN_ROWS, FAN_COLS):
+        raise ParameterError(f"fan_levels needs (9, 17) grids, got {m.shape} and {near.shape}")
+    peak = float(m.max())
+    if not peak > 0:
+        return np.zeros((FAN_ROWS, FAN_COLS), np.float32)
+    rel = np.clip(m / peak, 0.0, 1.0)
+    on = (rel >= params.cell_rel) & (near >= params.near_min)
+    return np.where(on, rel, 0.0).astype(np.float32)
+
+
+def _gray(x: np.ndarray) -> np.ndarray:
+    x = np.asarray(x)
+    if x.ndim == 3 and x.shape[2] == 3:
+        x = cv2.cvtColor(np.ascontiguousarray(x, dtype=np.uint8), cv2.COLOR_RGB2GRAY)
+    if x.ndim != 2 or x.size == 0:
+        raise ParameterError(f"expected a gray frame of shape (h, w), got {x.shape}")
+    if x.dtype != np.uint8:
+        x = np.clip(np.nan_to_num(x.astype(np.float64)), 0, 255).astype(np.uint8)
+    return np.ascontiguousarray(x)

@@ -1,0 +1,103 @@
+"""Shot-cut detection on small proxies (not in the thesis: flow across a cut is meaningless).
+
+A frame's signature is its normalised colour histogram (16 bins per RGB channel; 32 luma bins for
+a gray frame) plus a 16 x 9 luma thumbnail. Two frames are in different shots when
+
+- both have structure (thumbnail standard deviation >= ``flat_std``): the colour distribution
+  changed (half the histogram L1 distance >= ``hist_threshold``) AND the layout changed (the
+  zero-mean correlation of the thumbnails <= ``corr_threshold``). A fade changes the histogram
+  but keeps the layout; a pan keeps the histogram; a hard cut changes both. Colour matters: a
+  green shot and a grey shot can have the same luma.
+- one of them is flat (black, a title card): the mean brightness jumps by ``flat_jump`` grey
+  levels or more (a fade from black moves a few levels per frame, a cut from black jumps).
+
+:func:`cut_score` condenses this into one number in 0..1 (>= 0.5 means cut) for reports.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from autohaptics.errors import ParameterError
+
+_BINS = 32  # luma bins of a gray frame
+_RGB_BINS = 16  # bins per channel of an RGB frame
+_THUMB = (16, 9)
+_THUMB_N = _THUMB[0] * _THUMB[1]
+
+
+@dataclass(frozen=True)
+class CutParams:
+    """hist_threshold : histogram distance (0..1) from which the colours count as changed (0.25).
+    corr_threshold : thumbnail correlation (-1..1) up to which the layout counts as changed (0.5).
+    flat_std : thumbnail standard deviation (grey levels) below which a frame is flat (4).
+    flat_jump : mean brightness jump (grey levels) that makes a cut next to a flat frame (40).
+    """
+
+    hist_threshold: float = 0.25
+    corr_threshold: float = 0.5
+    flat_std: float = 4.0
+    flat_jump: float = 40.0
+
+    def __post_init__(self):
+        if not (0.0 < float(self.hist_threshold) <= 1.0):
+            raise ParameterError(f"cuts.hist_threshold must lie in (0, 1], got {self.hist_threshold!r}")
+        if not (-1.0 <= float(self.corr_threshold) <= 1.0):
+            raise ParameterError(f"cuts.corr_threshold must lie in -1..1, got {self.corr_threshold!r}")
+        if not (0.0 <= float(self.flat_std) and 0.0 < float(self.flat_jump) <= 255.0):
+            raise ParameterError("cuts.flat_std must be >= 0 and cuts.flat_jump in (0, 255]")
+
+
+def frame_signature(frame: np.ndarray) -> np.ndarray:
+    """Signature of a frame, gray uint8 [shape=(h, w)] or RGB uint8 [shape=(h, w, 3)].
+
+    Returns float32: the histogram (32 luma bins, or 3 x 16 colour bins, summing to 1) followed by
+    the 144 thumbnail values (0..255). Compare only signatures of the same kind.
+    """
+    f = np.asarray(frame)
+    if f.ndim not in (2, 3) or f.size == 0 or (f.ndim == 3 and f.shape[2] != 3):
+        raise ParameterError(f"expected a gray (h, w) or RGB (h, w, 3) frame, got {f.shape}")
+    f = np.ascontiguousarray(f, dtype=np.uint8)
+    if f.ndim == 2:
+        gray = f
+        hist = np.bincount((gray >> 3).ravel(), minlength=_BINS).astype(np.float32)
+        hist /= max(1.0, float(hist.sum()))
+    else:
+        gray = cv2.cvtColor(f, cv2.COLOR_RGB2GRAY)
+        codes = (f >> 4).reshape(-1, 3).astype(np.int64) + np.array([0, _RGB_BINS, 2 * _RGB_BINS])
+        hist = np.bincount(codes.ravel(), minlength=3 * _RGB_BINS).astype(np.float32)
+        hist /= max(1.0, float(hist.sum()))
+    thumb = cv2.resize(gray, _THUMB, interpolation=cv2.INTER_AREA).astype(np.float32).ravel()
+    return np.concatenate([hist, thumb])
+
+
+def _parts(sig_a: np.ndarray, sig_b: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    a, b = np.asarray(sig_a, np.float32), np.asarray(sig_b, np.float32)
+    if a.shape != b.shape:
+        raise ParameterError(f"signatures differ in shape (gray vs colour?): {a.shape} vs {b.shape}")
+    nh = a.size - _THUMB_N
+    return 0.5 * float(np.abs(a[:nh] - b[:nh]).sum()), a[nh:].astype(np.float64), b[nh:].astype(np.float64)
+
+
+def _corr(ta: np.ndarray, tb: np.ndarray) -> float:
+    da, db = ta - ta.mean(), tb - tb.mean()
+    den = float(np.sqrt((da * da).sum() * (db * db).sum()))
+    return float((da * db).sum() / den) if den > 0 else 1.0
+
+
+def cut_score(sig_a: np.ndarray, sig_b: np.ndarray, *, params: CutParams = CutParams()) -> float:
+    """How clearly two frames belong to different shots, 0..1; 0.5 or more is a cut (see is_cut)."""
+    hist, ta, tb = _parts(sig_a, sig_b)
+    if min(ta.std(), tb.std()) < params.flat_std:
+        return float(min(1.0, 0.5 * abs(ta.mean() - tb.mean()) / params.flat_jump))
+    colour = min(1.0, 0.5 * hist / params.hist_threshold)
+    layout = min(1.0, 0.5 * (1.0 - _corr(ta, tb)) / max(1e-6, 1.0 - params.corr_threshold))
+    return float(min(colour, layout))
+
+
+def is_cut(sig_a: np.ndarray, sig_b: np.ndarray, *, params: CutParams = CutParams()) -> bool:
+    """True when the two frames' signatures belong to different shots (module docstring)."""
+    return cut_score(sig_a, sig_b, params=params) >= 0.5

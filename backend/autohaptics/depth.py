@@ -1,0 +1,134 @@
+"""Relative depth for airflow ticks: a nearness map in [0, 1], 1 = near (ALGORITHM.md section 5).
+
+Backends:
+
+- ``"embedded"`` (default, no weights): a monocular CUE model, not a depth estimator. It blends
+  (a) the ground-plane prior: lower in the frame is nearer (true for most shots of people and
+  objects standing on the ground; wrong for ceilings, close-ups of faces, aerial shots);
+  (b) local detail: in-focus, high-contrast regions are usually the subject, which is usually
+  nearer than a defocused background (wrong for deep-focus shots and textured backgrounds);
+  (c) expansion, when the flow is given: positive divergence of the flow means the surface grows
+  on screen, i.e. comes toward the camera (the strongest cue for "rushing at the viewer"; it sees
+  only moving things and mistakes a zoom-in for approach).
+  It ranks regions; it does not measure distance.
+- ``"onnx"``: any monocular depth network exported to ONNX (e.g. a MiDaS-style model), loaded
+  from a user-supplied file; ``output_kind`` says whether it outputs depth (larger = farther) or
+  disparity / inverse depth (larger = nearer).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from autohaptics.errors import ParameterError
+from autohaptics.saliency import OnnxMapModel
+
+BACKENDS = ("embedded", "onnx")
+DepthBackend = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class DepthParams:
+    """Depth backend and the embedded cue weights.
+
+    backend : "embedded" | "onnx".
+    proxy_width : width of the RGB proxy depth runs on, px (default 128).
+    w_position, w_detail, w_expansion : weights of the embedded cues (normalised to sum 1; a zero
+        weight skips the cue; expansion needs the flow).
+    onnx_model, onnx_input_size (w, h), onnx_mean, onnx_std (0..1 scale), onnx_channel_order.
+    output_kind : "depth" (larger = farther) | "disparity" (larger = nearer) for the ONNX output.
+    """
+
+    backend: str = "embedded"
+    proxy_width: int = 128
+    w_position: float = 0.4
+    w_detail: float = 0.2
+    w_expansion: float = 0.4
+    onnx_model: str | None = None
+    onnx_input_size: tuple[int, int] = (256, 256)
+    onnx_mean: tuple[float, float, float] = (0.485, 0.456, 0.406)
+    onnx_std: tuple[float, float, float] = (0.229, 0.224, 0.225)
+    onnx_channel_order: str = "rgb"
+    output_kind: str = "disparity"
+
+    def __post_init__(self):
+        if self.backend not in BACKENDS:
+            raise ParameterError(f"depth.backend must be one of {BACKENDS}, got {self.backend!r}")
+        if self.output_kind not in ("depth", "disparity"):
+            raise ParameterError(f"depth.output_kind must be depth or disparity, got {self.output_kind!r}")
+        if min(self.w_position, self.w_detail, self.w_expansion) < 0:
+            raise ParameterError("depth cue weights must be >= 0")
+        if self.backend == "embedded" and self.w_position + self.w_detail + self.w_expansion <= 0:
+            raise ParameterError("the embedded depth backend needs at least one positive cue weight")
+        if self.backend == "onnx" and not self.onnx_model:
+            raise ParameterError("depth.backend 'onnx' needs depth.onnx_model (path of an .onnx file)")
+        if not (8 <= int(self.proxy_width) <= 4096):
+            raise ParameterError(f"depth.proxy_width must lie in 8..4096 px, got {self.proxy_width!r}")
+
+
+def make_depth_backend(params: DepthParams) -> DepthBackend | None:
+    """The ONNX model (loaded once), or None for the embedded cues."""
+    if params.backend == "onnx":
+        return OnnxMapModel(params.onnx_model, input_size=params.onnx_input_size, mean=params.onnx_mean,
+                            std=params.onnx_std, channel_order=params.onnx_channel_order, what="depth")
+    return None
+
+
+def nearness_map(rgb: np.ndarray, *, params: DepthParams = DepthParams(), backend: DepthBackend | None = None,
+                 flow: np.ndarray | None = None) -> np.ndarray:
+    """Nearness of each pixel, 0 (far) .. 1 (near). rgb uint8 [shape=(h, w, 3)] -> float32 [shape=(h, w)].
+
+    flow : optional float [shape=(h', w', 2)] px/frame of the same frame (any size), for the
+    expansion cue of the embedded backend.
+    """
+    rgb = np.asarray(rgb)
+    if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.size == 0:
+        raise ParameterError(f"expected an RGB frame of shape (h, w, 3), got {rgb.shape}")
+    h, w = rgb.shape[:2]
+    if params.backend == "onnx":
+        model = backend or make_depth_backend(params)
+        raw = _minmax(np.asarray(model(np.ascontiguousarray(rgb, dtype=np.uint8)), np.float32))
+        return (1.0 - raw if params.output_kind == "depth" else raw).astype(np.float32)
+    return _embedded(np.ascontiguousarray(rgb, dtype=np.uint8), params, flow)
+
+
+def _embedded(rgb: np.ndarray, params: DepthParams, flow: np.ndarray | None) -> np.ndarray:
+    h, w = rgb.shape[:2]
+    cues, weights = [], []
+    if params.w_position > 0:
+        rows = (np.arange(h, dtype=np.float32) + 0.5) / h
+        cues.append(np.repeat(rows[:, None], w, axis=1))
+        weights.append(params.w_position)
+    if params.w_detail > 0 and min(h, w) >= 3:
+        gray = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32)
+        detail = np.abs(cv2.Laplacian(gray, cv2.CV_32F, ksize=3))
+        sigma = max(1.0, 0.05 * w)
+        cues.append(_minmax(cv2.GaussianBlur(detail, (0, 0), sigma)))
+        weights.append(params.w_detail)
+    if params.w_expansion > 0 and flow is not None:
+        f = np.asarray(flow, dtype=np.float32)
+        if f.ndim == 3 and f.shape[2] == 2 and min(f.shape[:2]) >= 3:
+            if f.shape[:2] != (h, w):
+                sx, sy = w / f.shape[1], h / f.shape[0]
+                f = cv2.resize(f, (w, h), interpolation=cv2.INTER_LINEAR) * np.array([sx, sy], np.float32)
+            div = np.gradient(f[..., 0], axis=1) + np.gradient(f[..., 1], axis=0)
+            div = cv2.GaussianBlur(np.maximum(div, 0.0).astype(np.float32), (0, 0), max(1.0, 0.04 * w))
+            cues.append(_minmax(div))
+            weights.append(params.w_expansion)
+    if not cues:
+        return np.full((h, w), 0.5, np.float32)
+    wsum = float(sum(weights))
+    near = sum(wt / wsum * c for wt, c in zip(weights, cues))
+    return np.clip(np.nan_to_num(near), 0.0, 1.0).astype(np.float32)
+
+
+def _minmax(x: np.ndarray) -> np.ndarray:
+    x = np.where(np.isfinite(x), x, 0.0).astype(np.float32)
+    lo, hi = float(x.min()), float(x.max())
+    if not hi - lo > 1e-9:
+        return np.zeros_like(x)
+    return (x - lo) / (hi - lo)

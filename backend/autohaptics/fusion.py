@@ -1,0 +1,176 @@
+"""Saliency -> spatial distribution over the nine actuators (ALGORITHM.md section 3, thesis 3.2).
+
+Recipe per analysed frame:
+
+1. salient shape: binarise the map, remove small noisy specks (the thesis filters "noisy salient edges");
+2. for each of the 14 triangles holding salient pixels: the centroid C_i of those pixels;
+3. alpha = 1 / distance(C_i, vertex) for each ACTUATOR vertex of the triangle (frame corners carry
+   no actuator and get no weight); w = alpha / sum(alpha); a centroid on a vertex gives that vertex 1;
+4. W_A = sum of w over the triangles around actuator A; beta = W / max(W) (strongest actuator = 1);
+5. nothing salient: all weight on A5 (thesis 4.4.3).
+
+``variant="paper"`` is exactly that. ``variant="mass"`` multiplies each triangle's w by its salient
+mass (its share of the frame's salient pixels), so a speck no longer counts as much as a fully
+salient triangle.
+
+Binarisation (decision; the thesis used a CNN mask): a pixel is salient when its value is at least
+``max(min_level, mean + k_std * std)`` of the map; then a morphological opening (3 x 3) and removal
+of connected regions smaller than ``min_speck_area`` of the frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+from autohaptics.errors import ParameterError
+from autohaptics.layout import ACTUATOR_IDS, CENTRE_ACTUATOR, N_ACTUATORS, TRIANGLES, vertex_xy
+
+VARIANTS = ("paper", "mass")
+_N_TRI = len(TRIANGLES)
+# (14, 3) actuator index of each triangle vertex, -1 for a corner; (14, 3, 2) vertex coordinates
+_TRI_ACT = np.array([[ACTUATOR_IDS.index(v) if v.startswith("A") else -1 for v in tri] for tri in TRIANGLES])
+_TRI_XY = np.array([[vertex_xy(v) for v in tri] for tri in TRIANGLES], dtype=np.float64)
+_VERTEX_EPS = 1e-9
+
+
+@dataclass(frozen=True)
+class FusionParams:
+    """How a saliency map becomes actuator weights.
+
+    variant : "paper" (the thesis) | "mass" (triangles weighted by their salient mass).
+    min_level : lowest map value (0..1) that can count as salient.
+    k_std : a pixel is salient at mean + k_std * std of the map or above (and >= min_level).
+    min_speck_area : connected salient regions smaller than this fraction of the frame are noise.
+    """
+
+    variant: str = "paper"
+    min_level: float = 0.3
+    k_std: float = 1.5
+    min_speck_area: float = 0.002
+
+    def __post_init__(self):
+        if self.variant not in VARIANTS:
+            raise ParameterError(f"fusion.variant must be one of {VARIANTS}, got {self.variant!r}")
+        if not (0.0 <= float(self.min_level) <= 1.0):
+            raise ParameterError(f"fusion.min_level must lie in 0..1, got {self.min_level!r}")
+        if not (0.0 <= float(self.min_speck_area) < 1.0):
+            raise ParameterError(f"fusion.min_speck_area must lie in 0..1, got {self.min_speck_area!r}")
+
+
+def fallback_weights() -> np.ndarray:
+    """All weight on A5: the rule when nothing is salient. float64 [shape=(9,)]."""
+    beta = np.zeros(N_ACTUATORS)
+    beta[ACTUATOR_IDS.index(CENTRE_ACTUATOR)] = 1.0
+    return beta
+
+
+def salient_shape(saliency: np.ndarray, *, params: FusionParams = FusionParams()) -> np.ndarray:
+    """Binarised, de-specked saliency. saliency float [shape=(h, w)] in [0, 1] -> bool [shape=(h, w)]."""
+    s = np.asarray(saliency, dtype=np.float32)
+    if s.ndim != 2 or s.size == 0:
+        raise ParameterError(f"a saliency map must be 2-D and non-empty, got shape {s.shape}")
+    s = np.where(np.isfinite(s), s, 0.0)
+    if float(s.max()) <= 0.0:
+        return np.zeros(s.shape, bool)
+    level = max(float(params.min_level), float(s.mean() + params.k_std * s.std()))
+    mask = (s >= min(level, float(s.max()))).astype(np.uint8)
+    h, w = mask.shape
+    if min(h, w) >= 5:
+        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    min_px = params.min_speck_area * h * w
+    if min_px >= 1 and mask.any():
+        n, labels, st, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+        keep = np.zeros(n, bool)
+        keep[1:] = st[1:, cv2.CC_STAT_AREA] >= min_px
+        mask = keep[labels].astype(np.uint8)
+    return mask.astype(bool)
+
+
+@lru_cache(maxsize=32)
+def triangle_index_map(h: int, w: int) -> np.ndarray:
+    """Which triangle (0..13, T1 = 0) holds each pixel centre of an h x w frame. int8 [shape=(h, w)].
+
+    A pixel centre on a shared edge belongs to the lower-numbered triangle.
+    """
+    if h < 1 or w < 1:
+        raise ParameterError(f"frame size must be positive, got {h} x {w}")
+    ys, xs = np.mgrid[0:h, 0:w]
+    px = (xs + 0.5) / w
+    py = (ys + 0.5) / h
+    out = np.full((h, w), -1, np.int8)
+    for i in range(_N_TRI):
+        (x1, y1), (x2, y2), (x3, y3) = _TRI_XY[i]
+        det = (y2 - y3) * (x1 - x3) + (x3 - x2) * (y1 - y3)
+        l1 = ((y2 - y3) * (px - x3) + (x3 - x2) * (py - y3)) / det
+        l2 = ((y3 - y1) * (px - x3) + (x1 - x3) * (py - y3)) / det
+        l3 = 1.0 - l1 - l2
+        inside = (l1 >= -1e-12) & (l2 >= -1e-12) & (l3 >= -1e-12) & (out < 0)
+        out[inside] = i
+    out.setflags(write=False)
+    return out
+
+
+def triangle_weights(centroid: tuple[float, float], triangle: int) -> np.ndarray:
+    """Inverse-distance weights of one triangle's actuator vertices for a centroid (x, y).
+
+    Returns float64 [shape=(9,)] summing to 1 over the triangle's actuators; a centroid on an
+    actuator vertex gives that actuator 1 (no division by zero).
+    """
+    c = np.asarray(centroid, dtype=np.float64)
+    w = np.zeros(N_ACTUATORS)
+    acts = _TRI_ACT[triangle]
+    pts = _TRI_XY[triangle]
+    d = np.hypot(*(pts - c).T)
+    real = acts >= 0
+    hit = real & (d < _VERTEX_EPS)
+    if hit.any():
+        w[acts[np.argmax(hit)]] = 1.0
+        return w
+    alpha = np.where(real, 1.0 / np.maximum(d, _VERTEX_EPS), 0.0)
+    alpha /= alpha.sum()
+    for a, v in zip(acts, alpha):
+        if a >= 0:
+            w[a] += v
+    return w
+
+
+def actuator_weights(saliency: np.ndarray | None = None, *, params: FusionParams = FusionParams(),
+                     shape: np.ndarray | None = None) -> np.ndarray:
+    """beta per actuator A1..A9 for one frame: float64 [shape=(9,)] in [0, 1], max 1.
+
+    saliency : float [shape=(h, w)] in [0, 1]; or give the binary ``shape`` (salient_shape output).
+    Nothing salient -> all weight on A5.
+    """
+    if shape is None:
+        if saliency is None:
+            raise ParameterError("actuator_weights needs a saliency map or a salient shape")
+        shape = salient_shape(saliency, params=params)
+    shape = np.asarray(shape, dtype=bool)
+    if shape.ndim != 2 or not shape.any():
+        return fallback_weights()
+    h, w = shape.shape
+    tri = triangle_index_map(h, w)
+    ys, xs = np.nonzero(shape)
+    t = tri[ys, xs].astype(np.int64)
+    ok = t >= 0
+    ys, xs, t = ys[ok], xs[ok], t[ok]
+    if t.size == 0:
+        return fallback_weights()
+    counts = np.bincount(t, minlength=_N_TRI).astype(np.float64)
+    cx = np.bincount(t, weights=(xs + 0.5) / w, minlength=_N_TRI)
+    cy = np.bincount(t, weights=(ys + 0.5) / h, minlength=_N_TRI)
+    W = np.zeros(N_ACTUATORS)
+    total = counts.sum()
+    for i in np.flatnonzero(counts):
+        wi = triangle_weights((cx[i] / counts[i], cy[i] / counts[i]), int(i))
+        if params.variant == "mass":
+            wi *= counts[i] / total
+        W += wi
+    peak = W.max()
+    if not peak > 0:
+        return fallback_weights()
+    return W / peak

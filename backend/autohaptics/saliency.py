@@ -1,0 +1,199 @@
+"""Saliency: where the eye goes in a frame, a map in [0, 1] (ALGORITHM.md section 3, thesis 3.1.2).
+
+Backends (the fusion that uses the map is fixed, the backend is a choice):
+
+- ``"spectral"`` (default): OpenCV contrib's spectral residual (Hou & Zhang 2007), which needs no
+  weights; about 0.3 ms on a 128 px proxy.
+- ``"fine_grained"``: OpenCV contrib's fine-grained saliency (Montabone & Soto 2010); 300+ ms on a
+  1080p frame, so only ever run on the proxy.
+- ``"onnx"``: any single-input saliency network exported to ONNX (the thesis used a pyramid
+  feature attention network), loaded from a user-supplied file with onnxruntime; input size,
+  normalisation and channel order are parameters.
+
+Optionally a motion cue (frame difference with the previous frame) is blended in. A flat frame
+(black, one colour) has no salient region: its map is all zeros.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from autohaptics.errors import ParameterError
+
+BACKENDS = ("spectral", "fine_grained", "onnx")
+SaliencyBackend = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class SaliencyParams:
+    """Saliency backend and its inputs.
+
+    backend : "spectral" | "fine_grained" | "onnx".
+    proxy_width : width in px of the RGB proxy the map is computed on (default 128).
+    motion_weight : 0..1 share of the motion cue (|frame - previous frame|); 0 = not computed.
+    blur : Gaussian smoothing of the map, sigma as a fraction of the proxy width (0 = none).
+    flat_std : a frame whose luma standard deviation is below this (grey levels 0..255) is flat:
+        no salient region.
+    onnx_model : path of the ONNX file (backend "onnx").
+    onnx_input_size : (width, height) the network expects, px.
+    onnx_mean, onnx_std : per-channel normalisation on the 0..1 scale, in ``onnx_channel_order``.
+    onnx_channel_order : "rgb" | "bgr".
+    """
+
+    backend: str = "spectral"
+    proxy_width: int = 128
+    motion_weight: float = 0.0
+    blur: float = 0.02
+    flat_std: float = 2.0
+    onnx_model: str | None = None
+    onnx_input_size: tuple[int, int] = (224, 224)
+    onnx_mean: tuple[float, float, float] = (0.485, 0.456, 0.406)
+    onnx_std: tuple[float, float, float] = (0.229, 0.224, 0.225)
+    onnx_channel_order: str = "rgb"
+
+    def __post_init__(self):
+        if self.backend not in BACKENDS:
+            raise ParameterError(f"saliency.backend must be one of {BACKENDS}, got {self.backend!r}")
+        if not (8 <= int(self.proxy_width) <= 4096):
+            raise ParameterError(f"saliency.proxy_width must lie in 8..4096 px, got {self.proxy_width!r}")
+        if not (0.0 <= float(self.motion_weight) <= 1.0):
+            raise ParameterError(f"saliency.motion_weight must lie in 0..1, got {self.motion_weight!r}")
+        if not (0.0 <= float(self.blur) <= 0.5):
+            raise ParameterError(f"saliency.blur must lie in 0..0.5, got {self.blur!r}")
+        if self.onnx_channel_order not in ("rgb", "bgr"):
+            raise ParameterError(f"saliency.onnx_channel_order must be rgb or bgr, got {self.onnx_channel_order!r}")
+        if self.backend == "onnx" and not self.onnx_model:
+            raise ParameterError("saliency.backend 'onnx' needs saliency.onnx_model (path of an .onnx file)")
+
+
+def make_saliency_backend(params: SaliencyParams) -> SaliencyBackend:
+    """A callable ``rgb uint8 (h, w, 3) -> raw map float32 (h, w)``; models are loaded once here."""
+    if params.backend == "spectral":
+        engine = cv2.saliency.StaticSaliencySpectralResidual_create()
+        return lambda rgb: _opencv_map(engine, rgb)
+    if params.backend == "fine_grained":
+        engine = cv2.saliency.StaticSaliencyFineGrained_create()
+        return lambda rgb: _opencv_map(engine, rgb)
+    return OnnxMapModel(params.onnx_model, input_size=params.onnx_input_size, mean=params.onnx_mean,
+                        std=params.onnx_std, channel_order=params.onnx_channel_order, what="saliency")
+
+
+def saliency_map(rgb: np.ndarray, *, params: SaliencyParams = SaliencyParams(),
+                 backend: SaliencyBackend | None = None, prev_gray: np.ndarray | None = None) -> np.ndarray:
+    """Saliency of one frame.
+
+    rgb : uint8 [shape=(h, w, 3)], the proxy.
+    prev_gray : uint8 [shape=(h, w)], the previous frame's luma, for the motion cue (optional).
+    Returns float32 [shape=(h, w)] in [0, 1]; all zeros for a flat frame or a flat/NaN network output.
+    """
+    rgb = _check_rgb(rgb)
+    h, w = rgb.shape[:2]
+    gray = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)
+    if float(gray.std()) < params.flat_std:
+        return np.zeros((h, w), np.float32)
+    backend = backend or make_saliency_backend(params)
+    smap = _normalise(np.asarray(backend(rgb), dtype=np.float32), (h, w))
+    if params.motion_weight > 0 and prev_gray is not None and prev_gray.shape == gray.shape:
+        diff = cv2.absdiff(gray, prev_gray).astype(np.float32)
+        smap = (1.0 - params.motion_weight) * smap + params.motion_weight * _normalise(diff, (h, w))
+    if params.blur > 0 and min(h, w) >= 3:
+        sigma = max(0.5, params.blur * w)
+        smap = cv2.GaussianBlur(smap, (0, 0), sigmaX=sigma, sigmaY=sigma)
+    return _normalise(smap, (h, w))
+
+
+class OnnxMapModel:
+    """A single-input image network (ONNX) that outputs one map: saliency or depth.
+
+    The input is resized to ``input_size`` (w, h), scaled to 0..1, normalised with ``mean``/``std``
+    and laid out NCHW or NHWC as the model's input shape says. The first output is squeezed to
+    2-D (first channel of a multi-channel output) and resized back to the frame.
+    """
+
+    def __init__(self, path: str | Path | None, *, input_size=(224, 224), mean=(0.0, 0.0, 0.0), std=(1.0, 1.0, 1.0),
+                 channel_order: str = "rgb", what: str = "map"):
+        import onnxruntime as ort
+
+        if not path:
+            raise ParameterError(f"the ONNX {what} backend needs a model file")
+        p = Path(path)
+        if not p.is_file():
+            raise ParameterError(f"{p}: no such ONNX {what} model file")
+        opts = ort.SessionOptions()
+        opts.intra_op_num_threads = 1
+        opts.log_severity_level = 3
+        try:
+            self.session = ort.InferenceSession(str(p), sess_options=opts, providers=["CPUExecutionProvider"])
+        except Exception as exc:  # onnxruntime raises its own exception types for bad files
+            raise ParameterError(f"{p}: not a loadable ONNX model ({type(exc).__name__}: {exc})") from None
+        inputs = self.session.get_inputs()
+        if len(inputs) != 1:
+            raise ParameterError(f"{p}: the {what} model must have exactly one input, it has {len(inputs)}")
+        self.input = inputs[0]
+        shape = list(self.input.shape)
+        if len(shape) != 4:
+            raise ParameterError(f"{p}: the {what} model's input must be 4-D (NCHW or NHWC), got {shape}")
+        self.nhwc = shape[3] == 3 and shape[1] != 3
+        self.size = (int(input_size[0]), int(input_size[1]))
+        fixed_h, fixed_w = (shape[1], shape[2]) if self.nhwc else (shape[2], shape[3])
+        if isinstance(fixed_h, int) and isinstance(fixed_w, int) and fixed_h > 0 and fixed_w > 0:
+            self.size = (fixed_w, fixed_h)  # a fixed-size model decides its own input size
+        self.mean = np.asarray(mean, np.float32)
+        self.std = np.maximum(np.asarray(std, np.float32), 1e-6)
+        self.bgr = channel_order == "bgr"
+        self.what = what
+
+    def __call__(self, rgb: np.ndarray) -> np.ndarray:
+        h, w = rgb.shape[:2]
+        x = cv2.resize(rgb, self.size, interpolation=cv2.INTER_AREA if w > self.size[0] else cv2.INTER_LINEAR)
+        if self.bgr:
+            x = x[..., ::-1]
+        x = (x.astype(np.float32) / 255.0 - self.mean) / self.std
+        x = x[None] if self.nhwc else np.transpose(x, (2, 0, 1))[None]
+        out = self.session.run(None, {self.input.name: np.ascontiguousarray(x, dtype=np.float32)})[0]
+        out = np.asarray(out, dtype=np.float32)
+        while out.ndim > 2:
+            out = out[0]
+        if out.ndim != 2:
+            raise ParameterError(f"the ONNX {self.what} model's output has shape {np.shape(out)}, expected a map")
+        out = np.where(np.isfinite(out), out, 0.0).astype(np.float32)
+        return cv2.resize(out, (w, h), interpolation=cv2.INTER_LINEAR)
+
+
+# ----------------------------------------------------------------------- private
+def _check_rgb(rgb: np.ndarray) -> np.ndarray:
+    rgb = np.asarray(rgb)
+    if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.shape[0] < 1 or rgb.shape[1] < 1:
+        raise ParameterError(f"expected an RGB frame of shape (h, w, 3), got {rgb.shape}")
+    if rgb.dtype != np.uint8:
+        rgb = np.clip(np.nan_to_num(rgb.astype(np.float64)), 0, 255).astype(np.uint8)
+    return np.ascontiguousarray(rgb)
+
+
+def _opencv_map(engine, rgb: np.ndarray) -> np.ndarray:
+    h, w = rgb.shape[:2]
+    if min(h, w) < 4:  # too small for a spectrum: no structure to find
+        return np.zeros((h, w), np.float32)
+    ok, smap = engine.computeSaliency(cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+    if not ok or smap is None:
+        return np.zeros((h, w), np.float32)
+    smap = np.asarray(smap, dtype=np.float32)
+    if smap.shape != (h, w):
+        smap = cv2.resize(smap, (w, h), interpolation=cv2.INTER_LINEAR)
+    return smap
+
+
+def _normalise(smap: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Min-max to [0, 1]; a flat or non-finite map becomes all zeros."""
+    smap = np.where(np.isfinite(smap), smap, 0.0).astype(np.float32)
+    if smap.shape != shape:
+        smap = cv2.resize(smap, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
+    lo, hi = float(smap.min()), float(smap.max())
+    if not hi - lo > 1e-6 * max(1.0, abs(hi)):
+        return np.zeros(shape, np.float32)
+    return ((smap - lo) / (hi - lo)).astype(np.float32)

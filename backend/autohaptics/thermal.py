@@ -1,0 +1,118 @@
+"""Colour -> temperature (ALGORITHM.md section 4, thesis 5.2).
+
+Mean RGB of the frame; DisR = distance to pure red (255, 0, 0), DisG = distance to pure green
+(0, 255, 0). The thesis's ratio DisR / DisG is unbounded (a pure green frame divides by zero) and
+overshoots 55 C; we use the bounded, order-preserving r = DisR / (DisR + DisG) in [0, 1] (the
+denominator is never below the red-green distance, 360.6) and
+T = temp_high - (temp_high - temp_low) * r: red -> temp_high, green -> temp_low.
+
+The curve is a TARGET. 55 C on skin burns: the device profile clamps it to its own safe range
+(:func:`clamp_to_device`, default at most 40 C) and real thermal elements need a rate limit
+(:func:`slew_limit`). Neutral colours (black, white, grey) land mid-range under the formula; the
+``neutral_aware`` option pulls desaturated colours to a skin-neutral ``neutral_c``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from autohaptics.errors import ParameterError
+from autohaptics.layout import DEVICE_TEMP_MAX_C, DEVICE_TEMP_MIN_C, TEMP_HIGH_C, TEMP_LOW_C, TEMP_NEUTRAL_C
+
+_RED = np.array([255.0, 0.0, 0.0])
+_GREEN = np.array([0.0, 255.0, 0.0])
+
+
+@dataclass(frozen=True)
+class ThermalParams:
+    """Colour-to-temperature mapping.
+
+    temp_low, temp_high : target temperatures (C) of pure green and pure red (thesis: 30 and 55).
+    neutral_aware : pull desaturated colours towards ``neutral_c``.
+    neutral_c : skin-neutral temperature, C (default 33).
+    chroma_low, chroma_high : chroma (max - min channel, 0..255) below which a colour is fully
+        neutral and above which it keeps its full temperature (linear between), neutral_aware only.
+    slew_c_per_s : rate limit of the generated curve, C per second (None = no limit; the device
+        applies its own limit too).
+    """
+
+    temp_low: float = TEMP_LOW_C
+    temp_high: float = TEMP_HIGH_C
+    neutral_aware: bool = False
+    neutral_c: float = TEMP_NEUTRAL_C
+    chroma_low: float = 20.0
+    chroma_high: float = 90.0
+    slew_c_per_s: float | None = None
+
+    def __post_init__(self):
+        for name in ("temp_low", "temp_high", "neutral_c", "chroma_low", "chroma_high"):
+            if not math.isfinite(float(getattr(self, name))):
+                raise ParameterError(f"thermal.{name} must be finite, got {getattr(self, name)!r}")
+        if not (-20.0 <= self.temp_low < self.temp_high <= 80.0):
+            raise ParameterError(f"thermal needs -20 <= temp_low < temp_high <= 80 C, got {self.temp_low}, {self.temp_high}")
+        if not (self.temp_low <= self.neutral_c <= self.temp_high):
+            raise ParameterError(f"thermal.neutral_c must lie in [temp_low, temp_high], got {self.neutral_c}")
+        if not (0.0 <= self.chroma_low < self.chroma_high <= 255.0):
+            raise ParameterError("thermal needs 0 <= chroma_low < chroma_high <= 255")
+        if self.slew_c_per_s is not None and not (0.0 < float(self.slew_c_per_s) < 1e6):
+            raise ParameterError(f"thermal.slew_c_per_s must be positive (C/s) or None, got {self.slew_c_per_s!r}")
+
+
+def mean_colour(rgb: np.ndarray) -> np.ndarray:
+    """Mean RGB of a frame. rgb uint8 [shape=(h, w, 3)] -> float64 [shape=(3,)], 0..255."""
+    rgb = np.asarray(rgb)
+    if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.size == 0:
+        raise ParameterError(f"expected an RGB frame of shape (h, w, 3), got {rgb.shape}")
+    return rgb.reshape(-1, 3).mean(axis=0, dtype=np.float64)
+
+
+def warmth_ratio(mean_rgb: np.ndarray) -> np.ndarray:
+    """r = DisR / (DisR + DisG) in [0, 1] (0 = pure red, 1 = pure green). [shape=(..., 3)] -> [shape=(...,)]."""
+    c = np.clip(np.nan_to_num(np.asarray(mean_rgb, dtype=np.float64)), 0.0, 255.0)
+    dis_r = np.linalg.norm(c - _RED, axis=-1)
+    dis_g = np.linalg.norm(c - _GREEN, axis=-1)
+    return dis_r / (dis_r + dis_g)  # dis_r + dis_g >= |RED - GREEN| = 360.6 > 0
+
+
+def temperature_target(mean_rgb: np.ndarray, *, params: ThermalParams = ThermalParams()) -> np.ndarray:
+    """Target temperature per tick, C. mean_rgb float [shape=(n, 3)] (or (3,)) -> [shape=(n,)] (or scalar).
+
+    Always within [temp_low, temp_high]; a brighter red is never colder.
+    """
+    c = np.clip(np.nan_to_num(np.asarray(mean_rgb, dtype=np.float64)), 0.0, 255.0)
+    t = params.temp_high - (params.temp_high - params.temp_low) * warmth_ratio(c)
+    if params.neutral_aware:
+        chroma = c.max(axis=-1) - c.min(axis=-1)
+        keep = np.clip((chroma - params.chroma_low) / (params.chroma_high - params.chroma_low), 0.0, 1.0)
+        t = params.neutral_c + keep * (t - params.neutral_c)
+    return np.clip(t, params.temp_low, params.temp_high)
+
+
+def slew_limit(temps: np.ndarray, *, max_rate_c_per_s: float, tick_s: float = 0.1,
+               start_c: float | None = None) -> np.ndarray:
+    """Limit the change between consecutive ticks to ``max_rate_c_per_s * tick_s``.
+
+    temps float [shape=(n,)], C. start_c : the element's temperature before tick 0 (default temps[0]).
+    """
+    x = np.asarray(temps, dtype=np.float64)
+    if x.size == 0:
+        return x.copy()
+    if not (max_rate_c_per_s > 0 and tick_s > 0):
+        raise ParameterError("slew_limit needs a positive rate and tick")
+    step = float(max_rate_c_per_s) * float(tick_s)
+    out = np.empty_like(x)
+    cur = float(x[0] if start_c is None else start_c)
+    for i, target in enumerate(x.tolist()):
+        cur += min(step, max(-step, target - cur))
+        out[i] = cur
+    return out
+
+
+def clamp_to_device(temps: np.ndarray, *, min_c: float = DEVICE_TEMP_MIN_C, max_c: float = DEVICE_TEMP_MAX_C) -> np.ndarray:
+    """Clamp a target curve to a device's safe range (default 18..40 C)."""
+    if not min_c <= max_c:
+        raise ParameterError(f"device range must have min <= max, got {min_c}, {max_c}")
+    return np.clip(np.nan_to_num(np.asarray(temps, dtype=np.float64), nan=TEMP_NEUTRAL_C), min_c, max_c)

@@ -1,0 +1,281 @@
+"""The video pass: which frames are analysed, at what size, and which stages run on them.
+
+Per 100 ms tick k the pass takes the first decoded frame inside the tick (``analysis="tick"``)
+and the frame that follows it (for optical flow over one frame interval), or every decoded frame
+(``analysis="every"``, the reference). It computes, per tick:
+
+- ``mean_rgb``   mean colour of the frame (thermal), float32 [shape=(n, 3)], 0..255
+- ``cut``        a hard cut happens at tick k (against the previous tick's frame, or inside the flow pair)
+- ``static``     the flow pair is identical up to noise (no flow computed)
+- ``motion``     mean flow magnitude, frame widths per second, float32 [shape=(n,)]
+- ``cell_motion`` per fan cell, frame widths per second, float32 [shape=(n, 9, 17)]
+- ``nearness``   per fan cell, 0..1 (1 = near), only where depth ran, float32 [shape=(n, 9, 17)]
+- ``beta``       actuator weights from saliency fusion, 0..1, only where saliency ran, [shape=(n, 9)]
+
+What is skipped (``skip=True``): saliency where the audio intensity is zero (unless the mode
+needs every tick), optical flow on static pairs and across cuts, depth where the motion is below
+the airflow floor. Frames are converted to proxies only when a stage runs on them. A tick without
+a frame of its own (frame rate below 10 fps) holds the previous tick's values.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from autohaptics import airflow, cuts, depth, fusion, media, saliency, thermal
+from autohaptics.errors import ParameterError
+from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS
+from autohaptics.progress import CancelToken, ProgressFn, check_cancel
+from autohaptics.timebase import tick_of_time
+
+ANALYSIS_MODES = ("tick", "every")
+
+
+@dataclass(frozen=True)
+class VideoParams:
+    """Which frames the video pass analyses.
+
+    analysis : "tick" (one frame plus its successor per 100 ms tick) or "every" (every decoded
+        frame; the reference preset).
+    proxy_width : width in px of the gray proxy used for cuts and the static check (height keeps
+        the aspect). Flow, saliency and depth have their own widths in their params.
+    skip : skip what a scene does not need (see the module docstring). False computes everything.
+    """
+
+    analysis: str = "tick"
+    proxy_width: int = 160
+    skip: bool = True
+
+    def __post_init__(self):
+        if self.analysis not in ANALYSIS_MODES:
+            raise ParameterError(f"video.analysis must be one of {ANALYSIS_MODES}, got {self.analysis!r}")
+        if not (8 <= int(self.proxy_width) <= 7680):
+            raise ParameterError(f"video.proxy_width must lie in 8..7680 px, got {self.proxy_width!r}")
+
+
+@dataclass
+class VideoAnalysis:
+    """Per-tick results of the video pass (see the module docstring for units)."""
+
+    mean_rgb: np.ndarray
+    cut: np.ndarray
+    static: np.ndarray
+    motion: np.ndarray
+    cell_motion: np.ndarray
+    nearness: np.ndarray
+    depth_mask: np.ndarray
+    flow_mask: np.ndarray
+    beta: np.ndarray
+    saliency_mask: np.ndarray
+    frame_mask: np.ndarray
+    stats: dict = field(default_factory=dict)
+
+    ARRAYS = ("mean_rgb", "cut", "static", "motion", "cell_motion", "nearness", "depth_mask", "flow_mask",
+              "beta", "saliency_mask", "frame_mask")
+
+    @classmethod
+    def empty(cls, n: int) -> "VideoAnalysis":
+        return cls(
+            mean_rgb=np.zeros((n, 3), np.float32), cut=np.zeros(n, bool), static=np.zeros(n, bool),
+            motion=np.zeros(n, np.float32), cell_motion=np.zeros((n, FAN_ROWS, FAN_COLS), np.float32),
+            nearness=np.zeros((n, FAN_ROWS, FAN_COLS), np.float32), depth_mask=np.zeros(n, bool),
+            flow_mask=np.zeros(n, bool), beta=np.zeros((n, N_ACTUATORS), np.float32),
+            saliency_mask=np.zeros(n, bool), frame_mask=np.zeros(n, bool))
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {name: getattr(self, name) for name in self.ARRAYS}
+
+    @classmethod
+    def from_arrays(cls, arrays: dict[str, np.ndarray], stats: dict | None = None) -> "VideoAnalysis":
+        return cls(**{name: arrays[name] for name in cls.ARRAYS}, stats=stats or {})
+
+
+class _Stage:
+    """Seconds and tick counts of one stage."""
+
+    def __init__(self):
+        self.seconds = 0.0
+        self.computed = 0
+
+    def run(self, fn, *args, **kwargs):
+        t0 = time.perf_counter()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            self.seconds += time.perf_counter() - t0
+            self.computed += 1
+
+
+def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_params: saliency.SaliencyParams,
+               fusion_params: fusion.FusionParams, flow_params: airflow.FlowParams,
+               airflow_params: airflow.AirflowParams, cut_params: cuts.CutParams, depth_params: depth.DepthParams,
+               need_saliency: np.ndarray, need_flow: bool, need_colour: bool,
+               progress: ProgressFn | None = None, cancel: CancelToken | None = None) -> VideoAnalysis:
+    """Decode the video once and run the per-tick stages (module docstring).
+
+    need_saliency : bool [shape=(n,)], ticks whose saliency is needed (already reflects skipping).
+    need_flow : compute motion and depth at all (the fans track is wanted).
+    need_colour : compute the mean colour (the temperature track is wanted).
+    """
+    out = VideoAnalysis.empty(n)
+    stages = {name: _Stage() for name in ("decode", "proxy", "cuts", "static", "colour", "saliency", "flow", "depth")}
+    sal_backend = saliency.make_saliency_backend(saliency_params) if need_saliency.any() else None
+    depth_backend = depth.make_depth_backend(depth_params) if need_flow else None
+    floor = float(airflow_params.floor) if video.skip else -1.0
+    every = video.analysis == "every"
+    duration = max(info.duration_s, 1e-9)
+
+    prev_sig = None  # signature of the previous analysed frame (cut detection)
+    pending = None  # (tick, gray, rgb, time) waiting for its successor frame (flow pair)
+    acc = _Accumulator(n)
+    last_tick = -1
+    last_time = 0.0
+    t_decode = time.perf_counter()
+
+    for frame in media.iter_video(info.path, info=info):
+        stages["decode"].seconds += time.perf_counter() - t_decode
+        last_time = frame.time_s
+        k = min(int(tick_of_time(frame.time_s)), n - 1)
+        if k < 0:
+            t_decode = time.perf_counter()
+            continue
+        first_in_tick = k != last_tick
+        analyse_this = first_in_tick or every
+        is_successor = pending is not None
+        if not (analyse_this or is_successor):
+            t_decode = time.perf_counter()
+            continue
+        gray = stages["proxy"].run(frame.gray, flow_params.proxy_width)
+        if is_successor:
+            pk, pgray, prgb, pt = pending
+            pending = None
+            dt = max(frame.time_s - pt, 1e-3)
+            _flow_pair(pk, pgray, gray, prgb, dt, out, acc, stages, flow_params, airflow_params, cut_params,
+                       depth_params, depth_backend, floor, video.skip)
+        if analyse_this:
+            out.frame_mask[k] = True
+            want_sal = bool(need_saliency[k])
+            rgb = None
+            if need_colour or want_sal or need_flow:
+                width = max(saliency_params.proxy_width, depth_params.proxy_width) if (want_sal or need_flow) \
+                    else saliency_params.proxy_width
+                rgb = stages["proxy"].run(frame.proxy, width)
+            sig = stages["cuts"].run(cuts.frame_signature, rgb if rgb is not None else gray)
+            if first_in_tick and prev_sig is not None and prev_sig.shape == sig.shape \
+                    and cuts.is_cut(prev_sig, sig, params=cut_params):
+                out.cut[k] = True
+            prev_sig = sig
+            if need_colour:
+                acc.add_colour(k, stages["colour"].run(thermal.mean_colour, rgb))
+            if want_sal:
+                smap = stages["saliency"].run(saliency.saliency_map, rgb, params=saliency_params, backend=sal_backend)
+                acc.add_beta(k, fusion.actuator_weights(smap, params=fusion_params))
+            if need_flow:
+                pending = (k, gray, rgb, frame.time_s)
+        last_tick = k
+        if frame.index % 16 == 0:
+            check_cancel(cancel)
+            if progress is not None:
+                progress("video", min(1.0, frame.time_s / duration))
+        t_decode = time.perf_counter()
+
+    acc.finish(out)
+    _hold_missing(out)
+    out.stats = {
+        name: {"seconds": round(st.seconds, 4), "computed": st.computed} for name, st in stages.items()
+    }
+    for name, mask in (("saliency", out.saliency_mask), ("flow", out.flow_mask), ("depth", out.depth_mask)):
+        out.stats[name].update({"ticks_computed": int(mask.sum()), "ticks_skipped": int(n - mask.sum())})
+    out.stats["static"]["ticks_static"] = int(out.static.sum())
+    out.stats["cuts"]["cuts"] = int(out.cut.sum())
+    out.stats["frames"] = {"ticks_with_frame": int(out.frame_mask.sum()), "ticks": n,
+                           "last_time_s": round(last_time, 6)}
+    return out
+
+
+def _flow_pair(k, gray0, gray1, rgb0, dt, out: VideoAnalysis, acc: "_Accumulator", stages, flow_params,
+               airflow_params, cut_params, depth_params, depth_backend, floor, skip) -> None:
+    """Motion (and depth when the motion is high enough) for tick k from one frame pair."""
+    if cuts.is_cut(cuts.frame_signature(gray0), cuts.frame_signature(gray1), params=cut_params):
+        out.cut[k] = True
+        return
+    if skip and stages["static"].run(airflow.is_static, gray0, gray1, params=airflow_params):
+        out.static[k] = True
+        acc.add_motion(k, 0.0, np.zeros((FAN_ROWS, FAN_COLS), np.float32))
+        return
+    flow = stages["flow"].run(airflow.optical_flow, gray0, gray1, params=flow_params)
+    mag = airflow.motion_magnitude(flow, dt_s=dt, width_px=gray0.shape[1])
+    score = airflow.motion_score(mag)
+    cells = airflow.cell_motion(mag)
+    out.flow_mask[k] = True
+    acc.add_motion(k, score, cells)
+    if score > floor:
+        near = stages["depth"].run(depth.nearness_map, rgb0, params=depth_params, backend=depth_backend, flow=flow)
+        acc.add_near(k, airflow.grid_means(near))
+        out.depth_mask[k] = True
+
+
+class _Accumulator:
+    """Sums per tick (several frames per tick in the 'every' analysis), averaged at the end."""
+
+    def __init__(self, n: int):
+        self.colour = np.zeros((n, 3))
+        self.colour_n = np.zeros(n)
+        self.beta = np.zeros((n, N_ACTUATORS))
+        self.beta_n = np.zeros(n)
+        self.motion = np.zeros(n)
+        self.cells = np.zeros((n, FAN_ROWS, FAN_COLS))
+        self.motion_n = np.zeros(n)
+        self.near = np.zeros((n, FAN_ROWS, FAN_COLS))
+        self.near_n = np.zeros(n)
+
+    def add_colour(self, k, rgb_mean):
+        self.colour[k] += rgb_mean
+        self.colour_n[k] += 1
+
+    def add_beta(self, k, beta):
+        self.beta[k] += beta
+        self.beta_n[k] += 1
+
+    def add_motion(self, k, score, cells):
+        self.motion[k] += score
+        self.cells[k] += cells
+        self.motion_n[k] += 1
+
+    def add_near(self, k, near):
+        self.near[k] += near
+        self.near_n[k] += 1
+
+    def finish(self, out: VideoAnalysis) -> None:
+        def mean(total, count, dst, ndim_extra):
+            ok = count > 0
+            shape = (-1,) + (1,) * ndim_extra
+            dst[ok] = (total[ok] / count[ok].reshape(shape)).astype(dst.dtype)
+            return ok
+
+        mean(self.colour, self.colour_n, out.mean_rgb, 1)
+        ok = mean(self.beta, self.beta_n, out.beta, 1)
+        if ok.any():  # the mean of several frames' weights: strongest actuator back to 1
+            peak = out.beta[ok].max(axis=1, keepdims=True)
+            out.beta[ok] = np.where(peak > 0, out.beta[ok] / np.maximum(peak, 1e-12), out.beta[ok])
+        out.saliency_mask[:] = ok
+        mean(self.motion, self.motion_n, out.motion, 0)
+        mean(self.cells, self.motion_n, out.cell_motion, 2)
+        mean(self.near, self.near_n, out.nearness, 2)
+
+
+def _hold_missing(out: VideoAnalysis) -> None:
+    """Ticks without a frame of their own (frame rate < 10 fps) take the previous tick's values."""
+    missing = ~out.frame_mask
+    if not missing.any() or not out.frame_mask.any():
+        return
+    idx = np.where(out.frame_mask, np.arange(out.frame_mask.size), -1)
+    src = np.maximum.accumulate(idx)
+    fill = missing & (src >= 0)
+    rows = np.flatnonzero(fill)
+    for name in ("mean_rgb", "motion", "cell_motion", "nearness", "depth_mask", "beta", "saliency_mask", "static"):
+        arr = getattr(out, name)
+        arr[rows] = arr[src[rows]]
