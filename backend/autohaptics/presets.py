@@ -26,7 +26,7 @@ PRESETS: dict[str, dict[str, Any]] = {
     "reference": {
         "audio.loudness_method": "iso",
         "video.analysis": "every",
-        "video.proxy_width": 640,
+        "depth.proxy_width": 320,
         "video.skip": False,
         "saliency.proxy_width": 320,
         "flow.method": "farneback",
@@ -34,8 +34,8 @@ PRESETS: dict[str, dict[str, Any]] = {
     },
     "balanced": {},
     "fast": {
-        "video.proxy_width": 96,
         "saliency.proxy_width": 64,
+        "depth.proxy_width": 64,
         "flow.proxy_width": 96,
         "flow.dis_preset": "ultrafast",
     },

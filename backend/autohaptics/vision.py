@@ -36,24 +36,21 @@ ANALYSIS_MODES = ("tick", "every")
 
 @dataclass(frozen=True)
 class VideoParams:
-    """Which frames the video pass analyses.
+    """Which frames the video pass analyses. Proxy sizes are the stages' own parameters: the gray
+    proxy (static check, flow, in-pair cuts) is ``flow.proxy_width`` wide, the RGB proxy (colour,
+    saliency, depth, cuts between ticks) is ``max(saliency.proxy_width, depth.proxy_width)`` wide.
 
     analysis : "tick" (one frame plus its successor per 100 ms tick) or "every" (every decoded
         frame; the reference preset).
-    proxy_width : width in px of the gray proxy used for cuts and the static check (height keeps
-        the aspect). Flow, saliency and depth have their own widths in their params.
     skip : skip what a scene does not need (see the module docstring). False computes everything.
     """
 
     analysis: str = "tick"
-    proxy_width: int = 160
     skip: bool = True
 
     def __post_init__(self):
         if self.analysis not in ANALYSIS_MODES:
             raise ParameterError(f"video.analysis must be one of {ANALYSIS_MODES}, got {self.analysis!r}")
-        if not (8 <= int(self.proxy_width) <= 7680):
-            raise ParameterError(f"video.proxy_width must lie in 8..7680 px, got {self.proxy_width!r}")
 
 
 @dataclass
