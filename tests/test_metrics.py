@@ -1,0 +1,193 @@
+"""Error metrics between timelines (autohaptics.metrics) and ``autohaptics compare``: known answers."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from autohaptics import metrics as M
+from autohaptics.cli.main import main
+from autohaptics.errors import ParameterError
+from autohaptics.timeline import Timeline
+
+
+def _tl(n: int, sha: str = "abc") -> Timeline:
+    return Timeline.empty(n, source={"name": "x.mp4", "sha256": sha, "duration_s": n / 10})
+
+
+# ------------------------------------------------------------------------ onsets
+def test_onsets_mark_rises_from_zero_and_tick_zero_when_already_on():
+    x = np.array([0.5, 0.5, 0.0, 0.2, 0.0, 0.0, 0.1])
+    np.testing.assert_array_equal(np.flatnonzero(M.onsets(x)), [0, 3, 6])
+    grid = np.zeros((5, 2))
+    grid[2:4, 1] = 0.3
+    np.testing.assert_array_equal(M.onsets(grid), [[0, 0], [0, 0], [0, 1], [0, 0], [0, 0]])
+
+
+def test_onsets_reject_three_dimensional_input():
+    with pytest.raises(ParameterError, match="shape"):
+        M.onsets(np.zeros((3, 2, 2)))
+
+
+@pytest.mark.parametrize("ref, test, tol, expected", [
+    ([10], [11], 1, 1),
+    ([10], [12], 1, 0),
+    ([10], [12], 2, 1),
+    ([10, 11], [11], 1, 1),  # one test onset serves one reference onset only
+    ([10, 12], [11, 13], 1, 2),  # greedy earliest-free keeps both (11->10, 13->12)
+    ([5, 6, 7], [4, 6, 8], 1, 3),
+    ([], [3], 1, 0),
+    ([3], [], 1, 0),
+    ([30, 10, 20], [21, 9, 31], 1, 3),  # any order
+])
+def test_match_onsets(ref, test, tol, expected):
+    assert M.match_onsets(np.array(ref), np.array(test), tolerance=tol) == expected
+    # matching is symmetric in size
+    assert M.match_onsets(np.array(test), np.array(ref), tolerance=tol) == expected
+
+
+def test_onset_scores_known_answer():
+    n = 40
+    ref, test = np.zeros((n, 9)), np.zeros((n, 9))
+    # A1: onsets at 5 and 20 in ref; test has 6 (match) and 30 (spurious)
+    ref[5:8, 0] = 0.4
+    ref[20:22, 0] = 0.9
+    test[6:8, 0] = 0.4
+    test[30, 0] = 0.2
+    # A5: ref onset at 10, test onset at 12 (outside +-1) -> miss + spurious
+    ref[10:15, 4] = 1.0
+    test[12:15, 4] = 1.0
+    s = M.onset_scores(ref, test)
+    assert (s["matched"], s["ref_onsets"], s["test_onsets"]) == (1, 3, 3)
+    assert s["precision"] == pytest.approx(1 / 3) and s["recall"] == pytest.approx(1 / 3)
+    assert s["f1"] == pytest.approx(1 / 3)
+    a1 = s["per_actuator"][0]
+    assert (a1["matched"], a1["ref_onsets"], a1["test_onsets"]) == (1, 2, 2) and a1["f1"] == pytest.approx(0.5)
+    assert s["per_actuator"][1] == {"precision": 1.0, "recall": 1.0, "f1": 1.0, "matched": 0, "ref_onsets": 0,
+                                    "test_onsets": 0}
+    assert M.onset_scores(ref, test, tolerance=2)["matched"] == 2
+
+
+def test_prf_edge_cases():
+    assert M.prf(0, 0, 0) == {"precision": 1.0, "recall": 1.0, "f1": 1.0}
+    assert M.prf(0, 3, 0) == {"precision": 0.0, "recall": 0.0, "f1": 0.0}
+    assert M.prf(0, 0, 2) == {"precision": 0.0, "recall": 0.0, "f1": 0.0}
+    assert M.prf(2, 4, 2) == pytest.approx({"precision": 1.0, "recall": 0.5, "f1": 2 / 3})
+
+
+# ------------------------------------------------------------------- MAE / fans
+def test_mae_and_max_on_common_ticks():
+    a = np.array([0.0, 0.5, 1.0, 1.0])
+    b = np.array([0.1, 0.5, 0.7])
+    assert M.mae(a, b) == pytest.approx((0.1 + 0.0 + 0.3) / 3)
+    assert M.max_abs_error(a, b) == pytest.approx(0.3)
+    assert M.mae(np.zeros(0), np.zeros(3)) == 0.0
+
+
+def test_mae_rejects_mismatched_shapes_and_non_finite_values():
+    with pytest.raises(ParameterError, match="shape"):
+        M.mae(np.zeros((3, 9)), np.zeros((3, 8)))
+    with pytest.raises(ParameterError, match="non-finite"):
+        M.mae(np.zeros(3), np.array([0.0, np.nan, 0.0]))
+
+
+def test_fan_iou_known_answer():
+    a, b = np.zeros((4, 9, 17)), np.zeros((4, 9, 17))
+    a[1, 0, 0:4] = 0.5  # 4 cells
+    b[1, 0, 2:6] = 0.7  # 4 cells, 2 shared -> IoU 2/6
+    a[2, 3, 3] = 1.0  # only ref -> IoU 0
+    # tick 0 and 3: neither blows -> not counted
+    r = M.fan_iou(a, b)
+    assert r["ticks"] == 2 and r["ref_ticks_on"] == 2 and r["test_ticks_on"] == 1
+    assert r["iou"] == pytest.approx((2 / 6 + 0) / 2)
+    assert r["iou_pooled"] == pytest.approx(2 / 7)
+    assert M.fan_iou(a, a)["iou"] == 1.0
+    assert M.fan_iou(np.zeros((3, 9, 17)), np.zeros((3, 9, 17))) == {
+        "iou": 1.0, "iou_pooled": 1.0, "ticks": 0, "ref_ticks_on": 0, "test_ticks_on": 0}
+    # a level threshold: cells at 0.5 no longer count as on
+    assert M.fan_iou(a, b, on_level=0.6)["ticks"] == 2
+
+
+# ------------------------------------------------------------------------ report
+def test_compare_timelines_known_answer_and_different_lengths():
+    ref, test = _tl(30), _tl(32)
+    ref.vibration[10:13, 4] = 0.6
+    test.vibration[11:13, 4] = 0.6  # onset one tick later: matched; MAE 0.6 / (30 * 9)
+    test.temperature_c[:] = 34.0  # 1 C off everywhere (ref neutral 33)
+    ref.fans[5, 4, 8] = 1.0
+    test.fans[5, 4, 8] = 0.5
+    ref.features["loudness"] = np.linspace(0, 1, 30)
+    test.features["loudness"] = np.linspace(0, 1, 32)
+    test.features["motion"] = np.zeros(32)
+    r = M.compare_timelines(ref.validate(), test.validate())
+    assert r["n_ticks"] == {"ref": 30, "test": 32, "common": 30, "difference": 2}
+    assert r["same_source"] is True
+    assert r["vibration"]["mae"] == pytest.approx(0.6 / (30 * 9), rel=1e-6)
+    assert r["vibration"]["mae_per_actuator"]["A5"] == pytest.approx(0.6 / 30, rel=1e-6)
+    assert r["vibration"]["onsets"]["f1"] == 1.0
+    assert r["temperature"]["mae_c"] == pytest.approx(1.0)
+    assert r["fans"]["iou"] == 1.0 and r["fans"]["mae"] == pytest.approx(0.5 / (30 * 153))
+    loud = np.abs(np.linspace(0, 1, 30) - np.linspace(0, 1, 32)[:30]).mean()
+    assert r["features"] == {"loudness": pytest.approx(loud)}
+    assert r["features_only_in"] == {"ref": [], "test": ["motion"]}
+    h = M.headline(r)
+    assert h["tick_difference"] == 2 and h["onset_f1"] == 1.0
+    json.dumps(r)  # serialisable
+    text = M.format_report(r)
+    assert "difference +2" in text and "features only in test: motion" in text
+
+
+def test_identical_timelines_have_zero_error():
+    tl = _tl(20)
+    tl.vibration[3:9] = 0.5
+    tl.fans[4, :, :3] = 0.8
+    r = M.compare_timelines(tl, tl.copy())
+    h = M.headline(r)
+    assert h == {"vibration_mae": 0.0, "onset_f1": 1.0, "onset_precision": 1.0, "onset_recall": 1.0,
+                 "temperature_mae_c": 0.0, "fan_iou": 1.0, "tick_difference": 0}
+
+
+def test_different_sources_are_flagged():
+    r = M.compare_timelines(_tl(3, "aaa"), _tl(3, "bbb"))
+    assert r["same_source"] is False
+    assert "different sources" in M.format_report(r)
+    assert M.compare_timelines(_tl(3, ""), _tl(3, "bbb"))["same_source"] is None
+
+
+# --------------------------------------------------------------------------- CLI
+def test_cli_compare_text_and_json(tmp_path, capsys):
+    ref, test = _tl(10), _tl(10)
+    test.vibration[2:4, 0] = 0.5
+    ref.save(tmp_path / "a.json")
+    test.save(tmp_path / "b.json")
+    assert main(["compare", str(tmp_path / "a.json"), str(tmp_path / "b.json")]) == 0
+    out = capsys.readouterr().out
+    assert "vibration: MAE" in out and "F1 0.000" in out
+    assert main(["compare", str(tmp_path / "a.json"), str(tmp_path / "b.json"), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["vibration"]["mae"] == pytest.approx(1.0 / 90, rel=1e-4)
+    assert doc["vibration"]["onsets"]["test_onsets"] == 1
+
+
+def test_cli_compare_errors_are_one_line_with_exit_code_2(tmp_path):
+    _tl(5, "aaa").save(tmp_path / "a.json")
+    _tl(5, "bbb").save(tmp_path / "b.json")
+    (tmp_path / "bad.json").write_text("{not json")
+    exe = [sys.executable, "-m", "autohaptics.cli.main", "compare"]
+    cases = [
+        ([str(tmp_path / "a.json"), str(tmp_path / "missing.json")], "no such file"),
+        ([str(tmp_path / "a.json"), str(tmp_path / "bad.json")], "not a timeline JSON file"),
+        ([str(tmp_path / "a.json"), str(tmp_path / "b.json")], "different source"),
+    ]
+    for args, msg in cases:
+        r = subprocess.run(exe + args, capture_output=True, text=True)
+        assert r.returncode == 2, r.stderr
+        assert msg in r.stderr and "Traceback" not in r.stderr
+        assert len(r.stderr.strip().splitlines()) == 1
+    r = subprocess.run(exe + [str(tmp_path / "a.json"), str(tmp_path / "b.json"), "--any-source"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0 and "warning: the two timelines come from different sources" in r.stdout
