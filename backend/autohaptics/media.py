@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import math
 import os
+import queue
+import threading
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -32,7 +34,7 @@ import numpy as np
 from autohaptics.errors import MediaError
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
 
-_PLANAR_YUV8 = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj444p", "yuv411p", "yuv440p"}
+_PLANAR_YUV8 = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj444p", "yuv440p", "yuvj440p"}
 
 # Declared vs decoded duration: beyond this shortfall the file is called truncated.
 TRUNCATION_TOLERANCE_S = 0.5
@@ -266,15 +268,28 @@ class Frame:
         self.rotation = rotation
         self.width, self.height = (frame.height, frame.width) if rotation % 180 else (frame.width, frame.height)
 
+    def _size(self, width: int, height: int | None) -> tuple[int, int]:
+        width = max(1, int(width))
+        if height is None:
+            height = max(1, int(round(width * self.height / max(1, self.width))))
+        return width, max(1, int(height))
+
     def proxy(self, width: int, height: int | None = None, *, fmt: str = "rgb24",
               interpolation: str = "AREA") -> np.ndarray:
         """Scaled, colour-converted copy in display orientation.
 
         width, height : proxy size in pixels (height defaults to keep the display aspect).
         fmt : "rgb24" -> uint8 [shape=(h, w, 3)]; "gray" -> uint8 [shape=(h, w)] (luma).
+
+        For 8-bit planar YUV smaller than the frame (nearly every film) the planes are area-averaged
+        in place by OpenCV and converted on the small proxy (BT.709 matrix for BT.709-tagged
+        frames, BT.601 otherwise, as FFmpeg's scaler does): about 3x cheaper than FFmpeg's
+        scaled conversion of the full frame, within about 2 grey levels of it.
         """
-        if height is None:
-            height = max(1, int(round(width * self.height / max(1, self.width))))
+        width, height = self._size(width, height)
+        planes = self._planes_small(width, height, colour=fmt == "rgb24") if fmt in ("rgb24", "gray") else None
+        if planes is not None:
+            return _yuv_to_rgb(*planes, self._frame) if fmt == "rgb24" else _luma_full_range(planes[0], self._frame)
         w, h = (height, width) if self.rotation % 180 else (width, height)
         arr = self._frame.to_ndarray(width=max(1, w), height=max(1, h), format=fmt,
                                      interpolation=interpolation)
@@ -283,38 +298,104 @@ class Frame:
         return arr
 
     def gray(self, width: int) -> np.ndarray:
-        """Luma proxy ``width`` px wide (aspect kept), uint8 [shape=(h, w)], display orientation.
+        """Luma proxy ``width`` px wide (aspect kept), uint8 [shape=(h, w)], display orientation."""
+        return self.proxy(width, fmt="gray")
 
-        For 8-bit planar YUV (nearly every film) the Y plane is read in place and area-averaged
-        by OpenCV: no colour conversion at all, about 3x cheaper than a scaled RGB conversion.
-        """
-        f = self._frame
-        if f.format.name in _PLANAR_YUV8 and width < self.width:
-            plane = f.planes[0]
-            y = np.frombuffer(plane, np.uint8).reshape(-1, plane.line_size)[: f.height, : f.width]
-            if self.rotation:
-                y = np.rot90(y, k=self.rotation // 90)
-            height = max(1, int(round(width * self.height / max(1, self.width))))
-            small = cv2.resize(np.ascontiguousarray(y), (max(1, width), height), interpolation=cv2.INTER_AREA)
-            full_range = f.format.name.startswith("yuvj") or getattr(f, "color_range", 0) == 2
-            if not full_range:  # limited-range luma 16..235 -> 0..255, as FFmpeg's gray conversion does
-                small = cv2.convertScaleAbs(small, alpha=255.0 / 219.0, beta=-16.0 * 255.0 / 219.0)
-            return small
-        return self.proxy(min(width, self.width), fmt="gray")
+    def rgb_and_gray(self, width: int, gray_width: int) -> tuple[np.ndarray, np.ndarray]:
+        """An RGB proxy ``width`` px wide and a luma proxy ``gray_width`` px wide from ONE read of
+        the frame's planes (reading a 1080p plane costs more than everything done to the proxy)."""
+        width, height = self._size(width, None)
+        planes = self._planes_small(width, height, colour=True)
+        if planes is None:
+            return self.proxy(width), self.gray(gray_width)
+        rgb = _yuv_to_rgb(*planes, self._frame)
+        y = _luma_full_range(planes[0], self._frame)
+        gw, gh = self._size(gray_width, None)
+        if (gw, gh) != (width, height):
+            y = cv2.resize(y, (gw, gh), interpolation=cv2.INTER_AREA if gw < width else cv2.INTER_LINEAR)
+        return rgb, y
 
     def full(self, *, fmt: str = "rgb24") -> np.ndarray:
         """Full-resolution copy in display orientation (the reference preset)."""
         return self.proxy(self.width, self.height, fmt=fmt)
 
+    def _planes_small(self, width: int, height: int, *, colour: bool):
+        """(Y, U, V) area-averaged to (height, width) in display orientation, uint8; None when the
+        pixel format has no fast path or the proxy is not smaller than the frame."""
+        f = self._frame
+        name = f.format.name
+        if name not in _PLANAR_YUV8 or width >= self.width or height >= self.height:
+            return None
+        k = self.rotation // 90
+        dw, dh = (height, width) if k % 2 else (width, height)  # target (w, h) before rotation
+        out = []
+        for i in range(3 if colour else 1):
+            plane = f.planes[i]
+            ph, pw = plane.height, plane.width
+            arr = np.frombuffer(plane, np.uint8).reshape(-1, plane.line_size)[:ph, :pw]
+            if i == 0 and pw >= 4 * dw and ph >= 4 * dh:
+                # 4x or more: average 2 x 2 blocks first (cv2.pyrDown-like), then area-scale: half
+                # the memory traffic of one big area pass, the same proxy within a grey level
+                arr = cv2.resize(arr, (pw // 2, ph // 2), interpolation=cv2.INTER_AREA)
+            if i == 0:
+                small = cv2.resize(arr, (dw, dh), interpolation=cv2.INTER_AREA)
+            else:  # chroma: average at its own (sub-sampled) scale, then up to the luma size
+                cw = max(1, round(dw * pw / f.width))
+                ch = max(1, round(dh * ph / f.height))
+                small = cv2.resize(arr, (cw, ch), interpolation=cv2.INTER_AREA)
+                if (cw, ch) != (dw, dh):
+                    small = cv2.resize(small, (dw, dh), interpolation=cv2.INTER_LINEAR)
+            out.append(np.ascontiguousarray(np.rot90(small, k=k)) if k else small)
+        return out if colour else (out[0], None, None)
 
-def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None) -> Iterator[Frame]:
+
+def _full_range(frame: av.VideoFrame) -> bool:
+    return frame.format.name.startswith("yuvj") or getattr(frame, "color_range", 0) == 2
+
+
+def _luma_full_range(y: np.ndarray, frame: av.VideoFrame) -> np.ndarray:
+    """Limited-range luma 16..235 -> 0..255, as FFmpeg's gray conversion does."""
+    if _full_range(frame):
+        return y
+    return cv2.convertScaleAbs(y, alpha=255.0 / 219.0, beta=-16.0 * 255.0 / 219.0)
+
+
+def _yuv_to_rgb(y: np.ndarray, u: np.ndarray, v: np.ndarray, frame: av.VideoFrame) -> np.ndarray:
+    kr, kb = (0.2126, 0.0722) if getattr(frame, "colorspace", 0) == 1 else (0.299, 0.114)
+    kg = 1.0 - kr - kb
+    if _full_range(frame):
+        yy = y.astype(np.float32)
+        cb = u.astype(np.float32) - 128.0
+        cr = v.astype(np.float32) - 128.0
+    else:
+        yy = (y.astype(np.float32) - 16.0) * (255.0 / 219.0)
+        cb = (u.astype(np.float32) - 128.0) * (255.0 / 224.0)
+        cr = (v.astype(np.float32) - 128.0) * (255.0 / 224.0)
+    rgb = np.empty(y.shape + (3,), np.float32)
+    rgb[..., 0] = yy + (2.0 * (1.0 - kr)) * cr
+    rgb[..., 1] = yy - (2.0 * kb * (1.0 - kb) / kg) * cb - (2.0 * kr * (1.0 - kr) / kg) * cr
+    rgb[..., 2] = yy + (2.0 * (1.0 - kb)) * cb
+    return np.clip(rgb + 0.5, 0.0, 255.0).astype(np.uint8)
+
+
+def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefetch: int = 0) -> Iterator[Frame]:
     """Decode the video stream frame by frame (presentation order); nothing is converted here.
 
+    prefetch : when > 0, decode in a background thread up to this many frames ahead, so FFmpeg's
+        decoder threads keep working while the caller analyses a frame (PyAV releases the GIL
+        while decoding). Frames stay valid after the step that yielded them in this mode.
     Raises MediaError when there is no video stream or no frame decodes.
     """
     info = info or probe(path)
     if info.video is None:
         raise MediaError(f"{info.path}: no video stream")
+    if prefetch > 0:
+        yield from _prefetched(lambda: _iter_video(info), prefetch)
+    else:
+        yield from _iter_video(info)
+
+
+def _iter_video(info: MediaInfo) -> Iterator[Frame]:
     report = AudioReport()
     n = 0
     with open_container(info.path) as c:
@@ -331,6 +412,50 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None) -> Ite
     if n == 0:
         reason = f" ({report.first_error})" if report.first_error else ""
         raise MediaError(f"{info.path}: the video stream holds no decodable frames{reason}")
+
+
+_END = object()
+
+
+def _prefetched(make_iter, depth: int) -> Iterator:
+    """Run an iterator in a daemon thread, ``depth`` items ahead; exceptions reach the consumer;
+    closing the consumer stops the producer."""
+    q: queue.Queue = queue.Queue(maxsize=depth)
+    stop = threading.Event()
+
+    def produce():
+        try:
+            for item in make_iter():
+                while not stop.is_set():
+                    try:
+                        q.put(item, timeout=0.1)
+                        break
+                    except queue.Full:
+                        continue
+                if stop.is_set():
+                    return
+            q.put(_END)
+        except BaseException as exc:  # handed to the consumer, re-raised there
+            q.put(exc)
+
+    worker = threading.Thread(target=produce, name="autohaptics-decode", daemon=True)
+    worker.start()
+    try:
+        while True:
+            item = q.get()
+            if item is _END:
+                return
+            if isinstance(item, BaseException):
+                raise item
+            yield item
+    finally:
+        stop.set()
+        while worker.is_alive():
+            try:
+                q.get(timeout=0.05)
+            except queue.Empty:
+                pass
+        worker.join()
 
 
 def decode_all(path: str | os.PathLike, *, info: MediaInfo | None = None) -> dict:

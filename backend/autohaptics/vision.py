@@ -23,6 +23,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
 from autohaptics import airflow, cuts, depth, fusion, media, saliency, thermal
@@ -43,10 +44,13 @@ class VideoParams:
     analysis : "tick" (one frame plus its successor per 100 ms tick) or "every" (every decoded
         frame; the reference preset).
     skip : skip what a scene does not need (see the module docstring). False computes everything.
+    prefetch : frames decoded ahead in a background thread, overlapping decoding with analysis
+        (0 = decode in the calling thread).
     """
 
     analysis: str = "tick"
     skip: bool = True
+    prefetch: int = 8
 
     def __post_init__(self):
         if self.analysis not in ANALYSIS_MODES:
@@ -118,10 +122,12 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
     need_colour : compute the mean colour (the temperature track is wanted).
     """
     out = VideoAnalysis.empty(n)
-    stages = {name: _Stage() for name in ("decode", "proxy", "cuts", "static", "colour", "saliency", "flow", "depth")}
+    stages = {name: _Stage() for name in
+              ("decode_wait", "proxy", "cuts", "static", "colour", "saliency", "flow", "depth")}
     sal_backend = saliency.make_saliency_backend(saliency_params) if need_saliency.any() else None
     depth_backend = depth.make_depth_backend(depth_params) if need_flow else None
     floor = float(airflow_params.floor) if video.skip else -1.0
+    rgb_width = max(saliency_params.proxy_width, depth_params.proxy_width if need_flow else 0)
     every = video.analysis == "every"
     duration = max(info.duration_s, 1e-9)
 
@@ -132,8 +138,8 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
     last_time = 0.0
     t_decode = time.perf_counter()
 
-    for frame in media.iter_video(info.path, info=info):
-        stages["decode"].seconds += time.perf_counter() - t_decode
+    for frame in media.iter_video(info.path, info=info, prefetch=video.prefetch):
+        stages["decode_wait"].seconds += time.perf_counter() - t_decode
         last_time = frame.time_s
         k = min(int(tick_of_time(frame.time_s)), n - 1)
         if k < 0:
@@ -145,7 +151,12 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
         if not (analyse_this or is_successor):
             t_decode = time.perf_counter()
             continue
-        gray = stages["proxy"].run(frame.gray, flow_params.proxy_width)
+        want_sal = analyse_this and bool(need_saliency[k])
+        rgb = None
+        if analyse_this and (need_colour or want_sal or need_flow):
+            rgb, gray = stages["proxy"].run(frame.rgb_and_gray, rgb_width, flow_params.proxy_width)
+        else:
+            gray = stages["proxy"].run(frame.gray, flow_params.proxy_width)
         if is_successor:
             pk, pgray, prgb, pt = pending
             pending = None
@@ -154,12 +165,6 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
                        depth_params, depth_backend, floor, video.skip)
         if analyse_this:
             out.frame_mask[k] = True
-            want_sal = bool(need_saliency[k])
-            rgb = None
-            if need_colour or want_sal or need_flow:
-                width = max(saliency_params.proxy_width, depth_params.proxy_width) if (want_sal or need_flow) \
-                    else saliency_params.proxy_width
-                rgb = stages["proxy"].run(frame.proxy, width)
             sig = stages["cuts"].run(cuts.frame_signature, rgb if rgb is not None else gray)
             if first_in_tick and prev_sig is not None and prev_sig.shape == sig.shape \
                     and cuts.is_cut(prev_sig, sig, params=cut_params):
@@ -168,7 +173,8 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
             if need_colour:
                 acc.add_colour(k, stages["colour"].run(thermal.mean_colour, rgb))
             if want_sal:
-                smap = stages["saliency"].run(saliency.saliency_map, rgb, params=saliency_params, backend=sal_backend)
+                smap = stages["saliency"].run(saliency.saliency_map, _resized(rgb, saliency_params.proxy_width),
+                                              params=saliency_params, backend=sal_backend)
                 acc.add_beta(k, fusion.actuator_weights(smap, params=fusion_params))
             if need_flow:
                 pending = (k, gray, rgb, frame.time_s)
@@ -210,9 +216,19 @@ def _flow_pair(k, gray0, gray1, rgb0, dt, out: VideoAnalysis, acc: "_Accumulator
     out.flow_mask[k] = True
     acc.add_motion(k, score, cells)
     if score > floor:
-        near = stages["depth"].run(depth.nearness_map, rgb0, params=depth_params, backend=depth_backend, flow=flow)
+        near = stages["depth"].run(depth.nearness_map, _resized(rgb0, depth_params.proxy_width),
+                                   params=depth_params, backend=depth_backend, flow=flow)
         acc.add_near(k, airflow.grid_means(near))
         out.depth_mask[k] = True
+
+
+def _resized(rgb: np.ndarray, width: int) -> np.ndarray:
+    """``rgb`` scaled to ``width`` px (aspect kept); the same array when it already has that width."""
+    h, w = rgb.shape[:2]
+    if w == width:
+        return rgb
+    height = max(1, int(round(width * h / w)))
+    return cv2.resize(rgb, (width, height), interpolation=cv2.INTER_AREA if width < w else cv2.INTER_LINEAR)
 
 
 class _Accumulator:
