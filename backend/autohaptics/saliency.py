@@ -156,13 +156,30 @@ class OnnxMapModel:
         x = (x.astype(np.float32) / 255.0 - self.mean) / self.std
         x = x[None] if self.nhwc else np.transpose(x, (2, 0, 1))[None]
         out = self.session.run(None, {self.input.name: np.ascontiguousarray(x, dtype=np.float32)})[0]
-        out = np.asarray(out, dtype=np.float32)
-        while out.ndim > 2:
-            out = out[0]
-        if out.ndim != 2:
-            raise ParameterError(f"the ONNX {self.what} model's output has shape {np.shape(out)}, expected a map")
+        out = _first_map(np.asarray(out, dtype=np.float32), channels_last=self.nhwc, what=self.what)
         out = np.where(np.isfinite(out), out, 0.0).astype(np.float32)
         return cv2.resize(out, (w, h), interpolation=cv2.INTER_LINEAR)
+
+
+def _first_map(out: np.ndarray, *, channels_last: bool, what: str) -> np.ndarray:
+    """The first channel of a network's output as a 2-D map.
+
+    4-D outputs are (N, C, H, W) or (N, H, W, C): the smaller of axes 1 and 3 is the channel axis
+    (a tie follows the input's layout), so (1, 1, H, W) and (1, H, W, 1) both give the H x W map.
+    3-D outputs drop a leading or trailing axis of size 1, else take the first channel.
+    """
+    if out.ndim == 4:
+        last = out.shape[3] < out.shape[1] or (out.shape[3] == out.shape[1] and channels_last)
+        out = out[0, :, :, 0] if last else out[0, 0]
+    elif out.ndim == 3:
+        if out.shape[0] == 1 or (out.shape[2] != 1 and not channels_last):
+            out = out[0]
+        else:
+            out = out[:, :, 0]
+    if out.ndim != 2 or out.size == 0:
+        raise ParameterError(f"the ONNX {what} model's output has shape {np.shape(out)}, expected a map "
+                             "(H, W), (1, H, W), (1, C, H, W) or (1, H, W, C)")
+    return out
 
 
 # ----------------------------------------------------------------------- private
