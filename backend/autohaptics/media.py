@@ -303,25 +303,30 @@ class Frame:
 
     def rgb_and_gray(self, width: int, gray_width: int) -> tuple[np.ndarray, np.ndarray]:
         """An RGB proxy ``width`` px wide and a luma proxy ``gray_width`` px wide from ONE read of
-        the frame's planes (reading a 1080p plane costs more than everything done to the proxy)."""
-        width, height = self._size(width, None)
-        planes = self._planes_small(width, height, colour=True)
-        if planes is None:
-            return self.proxy(width), self.gray(gray_width)
-        rgb = _yuv_to_rgb(*planes, self._frame)
-        y = _luma_full_range(planes[0], self._frame)
+        the luma plane (reading a 1080p plane costs more than everything done to the proxy).
+
+        The luma proxy is bit-identical to :meth:`gray` (optical flow compares it with the next
+        frame's :meth:`gray`); the RGB proxy's luma is resampled from it.
+        """
         gw, gh = self._size(gray_width, None)
-        if (gw, gh) != (width, height):
-            y = cv2.resize(y, (gw, gh), interpolation=cv2.INTER_AREA if gw < width else cv2.INTER_LINEAR)
-        return rgb, y
+        rw, rh = self._size(width, None)
+        ys = self._planes_small(gw, gh, colour=False)
+        chroma = self._planes_small(rw, rh, colour=True, luma=False) if ys is not None else None
+        if ys is None or chroma is None:
+            return self.proxy(width), self.gray(gray_width)
+        y_raw = ys[0]
+        y_rgb = y_raw if (gw, gh) == (rw, rh) else cv2.resize(
+            y_raw, (rw, rh), interpolation=cv2.INTER_AREA if rw < gw else cv2.INTER_LINEAR)
+        return _yuv_to_rgb(y_rgb, chroma[1], chroma[2], self._frame), _luma_full_range(y_raw, self._frame)
 
     def full(self, *, fmt: str = "rgb24") -> np.ndarray:
         """Full-resolution copy in display orientation (the reference preset)."""
         return self.proxy(self.width, self.height, fmt=fmt)
 
-    def _planes_small(self, width: int, height: int, *, colour: bool):
-        """(Y, U, V) area-averaged to (height, width) in display orientation, uint8; None when the
-        pixel format has no fast path or the proxy is not smaller than the frame."""
+    def _planes_small(self, width: int, height: int, *, colour: bool, luma: bool = True):
+        """(Y, U, V) area-averaged to (height, width) in display orientation, uint8 (None for a
+        plane not asked for); None when the pixel format has no fast path or the proxy is not
+        smaller than the frame."""
         f = self._frame
         name = f.format.name
         if name not in _PLANAR_YUV8 or width >= self.width or height >= self.height:
@@ -330,6 +335,9 @@ class Frame:
         dw, dh = (height, width) if k % 2 else (width, height)  # target (w, h) before rotation
         out = []
         for i in range(3 if colour else 1):
+            if i == 0 and not luma:
+                out.append(None)
+                continue
             plane = f.planes[i]
             ph, pw = plane.height, plane.width
             arr = np.frombuffer(plane, np.uint8).reshape(-1, plane.line_size)[:ph, :pw]

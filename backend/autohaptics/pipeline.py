@@ -307,7 +307,7 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
         tl.features["motion"] = np.clip(video.motion / peak, 0.0, 1.0) if peak > 0 else np.zeros(n)
         tl.features["motion_fw_per_s"] = video.motion.astype(np.float64)
         if "fans" in params.tracks:
-            tl.fans[:] = _fans(params, video, stats)
+            tl.fans = _fans(params, video, stats)
 
     gen_params = params_to_dict(params)
     gen_params["thresholds"] = dict(params.intensity.thresholds)
@@ -398,7 +398,8 @@ def _fans(params: GenerateParams, video: VideoAnalysis, stats: dict) -> np.ndarr
     on = valid & (video.motion > threshold) & video.depth_mask
     fans = np.zeros((n,) + video.cell_motion.shape[1:], np.float32)
     for k in np.flatnonzero(on):
-        fans[k] = airflow.fan_levels(video.cell_motion[k], video.nearness[k], params=params.airflow)
+        fans[k] = airflow.fan_levels(video.cell_motion[k].astype(np.float32), video.nearness[k].astype(np.float32),
+                                     params=params.airflow)
     stats["airflow"] = {"threshold_fw_per_s": float(threshold), "ticks_on": int(on.sum()),
                         "ticks_at_cuts": int(video.cut.sum())}
     return fans

@@ -8,8 +8,9 @@ and the frame that follows it (for optical flow over one frame interval), or eve
 - ``cut``        a hard cut happens at tick k (against the previous tick's frame, or inside the flow pair)
 - ``static``     the flow pair is identical up to noise (no flow computed)
 - ``motion``     mean flow magnitude, frame widths per second, float32 [shape=(n,)]
-- ``cell_motion`` per fan cell, frame widths per second, float32 [shape=(n, 9, 17)]
-- ``nearness``   per fan cell, 0..1 (1 = near), only where depth ran, float32 [shape=(n, 9, 17)]
+- ``cell_motion`` per fan cell, frame widths per second, float16 [shape=(n, 9, 17)] (3 digits are
+  plenty; a 2-hour film's grids stay at 22 MB each)
+- ``nearness``   per fan cell, 0..1 (1 = near), only where depth ran, float16 [shape=(n, 9, 17)]
 - ``beta``       actuator weights from saliency fusion, 0..1, only where saliency ran, [shape=(n, 9)]
 
 What is skipped (``skip=True``): saliency where the audio intensity is zero (unless the mode
@@ -81,8 +82,8 @@ class VideoAnalysis:
     def empty(cls, n: int) -> "VideoAnalysis":
         return cls(
             mean_rgb=np.zeros((n, 3), np.float32), cut=np.zeros(n, bool), static=np.zeros(n, bool),
-            motion=np.zeros(n, np.float32), cell_motion=np.zeros((n, FAN_ROWS, FAN_COLS), np.float32),
-            nearness=np.zeros((n, FAN_ROWS, FAN_COLS), np.float32), depth_mask=np.zeros(n, bool),
+            motion=np.zeros(n, np.float32), cell_motion=np.zeros((n, FAN_ROWS, FAN_COLS), np.float16),
+            nearness=np.zeros((n, FAN_ROWS, FAN_COLS), np.float16), depth_mask=np.zeros(n, bool),
             flow_mask=np.zeros(n, bool), beta=np.zeros((n, N_ACTUATORS), np.float32),
             saliency_mask=np.zeros(n, bool), frame_mask=np.zeros(n, bool))
 
@@ -133,7 +134,7 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
 
     prev_sig = None  # signature of the previous analysed frame (cut detection)
     pending = None  # (tick, gray, rgb, time) waiting for its successor frame (flow pair)
-    acc = _Accumulator(n)
+    acc = _Accumulator(out)
     last_tick = -1
     last_time = 0.0
     t_decode = time.perf_counter()
@@ -185,7 +186,7 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
                 progress("video", min(1.0, frame.time_s / duration))
         t_decode = time.perf_counter()
 
-    acc.finish(out)
+    acc.finish()
     _hold_missing(out)
     out.stats = {
         name: {"seconds": round(st.seconds, 4), "computed": st.computed} for name, st in stages.items()
@@ -232,52 +233,53 @@ def _resized(rgb: np.ndarray, width: int) -> np.ndarray:
 
 
 class _Accumulator:
-    """Sums per tick (several frames per tick in the 'every' analysis), averaged at the end."""
+    """Per-tick sums written straight into the output arrays (several frames per tick in the
+    'every' analysis), divided by the counts at the end: no second set of (n, 9, 17) arrays."""
 
-    def __init__(self, n: int):
-        self.colour = np.zeros((n, 3))
-        self.colour_n = np.zeros(n)
-        self.beta = np.zeros((n, N_ACTUATORS))
-        self.beta_n = np.zeros(n)
-        self.motion = np.zeros(n)
-        self.cells = np.zeros((n, FAN_ROWS, FAN_COLS))
-        self.motion_n = np.zeros(n)
-        self.near = np.zeros((n, FAN_ROWS, FAN_COLS))
-        self.near_n = np.zeros(n)
+    def __init__(self, out: VideoAnalysis):
+        self.out = out
+        n = out.motion.size
+        self.colour_n = np.zeros(n, np.int32)
+        self.beta_n = np.zeros(n, np.int32)
+        self.motion_n = np.zeros(n, np.int32)
+        self.near_n = np.zeros(n, np.int32)
 
     def add_colour(self, k, rgb_mean):
-        self.colour[k] += rgb_mean
+        self.out.mean_rgb[k] += rgb_mean
         self.colour_n[k] += 1
 
     def add_beta(self, k, beta):
-        self.beta[k] += beta
+        self.out.beta[k] += beta
         self.beta_n[k] += 1
 
     def add_motion(self, k, score, cells):
-        self.motion[k] += score
-        self.cells[k] += cells
+        self.out.motion[k] += score
+        self.out.cell_motion[k] += cells
         self.motion_n[k] += 1
 
     def add_near(self, k, near):
-        self.near[k] += near
+        self.out.nearness[k] += near
         self.near_n[k] += 1
 
-    def finish(self, out: VideoAnalysis) -> None:
-        def mean(total, count, dst, ndim_extra):
-            ok = count > 0
-            shape = (-1,) + (1,) * ndim_extra
-            dst[ok] = (total[ok] / count[ok].reshape(shape)).astype(dst.dtype)
-            return ok
+    def finish(self) -> None:
+        out = self.out
 
-        mean(self.colour, self.colour_n, out.mean_rgb, 1)
-        ok = mean(self.beta, self.beta_n, out.beta, 1)
-        if ok.any():  # the mean of several frames' weights: strongest actuator back to 1
-            peak = out.beta[ok].max(axis=1, keepdims=True)
-            out.beta[ok] = np.where(peak > 0, out.beta[ok] / np.maximum(peak, 1e-12), out.beta[ok])
+        def mean(arr, count):
+            many = count > 1
+            if many.any():
+                arr[many] /= count[many].reshape((-1,) + (1,) * (arr.ndim - 1)).astype(arr.dtype)
+            return count > 0
+
+        mean(out.mean_rgb, self.colour_n)
+        ok = mean(out.beta, self.beta_n)
+        many = self.beta_n > 1
+        if many.any():  # the mean of several frames' weights: strongest actuator back to 1
+            peak = out.beta[many].max(axis=1, keepdims=True)
+            out.beta[many] = np.where(peak > 0, out.beta[many] / np.maximum(peak, 1e-12), out.beta[many])
         out.saliency_mask[:] = ok
-        mean(self.motion, self.motion_n, out.motion, 0)
-        mean(self.cells, self.motion_n, out.cell_motion, 2)
-        mean(self.near, self.near_n, out.nearness, 2)
+        mean(out.motion, self.motion_n)
+        mean(out.cell_motion, self.motion_n)
+        mean(out.nearness, self.near_n)
 
 
 def _hold_missing(out: VideoAnalysis) -> None:
