@@ -60,8 +60,12 @@ def run(args) -> int:
     return 0
 
 
+SAMPLE_NAME = "sample (10 s demo)"
+
+
 def _open_sample(url: str) -> None:
-    """Write the sample clip, upload it through the API once /health answers, open the editor on it."""
+    """Open the editor on the sample project: reuse it when the data folder has it, otherwise write
+    the sample clip and upload it through the API once /health answers."""
     try:
         from autohaptics.synth import sample_clip
     except ImportError as exc:
@@ -80,9 +84,14 @@ def _open_sample(url: str) -> None:
                     print(f"autohaptics: the server did not answer at {url}; sample not added", file=sys.stderr)
                     return
                 time.sleep(0.25)
+        with urllib.request.urlopen(f"{url}api/projects", timeout=10) as resp:
+            existing = [p for p in json.load(resp) if p.get("name") == SAMPLE_NAME]
+        if existing:
+            webbrowser.open(f"{url}#/project/{existing[0]['id']}")
+            return
         boundary = uuid.uuid4().hex
         body = b"".join([
-            f"--{boundary}\r\nContent-Disposition: form-data; name=\"name\"\r\n\r\nsample (10 s demo)\r\n".encode(),
+            f"--{boundary}\r\nContent-Disposition: form-data; name=\"name\"\r\n\r\n{SAMPLE_NAME}\r\n".encode(),
             f"--{boundary}\r\nContent-Disposition: form-data; name=\"file\"; filename=\"sample.mp4\"\r\n"
             "Content-Type: video/mp4\r\n\r\n".encode(),
             clip.read_bytes(), f"\r\n--{boundary}--\r\n".encode()])
