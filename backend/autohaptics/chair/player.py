@@ -161,6 +161,30 @@ class ChairPlayer:
                 self._state = "paused"
             self._resync()
 
+    def sync(self, position_s: float) -> float:
+        """Correct the clock to a reported video position while playing, without resending or
+        skipping ticks: the next tick goes out when the corrected clock reaches it (a clock that
+        ran ahead waits, one that fell behind catches up like after a stall). Returns the drift
+        in seconds (reported minus extrapolated position). When not playing this is a seek.
+
+        Meant for small drifts (the browser's once-a-second reports); a clock that ran ahead by
+        more than the chair's watchdog (300 ms) would leave it without frames meanwhile, so the
+        caller seeks instead when the drift is large.
+        """
+        pos = _check_position(position_s)
+        with self._cv:
+            if self._state != "playing":
+                drift = pos - self._anchor_pos
+            else:
+                now = time.monotonic()
+                drift = pos - self._position_at(now)
+                self._anchor_pos, self._anchor_t = pos, now
+                self._gen += 1
+                self._cv.notify_all()
+                return drift
+        self.seek(pos)
+        return drift
+
     def stop(self) -> None:
         """STOP now: every output off; playback stops and keeps its position."""
         with self._send_lock:

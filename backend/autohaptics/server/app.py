@@ -12,9 +12,10 @@ from fastapi.responses import JSONResponse
 from starlette.staticfiles import StaticFiles
 
 from autohaptics import __version__
-from autohaptics.errors import MediaError, ParameterError
+from autohaptics.errors import DeviceError, MediaError, ParameterError
+from autohaptics.server.chair import ChairService
 from autohaptics.server.jobs import JobRunner
-from autohaptics.server.routes import jobs, projects, service, timeline
+from autohaptics.server.routes import chair, jobs, projects, service, timeline
 from autohaptics.server.settings import Settings
 from autohaptics.server.store import Conflict, NotFound, Store
 from autohaptics.server.timelines import Timelines
@@ -37,7 +38,7 @@ class FrontendFiles(StaticFiles):
 def create_app(settings: Settings | None = None) -> FastAPI:
     """The service for ``settings`` (default: :meth:`Settings.from_env`).
 
-    The store, the timelines service and the job runner start with the application's lifespan
+    The store, the timelines service, the job runner and the chair service start with the application's lifespan
     (use ``with TestClient(app)`` in tests) and are reachable through the dependencies of
     :mod:`autohaptics.server.deps`.
     """
@@ -52,10 +53,14 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         timelines = Timelines(store)
         runner = JobRunner(store, workers=settings.jobs, mp_context=settings.mp_context, timelines=timelines)
         await anyio.to_thread.run_sync(runner.start)
+        chair_service = ChairService(store, timelines)
+        chair_service.start()
         app.state.store, app.state.timelines, app.state.runner = store, timelines, runner
+        app.state.chair = chair_service
         try:
             yield
         finally:
+            await anyio.to_thread.run_sync(chair_service.close)  # STOP before anything else goes
             await anyio.to_thread.run_sync(runner.stop)
             store.close()
 
@@ -64,7 +69,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                               "(docs/API.md).")
     app.state.settings = settings
     _add_error_handlers(app)
-    for module in (service, projects, jobs, timeline):
+    for module in (service, projects, jobs, timeline, chair):
         app.include_router(module.router)
     front = settings.frontend_dir
     if front is not None and front.is_dir():
@@ -92,6 +97,10 @@ def _add_error_handlers(app: FastAPI) -> None:
             return _detail(400, str(exc), problems=[
                 {"row": p.row, "column": p.column, "message": p.message} for p in problems])
         return _detail(400, str(exc))
+
+    @app.exception_handler(DeviceError)
+    async def device_error(request: Request, exc: DeviceError):
+        return _detail(409, str(exc))
 
     @app.exception_handler(UploadTooLarge)
     async def too_large(request: Request, exc: UploadTooLarge):

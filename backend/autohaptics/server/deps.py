@@ -6,6 +6,7 @@ from typing import Annotated
 
 from fastapi import Depends, Request
 
+from autohaptics.server.chair import ChairService
 from autohaptics.server.jobs import JobRunner
 from autohaptics.server.settings import Settings
 from autohaptics.server.store import Store
@@ -28,7 +29,12 @@ def get_timelines(request: Request) -> Timelines:
     return request.app.state.timelines
 
 
+def get_chair(request: Request) -> ChairService:
+    return request.app.state.chair
+
+
 SettingsDep = Annotated[Settings, Depends(get_settings)]
 StoreDep = Annotated[Store, Depends(get_store)]
 RunnerDep = Annotated[JobRunner, Depends(get_runner)]
 TimelinesDep = Annotated[Timelines, Depends(get_timelines)]
+ChairDep = Annotated[ChairService, Depends(get_chair)]

@@ -133,3 +133,98 @@ class EditOut(RevisionOut):
 
 class EditsOut(RevisionOut):
     ops: list[dict[str, Any]]
+
+
+# ------------------------------------------------------------------------ chair
+class PortOut(BaseModel):
+    device: str
+    description: str
+    kind: Literal["usb", "serial", "virtual"]
+    vid: int | None = None
+    pid: int | None = None
+    serial_number: str | None = None
+    manufacturer: str | None = None
+    likely_chair: bool
+
+
+class ChairConnectIn(_In):
+    port: str = Field(min_length=1, max_length=4096)
+
+
+class ChairPlaybackIn(_In):
+    project_id: str
+    state: Literal["play", "pause", "seek"]
+    position_s: float = Field(ge=0)
+    heartbeat: bool = False
+
+
+class ChairMuteIn(_In):
+    back: bool | None = None
+    armrests: bool | None = None
+    seat: bool | None = None
+    heat: bool | None = None
+    fans: bool | None = None
+
+
+class ChairComfortIn(_In):
+    scale: float | None = Field(default=None, ge=0, le=1)
+    mute: ChairMuteIn | None = None
+
+
+class ChairSettingsIn(_In):
+    latency_ms: float | None = Field(default=None, ge=-500, le=500)
+    comfort: ChairComfortIn | None = None
+
+
+class ChairComfortOut(BaseModel):
+    scale: float
+    mute: dict[str, bool]
+
+
+class ChairSettingsOut(BaseModel):
+    latency_ms: float
+    comfort: ChairComfortOut
+
+
+class ChairPushIn(_In):
+    project_id: str
+    start_s: float = Field(ge=0)
+    end_s: float = Field(gt=0)
+
+
+class ChairPlaybackOut(BaseModel):
+    state: str
+    project_id: str | None
+    revision: int | None
+    duration_s: float | None
+    ticks_skipped: int
+    clock_priority: str | None
+    drift_s: float | None
+    drift_seeks: int
+
+
+class ChairPushOut(BaseModel):
+    project_id: str
+    start_s: float
+    end_s: float
+    state: Literal["running", "done", "cancelled", "failed"]
+    progress: float
+    error: str | None
+
+
+class ChairStatusOut(BaseModel):
+    connected: bool
+    state: Literal["idle", "connected", "reconnecting", "disconnected", "closed"]
+    port: str | None
+    capabilities: dict[str, Any] | None
+    frames_sent: int
+    frames_dropped: int
+    last_tick: int | None
+    reconnects: int
+    diagnostics: dict[str, Any] | None
+    error: str | None
+    playing: bool
+    position_s: float
+    playback: ChairPlaybackOut
+    push: ChairPushOut | None
+    settings: ChairSettingsOut

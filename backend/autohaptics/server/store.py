@@ -2,7 +2,7 @@
 
 Layout of ``data_dir``::
 
-    autohaptics.sqlite3          projects, jobs, edits
+    autohaptics.sqlite3          projects, jobs, edits, settings (service-wide, e.g. the chair's)
     projects/<id>/<uuid>.<ext>   the uploaded media (server-chosen name)
     projects/<id>/analysis.npz   the feature cache (pipeline.Analysis)
     projects/<id>/generated.json the generated timeline (never edited; edits live in the database)
@@ -77,6 +77,11 @@ CREATE TABLE IF NOT EXISTS edits (
     op TEXT NOT NULL,
     created_at TEXT NOT NULL,
     PRIMARY KEY (project_id, seq)
+);
+CREATE TABLE IF NOT EXISTS settings (
+    key TEXT PRIMARY KEY,
+    value TEXT NOT NULL,
+    updated_at TEXT NOT NULL
 );
 """
 
@@ -419,6 +424,24 @@ class Store:
                    (cursor, now_iso(), pid))
         row = db.execute("SELECT revision, cursor FROM projects WHERE id=?", (pid,)).fetchone()
         return {"revision": row["revision"], "cursor": row["cursor"]}
+
+    # ------------------------------------------------------------------ settings
+    def get_setting(self, key: str) -> dict | None:
+        """A service-wide settings document (JSON object), or None when never stored."""
+        row = self._one("SELECT value FROM settings WHERE key=?", (key,))
+        return json.loads(row["value"]) if row is not None else None
+
+    def put_setting(self, key: str, value: dict) -> None:
+        with self._tx() as db:
+            db.execute("INSERT INTO settings (key, value, updated_at) VALUES (?, ?, ?) ON CONFLICT(key) DO UPDATE"
+                       " SET value=excluded.value, updated_at=excluded.updated_at", (key, json.dumps(value), now_iso()))
+
+    def revision(self, pid: str) -> int:
+        """The project's current revision (NotFound when it does not exist)."""
+        row = self._one("SELECT revision FROM projects WHERE id=?", (check_id(pid),))
+        if row is None:
+            raise NotFound(f"no project with id {pid!r}")
+        return int(row["revision"])
 
     # ------------------------------------------------------------------ snapshot
     def snapshot(self, pid: str) -> tuple[int, list[dict], dict]:
