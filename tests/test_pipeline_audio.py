@@ -9,7 +9,7 @@ import pytest
 from autohaptics import intensity as it
 from autohaptics.pipeline import GenerateParams, analyse, derive, generate, resolve_params
 from autohaptics.timeline import Timeline
-from conftest import SHARED_CLIPS, shared_clip
+from shared_data import SHARED_CLIPS, shared_clip
 
 
 def _onsets(x: np.ndarray) -> np.ndarray:

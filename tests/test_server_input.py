@@ -13,7 +13,7 @@ from fastapi.testclient import TestClient
 from autohaptics.server.app import create_app
 from autohaptics.server.settings import Settings
 
-from conftest import shared_clip
+from shared_data import shared_clip
 
 CLIP = "bbb_1s_1280x720_vp8_vorbis.webm"  # 86 kB
 LIMIT = 100_000

@@ -20,7 +20,7 @@ from autohaptics.server.app import create_app
 from autohaptics.server.settings import Settings
 from autohaptics.server.store import INTERRUPTED, Store
 
-from conftest import shared_clip
+from shared_data import shared_clip
 
 CLIP = "bbb_1s_1280x720_vp8_vorbis.webm"
 TERMINAL = ("done", "failed", "cancelled")
