@@ -14,6 +14,26 @@
 
 A static pair (nothing changed beyond noise) is detected by a cheap frame difference so flow is
 not computed at all, and flow is never computed across a shot cut (see :mod:`autohaptics.cuts`).
+
+Decisions (measured; synthetic scenes from :mod:`autohaptics.synth` have exact answers):
+
+- DIS preset "medium" by default. On the 160 px proxy the "fast" preset estimates flow at a
+  quarter of the proxy's resolution (finest scale 2) and smears it over static surroundings: a
+  textured disc translating over a static textured background gave a relative end-point error of
+  0.31 inside the disc and 5 % of its motion far from it (13 % for a disc growing toward the
+  camera; a static strip above it read a third of the peak cell's motion), which turned on fans
+  over static background. "medium" (finest scale 1): errors 0.01 (translation) and 0.16
+  (expansion), no measurable smear; the 320x180@24 vs 1280x720@30 renders of
+  :func:`autohaptics.synth.sample_scene` went from fan-cell IoU 0.76 to 0.93. Cost: 2.1 ms
+  instead of 0.45 ms per 160x68 pair on one core.
+- Farneback (kept as a variant) needs second-order image structure within its polynomial
+  neighbourhood (5-7 px): on smooth content it under-reads motion badly (a smooth texture panned
+  2 px/frame read 0.02-0.06 px at any window size; on the Sintel trailer at 640 px its mean
+  motion is a median 0.22 of DIS "medium"'s, whereas DIS at 160 px and at 640 px agree within
+  1 %). It is accurate on finely textured content.
+- A near cell enclosed by blowing cells blows as well (``fill_enclosed``): an object coming
+  straight at the camera expands, and its centre has no image motion although all of it
+  approaches; without this its fans form a ring. Its level is the mean level of the blowing cells.
 """
 
 from __future__ import annotations
@@ -40,12 +60,12 @@ class FlowParams:
 
     method : "dis" (OpenCV DIS, default) | "farneback" (the reference).
     proxy_width : width of the gray proxy the flow runs on, px (default 160).
-    dis_preset : "ultrafast" | "fast" | "medium".
+    dis_preset : "ultrafast" | "fast" | "medium" (default; see the module docstring).
     """
 
     method: str = "dis"
     proxy_width: int = 160
-    dis_preset: str = "fast"
+    dis_preset: str = "medium"
 
     def __post_init__(self):
         if self.method not in FLOW_METHODS:
@@ -68,6 +88,8 @@ class AirflowParams:
     static_level, static_fraction : a frame pair is static when fewer than ``static_fraction`` of
         the proxy's pixels changed by more than ``static_level`` grey levels (noise tolerant, yet a
         small moving object is seen).
+    fill_enclosed : a near cell enclosed by "on" cells blows too (the still centre of an object
+        expanding toward the camera; see the module docstring).
     """
 
     threshold: float | None = None
@@ -77,6 +99,7 @@ class AirflowParams:
     near_min: float = 0.5
     static_level: float = 12.0
     static_fraction: float = 0.002
+    fill_enclosed: bool = True
 
     def __post_init__(self):
         if self.threshold is not None and not (math.isfinite(self.threshold) and self.threshold >= 0):
@@ -180,8 +203,25 @@ def fan_levels(cell_motion_: np.ndarray, nearness: np.ndarray, *, params: Airflo
     if not peak > 0:
         return np.zeros((FAN_ROWS, FAN_COLS), np.float32)
     rel = np.clip(m / peak, 0.0, 1.0)
-    on = (rel >= params.cell_rel) & (near >= params.near_min)
-    return np.where(on, rel, 0.0).astype(np.float32)
+    near_ok = near >= params.near_min
+    on = (rel >= params.cell_rel) & near_ok
+    levels = np.where(on, rel, 0.0)
+    if params.fill_enclosed and on.any():
+        holes = _enclosed(on) & near_ok
+        if holes.any():
+            levels[holes] = float(levels[on].mean())
+    return levels.astype(np.float32)
+
+
+def _enclosed(on: np.ndarray) -> np.ndarray:
+    """Cells that are off and cannot reach the grid border through off cells (4-connected)."""
+    off = (~on).astype(np.uint8)
+    n, labels = cv2.connectedComponents(off, connectivity=4)
+    border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    inside = np.ones(n, bool)
+    inside[border] = False
+    inside[0] = False  # label 0 is the "on" cells
+    return inside[labels]
 
 
 def _gray(x: np.ndarray) -> np.ndarray:

@@ -1,0 +1,192 @@
+"""Motion -> fan grid (ALGORITHM.md section 5): flow units, static pairs, the threshold, fan levels."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from autohaptics import airflow, depth, synth
+from autohaptics.errors import ParameterError
+from autohaptics.layout import FAN_COLS, FAN_ROWS
+
+BG = synth.Texture("noise", 0.08, 0.3, seed=1)
+OBJ = synth.Texture("noise", 0.25, 0.5, seed=2)
+
+
+def gray(scene: synth.Scene, t: float, w: int, h: int) -> np.ndarray:
+    return cv2.cvtColor(synth.render_frame(scene, t, width=w, height=h), cv2.COLOR_RGB2GRAY)
+
+
+def pan_scene(speed: float, scale: float = 0.1) -> synth.Scene:
+    return synth.Scene(2.0, background=(synth.Segment(0, 2, (120, 110, 100), texture=synth.Texture("noise", scale, 0.5, seed=3),
+                                                      pan=(speed, 0.0)),))
+
+
+# ---------------------------------------------------------------- flow and its units
+@pytest.mark.parametrize("method, scale", [("dis", 0.1), ("dis", 0.03), ("farneback", 0.03)])
+def test_flow_of_a_pan_matches_the_known_shift(method, scale):
+    """A texture drifting at 0.6 frame widths/s moves 0.6 * 160 / 24 = 4 px per frame at 160 px.
+    (Farneback needs fine texture: see the airflow module docstring.)"""
+    scene = pan_scene(0.6, scale)
+    a, b = gray(scene, 0.5, 160, 90), gray(scene, 0.5 + 1 / 24, 160, 90)
+    flow = airflow.optical_flow(a, b, params=airflow.FlowParams(method=method))
+    assert flow.shape == (90, 160, 2) and flow.dtype == np.float32
+    inner = flow[10:-10, 10:-10]
+    np.testing.assert_allclose(np.median(inner[..., 0]), 4.0, atol=0.25)
+    np.testing.assert_allclose(np.median(inner[..., 1]), 0.0, atol=0.25)
+    mag = airflow.motion_magnitude(flow, dt_s=1 / 24, width_px=160)
+    np.testing.assert_allclose(np.median(mag[10:-10, 10:-10]), 0.6, rtol=0.06)
+
+
+def test_motion_magnitude_units_by_hand():
+    """(3, 4) px per frame = 5 px; at 200 px wide and 1/25 s: 5 / 200 * 25 = 0.625 frame widths/s."""
+    flow = np.zeros((10, 20, 2), np.float32)
+    flow[..., 0], flow[..., 1] = 3.0, 4.0
+    mag = airflow.motion_magnitude(flow, dt_s=0.04, width_px=200)
+    np.testing.assert_allclose(mag, 0.625, rtol=1e-6)
+    assert airflow.motion_score(mag) == pytest.approx(0.625, rel=1e-6)
+    assert airflow.motion_score(np.zeros((0, 0))) == 0.0
+    with pytest.raises(ParameterError):
+        airflow.motion_magnitude(flow, dt_s=0.0, width_px=200)
+
+
+@pytest.mark.parametrize("w, h, fps", [(96, 54, 24), (160, 90, 30), (320, 180, 60)])
+def test_motion_score_is_resolution_and_frame_rate_independent(w, h, fps):
+    """The same pan (0.4 frame widths/s) reads the same at any proxy width and frame rate."""
+    scene = pan_scene(0.4)
+    flow = airflow.optical_flow(gray(scene, 0.5, w, h), gray(scene, 0.5 + 1 / fps, w, h))
+    mag = airflow.motion_magnitude(flow, dt_s=1 / fps, width_px=w)
+    np.testing.assert_allclose(np.median(mag), 0.4, rtol=0.1)
+
+
+def test_flow_stays_on_the_moving_object():
+    """A textured disc translating over a static textured background: the flow magnitude far
+    from the disc stays below 2 % of the disc's (the default DIS preset does not smear)."""
+    scene = synth.Scene(2, background=(synth.Segment(0, 2, (110, 110, 115), texture=BG),),
+                        shapes=(synth.Shape("circle", (230, 140, 40), xy0=(0.3, 0.5), xy1=(0.9, 0.5), size0=(0.2, 0.35),
+                                            texture=OBJ),))
+    t = 1.0
+    flow = airflow.optical_flow(gray(scene, t, 160, 90), gray(scene, t + 1 / 24, 160, 90))
+    mag = np.hypot(flow[..., 0], flow[..., 1])
+    cx = 0.3 + 0.6 * t / 2  # disc centre x
+    xs = (np.arange(160) + 0.5) / 160
+    far = np.abs(xs - cx) > 0.3
+    expected = 0.3 * 160 / 24  # 0.3 frame widths/s
+    np.testing.assert_allclose(np.median(mag[30:60, np.abs(xs - cx) < 0.05]), expected, rtol=0.1)
+    assert mag[:, far].mean() < 0.02 * expected
+
+
+def test_too_small_proxy_gives_zero_flow():
+    a = np.random.default_rng(0).integers(0, 256, (15, 40), dtype=np.uint8)
+    np.testing.assert_array_equal(airflow.optical_flow(a, np.roll(a, 2, axis=1)), np.zeros((15, 40, 2), np.float32))
+    with pytest.raises(ParameterError, match="one size"):
+        airflow.optical_flow(a, a[:, :30])
+
+
+# ---------------------------------------------------------------- static pairs
+def test_static_pair_detection():
+    rng = np.random.default_rng(4)
+    a = rng.integers(40, 200, (90, 160), dtype=np.uint8)
+    noisy = np.clip(a.astype(int) + rng.integers(-4, 5, a.shape), 0, 255).astype(np.uint8)
+    assert airflow.is_static(a, a)
+    assert airflow.is_static(a, noisy)  # encoder noise of a few grey levels
+    moved = a.copy()
+    moved[40:46, 70:76] = 255  # a 6 x 6 px object (0.25 % of the proxy) appears
+    assert not airflow.is_static(a, moved)
+    assert not airflow.is_static(a, a[:, :100])  # sizes differ: never "static"
+
+
+# ---------------------------------------------------------------- grid and threshold
+def test_grid_means_by_hand():
+    """A 90 x 170 map made of 10 x 10 blocks with value row * 17 + col gives exactly those values."""
+    expected = np.arange(FAN_ROWS * FAN_COLS, dtype=np.float32).reshape(FAN_ROWS, FAN_COLS)
+    arr = np.kron(expected, np.ones((10, 10), np.float32))
+    np.testing.assert_allclose(airflow.grid_means(arr), expected, rtol=1e-6)
+    np.testing.assert_allclose(airflow.cell_motion(arr), expected, rtol=1e-6)
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (1, 40), (40, 1), (5, 5), (16, 16)])
+def test_grid_means_of_small_maps_samples_them(shape):
+    arr = np.arange(np.prod(shape), dtype=np.float32).reshape(shape)
+    g = airflow.grid_means(arr)
+    assert g.shape == (FAN_ROWS, FAN_COLS) and g.dtype == np.float32
+    assert g.min() >= arr.min() and g.max() <= arr.max()
+
+
+def test_adaptive_threshold_by_hand():
+    """[0, 0, 0, .01, .02, .03, .2]: median .01, |m - median| = [.01 .01 .01 0 .01 .02 .19], MAD .01,
+    threshold = .01 + 3 * 1.4826 * .01 = 0.054478."""
+    m = np.array([0, 0, 0, 0.01, 0.02, 0.03, 0.2, np.nan])
+    assert airflow.motion_threshold(m) == pytest.approx(0.054478, abs=1e-6)
+    assert airflow.motion_threshold(np.zeros(50)) == airflow.AirflowParams().floor  # static clip: the floor
+    assert airflow.motion_threshold(np.array([])) == airflow.AirflowParams().floor
+    assert airflow.motion_threshold(m, params=airflow.AirflowParams(threshold=0.3)) == 0.3
+
+
+# ---------------------------------------------------------------- fan levels
+def test_fan_levels_by_hand():
+    motion = np.zeros((FAN_ROWS, FAN_COLS))
+    near = np.zeros((FAN_ROWS, FAN_COLS))
+    motion[4, 12], near[4, 12] = 2.0, 0.9  # strongest and near: level 1
+    motion[4, 13], near[4, 13] = 1.2, 0.3  # strong (0.6) but far: off
+    motion[4, 14], near[4, 14] = 0.8, 1.0  # near but weak (0.4 < 0.5): off
+    motion[5, 12], near[5, 12] = 1.5, 0.5  # 0.75, near at the limit: on
+    levels = airflow.fan_levels(motion, near)
+    expected = np.zeros((FAN_ROWS, FAN_COLS), np.float32)
+    expected[4, 12], expected[5, 12] = 1.0, 0.75
+    np.testing.assert_array_equal(levels, expected)
+
+
+def test_enclosed_still_centre_of_an_approaching_object_blows():
+    """An object expanding toward the camera has no image motion at its centre; a near cell
+    enclosed by blowing cells blows at their mean level."""
+    motion = np.zeros((FAN_ROWS, FAN_COLS))
+    motion[2:7, 10:15] = 1.0
+    motion[3:6, 11:14] = 0.1  # the still centre
+    motion[2, 10] = 0.8
+    near = np.full((FAN_ROWS, FAN_COLS), 0.2)
+    near[2:7, 10:15] = 0.9
+    near[4, 12] = 0.3  # not near: stays off even though enclosed
+    levels = airflow.fan_levels(motion, near)
+    ring_mean = (15 * 1.0 + 0.8) / 16
+    assert levels[2, 10] == pytest.approx(0.8)
+    np.testing.assert_allclose(levels[3:6, 11:14][near[3:6, 11:14] >= 0.5], ring_mean, rtol=1e-6)
+    assert levels[4, 12] == 0.0
+    plain = airflow.fan_levels(motion, near, params=airflow.AirflowParams(fill_enclosed=False))
+    assert not plain[3:6, 11:14].any()
+    # a ring open to the border encloses nothing
+    motion[2:7, 14] = 0.1
+    motion[3:6, 15:] = 0.0
+    assert not airflow.fan_levels(motion, near)[3:6, 11:14].any()
+
+
+def test_fan_levels_of_no_motion_are_zero():
+    np.testing.assert_array_equal(airflow.fan_levels(np.zeros((9, 17)), np.ones((9, 17))), np.zeros((9, 17), np.float32))
+    with pytest.raises(ParameterError, match=r"\(9, 17\)"):
+        airflow.fan_levels(np.zeros((17, 9)), np.ones((9, 17)))
+
+
+def test_approaching_object_on_the_right_blows_right_fans():
+    """Flow + embedded depth + fan levels on a textured disc growing toward the camera at x = 0.75."""
+    scene = synth.Scene(2.0, background=(synth.Segment(0, 2, (110, 110, 115), texture=BG),),
+                        shapes=(synth.Shape("circle", (235, 140, 40), xy0=(0.75, 0.5), size0=(0.1, 0.18),
+                                            size1=(0.45, 0.8), texture=OBJ),))
+    t, fps = 1.0, 24
+    rgb = synth.render_frame(scene, t, width=128, height=72)
+    flow = airflow.optical_flow(gray(scene, t, 160, 90), gray(scene, t + 1 / fps, 160, 90))
+    mag = airflow.motion_magnitude(flow, dt_s=1 / fps, width_px=160)
+    levels = airflow.fan_levels(airflow.cell_motion(mag), airflow.grid_means(depth.nearness_map(rgb, flow=flow)))
+    cols = np.flatnonzero(levels.any(axis=0))
+    assert cols.size >= 3
+    assert cols.min() >= 9  # the right half: column 9 starts at x = 9/17 = 0.53
+
+
+@pytest.mark.parametrize("cls, kwargs", [
+    (airflow.FlowParams, {"method": "lucas"}), (airflow.FlowParams, {"dis_preset": "slow"}),
+    (airflow.FlowParams, {"proxy_width": 4}), (airflow.AirflowParams, {"threshold": -1.0}),
+    (airflow.AirflowParams, {"cell_rel": 1.5}), (airflow.AirflowParams, {"floor": -0.1}),
+])
+def test_params_are_checked(cls, kwargs):
+    with pytest.raises(ParameterError):
+        cls(**kwargs)
