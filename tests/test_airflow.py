@@ -115,10 +115,13 @@ def test_grid_means_of_small_maps_samples_them(shape):
 
 
 def test_adaptive_threshold_by_hand():
-    """[0, 0, 0, .01, .02, .03, .2]: median .01, |m - median| = [.01 .01 .01 0 .01 .02 .19], MAD .01,
-    threshold = .01 + 3 * 1.4826 * .01 = 0.054478."""
+    """[0, 0, 0, .01, .02, .03, .2]: the ticks above the floor (.005) are [.01, .02, .03, .2]:
+    median .025, |m - median| = [.015 .005 .005 .175], MAD .01,
+    threshold = .025 + 3 * 1.4826 * .01 = 0.069478. Static ticks do not drag the median to 0."""
     m = np.array([0, 0, 0, 0.01, 0.02, 0.03, 0.2, np.nan])
-    assert airflow.motion_threshold(m) == pytest.approx(0.054478, abs=1e-6)
+    assert airflow.motion_threshold(m) == pytest.approx(0.069478, abs=1e-6)
+    mostly_static = np.concatenate([np.zeros(500), m])
+    assert airflow.motion_threshold(mostly_static) == pytest.approx(0.069478, abs=1e-6)
     assert airflow.motion_threshold(np.zeros(50)) == airflow.AirflowParams().floor  # static clip: the floor
     assert airflow.motion_threshold(np.array([])) == airflow.AirflowParams().floor
     assert airflow.motion_threshold(m, params=airflow.AirflowParams(threshold=0.3)) == 0.3

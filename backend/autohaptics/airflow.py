@@ -6,8 +6,11 @@
    the same number at 160 px / 24 fps and at 4K / 60 fps, so one threshold transfers.
 3. Ticks whose mean motion exceeds the threshold are airflow ticks; the threshold is manual
    (``AirflowParams.threshold``) or adaptive from the clip's own motion distribution (default):
-   ``max(floor, median + k_mad * 1.4826 * MAD)``, so a calm clip's few fast moments stand out and a
-   static clip (all motion below the floor) gets no airflow at all.
+   ``max(floor, median + k_mad * 1.4826 * MAD)`` of the ticks that move (motion above the floor),
+   so a calm clip's few fast moments stand out and a static clip (all motion below the floor) gets
+   no airflow at all. Static ticks are left out of the statistics: a film whose ticks are more
+   than half static (titles, dialogue) would otherwise have median = MAD = 0 and every moving
+   tick would blow (the Sintel trailer: 260 of 521 ticks instead of its 48 fastest).
 4. Per tick the frame is split into 17 columns x 9 rows; a fan is on where its cell has strong
    motion (at least ``cell_rel`` of the tick's strongest cell) AND is near (nearness at least
    ``near_min``); its level is the cell's motion relative to the strongest cell, 0..1.
@@ -185,7 +188,7 @@ def motion_threshold(motion: np.ndarray, *, params: AirflowParams = AirflowParam
     if params.threshold is not None:
         return float(max(params.threshold, 0.0))
     m = np.asarray(motion, dtype=np.float64)
-    m = m[np.isfinite(m)]
+    m = m[np.isfinite(m) & (m > params.floor)]  # the statistics of the ticks that move
     if m.size == 0:
         return float(params.floor)
     med = float(np.median(m))
