@@ -97,6 +97,17 @@ def test_onnx_depth_model(tmp_path, layout, kind):
         assert bright == pytest.approx(0.0) and dark == pytest.approx(1.0)
 
 
+@pytest.mark.parametrize("kind", ["disparity", "depth"])
+def test_onnx_flat_output_is_all_far(tmp_path, kind):
+    """A flat frame through the brightness model gives a constant map: no region is nearer than
+    another, so nothing is near (a 'depth' output must not turn into 'everything near')."""
+    path = map_model(tmp_path / "bright.onnx", kind="mean")
+    p = depth.DepthParams(backend="onnx", onnx_model=str(path), onnx_input_size=(64, 36), output_kind=kind)
+    near = depth.nearness_map(np.full((H, W, 3), 90, np.uint8), params=p, backend=depth.make_depth_backend(p))
+    assert near.shape == (H, W) and near.dtype == np.float32
+    assert not near.any()
+
+
 def test_embedded_backend_needs_no_model():
     assert depth.make_depth_backend(depth.DepthParams()) is None
 

@@ -11,6 +11,14 @@ Backends:
   on screen, i.e. comes toward the camera (the strongest cue for "rushing at the viewer"; it sees
   only moving things and mistakes a zoom-in for approach).
   It ranks regions; it does not measure distance.
+
+  The expansion cue is on an ABSOLUTE scale (decision): the divergence is a relative growth rate
+  (1/s; the flow's px per frame over px, divided by the frame interval), the same at any proxy
+  size and frame rate; the cue is ``min(1, rate / expansion_full)``. For an object approaching at
+  constant speed the rate is 2 / (time to contact), so the default 1/s saturates at a contact
+  time of 2 s. A min-max normalised divergence (the first version) stretched flow noise to the
+  full 0..1 range whenever nothing approached, so "near" cells were a coin toss between two
+  encodes of one film; identical frames gave a full-range random expansion map.
 - ``"onnx"``: any monocular depth network exported to ONNX (e.g. a MiDaS-style model), loaded
   from a user-supplied file; ``output_kind`` says whether it outputs depth (larger = farther) or
   disparity / inverse depth (larger = nearer).
@@ -39,6 +47,8 @@ class DepthParams:
     proxy_width : width of the RGB proxy depth runs on, px (default 128).
     w_position, w_detail, w_expansion : weights of the embedded cues (normalised to sum 1; a zero
         weight skips the cue; expansion needs the flow).
+    expansion_full : relative growth rate (1/s) at which the expansion cue reaches 1 (default 1:
+        an approach with 2 s to contact).
     onnx_model, onnx_input_size (w, h), onnx_mean, onnx_std (0..1 scale), onnx_channel_order.
     output_kind : "depth" (larger = farther) | "disparity" (larger = nearer) for the ONNX output.
     """
@@ -48,6 +58,7 @@ class DepthParams:
     w_position: float = 0.4
     w_detail: float = 0.2
     w_expansion: float = 0.4
+    expansion_full: float = 1.0
     onnx_model: str | None = None
     onnx_input_size: tuple[int, int] = (256, 256)
     onnx_mean: tuple[float, float, float] = (0.485, 0.456, 0.406)
@@ -66,6 +77,8 @@ class DepthParams:
             raise ParameterError("the embedded depth backend needs at least one positive cue weight")
         if self.backend == "onnx" and not self.onnx_model:
             raise ParameterError("depth.backend 'onnx' needs depth.onnx_model (path of an .onnx file)")
+        if not (0.0 < float(self.expansion_full) < 1e6):
+            raise ParameterError(f"depth.expansion_full must be a positive rate (1/s), got {self.expansion_full!r}")
         if not (8 <= int(self.proxy_width) <= 4096):
             raise ParameterError(f"depth.proxy_width must lie in 8..4096 px, got {self.proxy_width!r}")
 
@@ -78,12 +91,16 @@ def make_depth_backend(params: DepthParams) -> DepthBackend | None:
     return None
 
 
+DEFAULT_FRAME_S = 1.0 / 24.0  # frame interval assumed for ``flow`` when dt_s is not given
+
+
 def nearness_map(rgb: np.ndarray, *, params: DepthParams = DepthParams(), backend: DepthBackend | None = None,
-                 flow: np.ndarray | None = None) -> np.ndarray:
+                 flow: np.ndarray | None = None, dt_s: float | None = None) -> np.ndarray:
     """Nearness of each pixel, 0 (far) .. 1 (near). rgb uint8 [shape=(h, w, 3)] -> float32 [shape=(h, w)].
 
     flow : optional float [shape=(h', w', 2)] px/frame of the same frame (any size), for the
     expansion cue of the embedded backend.
+    dt_s : the frame interval of ``flow``, s (default 1/24 s); it makes the expansion cue a rate.
     """
     rgb = np.asarray(rgb)
     if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.size == 0:
@@ -92,11 +109,16 @@ def nearness_map(rgb: np.ndarray, *, params: DepthParams = DepthParams(), backen
     if params.backend == "onnx":
         model = backend or make_depth_backend(params)
         raw = _minmax(np.asarray(model(np.ascontiguousarray(rgb, dtype=np.uint8)), np.float32))
+        if not raw.any():  # a flat (or non-finite) output ranks nothing nearer than anything: all far
+            return np.zeros(raw.shape, np.float32)
         return (1.0 - raw if params.output_kind == "depth" else raw).astype(np.float32)
-    return _embedded(np.ascontiguousarray(rgb, dtype=np.uint8), params, flow)
+    dt = DEFAULT_FRAME_S if dt_s is None else float(dt_s)
+    if not (dt > 0 and np.isfinite(dt)):
+        raise ParameterError(f"nearness_map needs a positive frame interval dt_s, got {dt_s!r}")
+    return _embedded(np.ascontiguousarray(rgb, dtype=np.uint8), params, flow, dt)
 
 
-def _embedded(rgb: np.ndarray, params: DepthParams, flow: np.ndarray | None) -> np.ndarray:
+def _embedded(rgb: np.ndarray, params: DepthParams, flow: np.ndarray | None, dt: float) -> np.ndarray:
     h, w = rgb.shape[:2]
     cues, weights = [], []
     if params.w_position > 0:
@@ -111,13 +133,14 @@ def _embedded(rgb: np.ndarray, params: DepthParams, flow: np.ndarray | None) -> 
         weights.append(params.w_detail)
     if params.w_expansion > 0 and flow is not None:
         f = np.asarray(flow, dtype=np.float32)
-        if f.ndim == 3 and f.shape[2] == 2 and min(f.shape[:2]) >= 3:
+        if f.ndim == 3 and f.shape[2] == 2 and min(f.shape[:2]) >= 3 and min(h, w) >= 3:
             if f.shape[:2] != (h, w):
                 sx, sy = w / f.shape[1], h / f.shape[0]
                 f = cv2.resize(f, (w, h), interpolation=cv2.INTER_LINEAR) * np.array([sx, sy], np.float32)
-            div = np.gradient(f[..., 0], axis=1) + np.gradient(f[..., 1], axis=0)
-            div = cv2.GaussianBlur(np.maximum(div, 0.0).astype(np.float32), (0, 0), max(1.0, 0.04 * w))
-            cues.append(_minmax(div))
+            f = np.where(np.isfinite(f), f, 0.0)
+            rate = (np.gradient(f[..., 0], axis=1) + np.gradient(f[..., 1], axis=0)) / dt  # 1/s
+            rate = cv2.GaussianBlur(np.maximum(rate, 0.0).astype(np.float32), (0, 0), max(1.0, 0.04 * w))
+            cues.append(np.clip(rate / float(params.expansion_full), 0.0, 1.0))
             weights.append(params.w_expansion)
     if not cues:
         return np.full((h, w), 0.5, np.float32)
