@@ -149,3 +149,42 @@ def test_onnx_errors_are_parameter_errors(tmp_path):
 def test_params_are_checked(kwargs):
     with pytest.raises(ParameterError):
         saliency.SaliencyParams(**kwargs)
+
+
+@pytest.mark.parametrize("backend", ["spectral", "fine_grained"])
+def test_backend_callable_returns_a_normalised_map(backend):
+    frame, _ = disc_frame()
+    fn = saliency.make_saliency_backend(saliency.SaliencyParams(backend=backend))
+    smap = fn(frame)
+    assert smap.shape == (H, W) and smap.dtype == np.float32
+    assert smap.min() == 0.0 and smap.max() == 1.0
+
+
+def test_backend_callable_gives_zeros_for_a_flat_network_output(tmp_path):
+    """A flat frame through the brightness model: a constant output, normalised to all zeros."""
+    path = map_model(tmp_path / "bright.onnx", kind="mean")
+    fn = saliency.make_saliency_backend(saliency.SaliencyParams(backend="onnx", onnx_model=str(path),
+                                                                onnx_input_size=(32, 18)))
+    out = fn(np.full((H, W, 3), 77, np.uint8))
+    assert out.shape == (H, W) and out.dtype == np.float32 and not out.any()
+
+
+@pytest.mark.parametrize("backend", ["spectral", "fine_grained"])
+@pytest.mark.parametrize("variant", ["paper", "mass"])
+def test_bright_object_on_the_left_drives_the_left_actuators(backend, variant):
+    """Saliency -> fusion end to end: a bright disc in the left third; A1/A3/A4/A8 lead and every
+    right actuator (A2/A6/A7/A9) stays below 0.3 of the strongest. A black frame: A5 only."""
+    from autohaptics import fusion
+    from autohaptics.layout import ACTUATOR_IDS
+
+    idx = {a: i for i, a in enumerate(ACTUATOR_IDS)}
+    frame, _ = disc_frame(x=0.17)
+    params = saliency.SaliencyParams(backend=backend)
+    fparams = fusion.FusionParams(variant=variant)
+    beta = fusion.actuator_weights(saliency.saliency_map(frame, params=params), params=fparams)
+    left = beta[[idx[a] for a in ("A1", "A3", "A4", "A8")]]
+    right = beta[[idx[a] for a in ("A2", "A6", "A7", "A9")]]
+    assert left.max() == 1.0
+    assert right.max() < 0.3, dict(zip(ACTUATOR_IDS, beta.round(3)))
+    black = saliency.saliency_map(np.zeros((H, W, 3), np.uint8), params=params)
+    np.testing.assert_array_equal(fusion.actuator_weights(black, params=fparams), np.eye(9)[idx["A5"]])

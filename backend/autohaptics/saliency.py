@@ -72,15 +72,26 @@ class SaliencyParams:
 
 
 def make_saliency_backend(params: SaliencyParams) -> SaliencyBackend:
-    """A callable ``rgb uint8 (h, w, 3) -> raw map float32 (h, w)``; models are loaded once here."""
+    """A callable ``rgb uint8 (h, w, 3) -> map float32 (h, w)`` in [0, 1]; models are loaded once here.
+
+    The map is the backend's output at the frame's size, min-max normalised; a flat or non-finite
+    output is all zeros.
+    """
     if params.backend == "spectral":
         engine = cv2.saliency.StaticSaliencySpectralResidual_create()
-        return lambda rgb: _opencv_map(engine, rgb)
-    if params.backend == "fine_grained":
+        raw = lambda rgb: _opencv_map(engine, rgb)  # noqa: E731
+    elif params.backend == "fine_grained":
         engine = cv2.saliency.StaticSaliencyFineGrained_create()
-        return lambda rgb: _opencv_map(engine, rgb)
-    return OnnxMapModel(params.onnx_model, input_size=params.onnx_input_size, mean=params.onnx_mean,
-                        std=params.onnx_std, channel_order=params.onnx_channel_order, what="saliency")
+        raw = lambda rgb: _opencv_map(engine, rgb)  # noqa: E731
+    else:
+        raw = OnnxMapModel(params.onnx_model, input_size=params.onnx_input_size, mean=params.onnx_mean,
+                           std=params.onnx_std, channel_order=params.onnx_channel_order, what="saliency")
+
+    def backend(rgb: np.ndarray) -> np.ndarray:
+        rgb = _check_rgb(rgb)
+        return _normalise(np.asarray(raw(rgb), dtype=np.float32), rgb.shape[:2])
+
+    return backend
 
 
 def saliency_map(rgb: np.ndarray, *, params: SaliencyParams = SaliencyParams(),
