@@ -519,6 +519,16 @@ def _pattern(tex: Texture, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     lat = _LATTICES.get(tex.seed)
     if lat is None:
         lat = _LATTICES.setdefault(tex.seed, _lattice(tex.seed))
+    if u.ndim == 2 and u.strides[0] == 0 and v.strides[1] == 0:
+        # u varies along x only and v along y only (every caller): the interpolation is separable.
+        # Rows first (Wv @ lattice, two weights per row of Wv), then two columns per pixel column.
+        rows = _lattice_weights(v[:, 0]) @ lat  # (h, 64)
+        iu = np.floor(u[0])
+        fu = u[0] - iu
+        fu = fu * fu * (3.0 - 2.0 * fu)
+        a = iu.astype(np.int64) % _LATTICE
+        left = rows[:, a]
+        return left + fu * (rows[:, (a + 1) % _LATTICE] - left)
     iu, iv = np.floor(u), np.floor(v)
     fu, fv = u - iu, v - iv
     fu = fu * fu * (3.0 - 2.0 * fu)  # smoothstep: C1 across lattice cells
@@ -529,6 +539,19 @@ def _pattern(tex: Texture, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     top = lat[b, a] + fu * (lat[b, a1] - lat[b, a])
     bot = lat[b1, a] + fu * (lat[b1, a1] - lat[b1, a])
     return top + fv * (bot - top)
+
+
+def _lattice_weights(c: np.ndarray) -> np.ndarray:
+    """Smoothstep interpolation weights [shape=(n, 64)] of coordinates ``c`` on the periodic lattice."""
+    i = np.floor(c)
+    f = c - i
+    f = f * f * (3.0 - 2.0 * f)
+    a = i.astype(np.int64) % _LATTICE
+    rows = np.arange(c.size)
+    wts = np.zeros((c.size, _LATTICE))
+    wts[rows, a] += 1.0 - f
+    wts[rows, (a + 1) % _LATTICE] += f
+    return wts
 
 
 def _frame_key(scene: Scene, t: float):
