@@ -15,6 +15,18 @@
  *   media_type?: string, view?: Record<string, any>|null}} Project
  * @typedef {{revision: number, cursor: number, ops: Array<Record<string, any>>}} EditList
  * @typedef {{points: number, duration_s: number, has_audio?: boolean, min: number[], max: number[]}} Waveform
+ * @typedef {{device: string, description: string, kind: "usb"|"serial"|"virtual", likely_chair: boolean}} ChairPort
+ * @typedef {{latency_ms: number, comfort: {scale: number, mute: Record<string, boolean>}}} ChairSettings
+ * @typedef {{project_id: string, start_s: number, end_s: number, state: "running"|"done"|"cancelled"|"failed",
+ *   progress: number, error: string|null}} ChairPush
+ * @typedef {{connected: boolean, state: "idle"|"connected"|"reconnecting"|"disconnected"|"closed",
+ *   port: string|null, capabilities: Record<string, any>|null, frames_sent: number, frames_dropped: number,
+ *   last_tick: number|null, reconnects: number, diagnostics: Record<string, any>|null, error: string|null,
+ *   playing: boolean, position_s: number,
+ *   playback: {state: string, project_id: string|null, revision: number|null, ticks_skipped: number,
+ *     drift_s: number|null, drift_seeks: number},
+ *   push: ChairPush|null, settings: ChairSettings}} ChairStatus
+ * @typedef {{project_id: string, state: "play"|"pause"|"seek", position_s: number, heartbeat?: boolean}} ChairReport
  */
 
 export class ApiError extends Error {
@@ -195,6 +207,72 @@ export class Api {
   /** @param {string} id @param {string} format */
   exportUrl(id, format) {
     return `${this.base}/api/projects/${enc(id)}/export?format=${encodeURIComponent(format)}`;
+  }
+
+  // ------------------------------------------------------------------ chair
+  /** @returns {Promise<ChairPort[]>} */
+  chairPorts() {
+    return this.request("GET", "/api/chair/ports");
+  }
+
+  /** @param {string} port @returns {Promise<ChairStatus>} */
+  chairConnect(port) {
+    return this.request("POST", "/api/chair/connect", { port });
+  }
+
+  /** @returns {Promise<ChairStatus>} */
+  chairDisconnect() {
+    return this.request("POST", "/api/chair/disconnect");
+  }
+
+  /** @returns {Promise<ChairStatus>} */
+  chairStatus() {
+    return this.request("GET", "/api/chair/status");
+  }
+
+  /** What the player does (play / pause / seek at a position); the chair follows it. @param {ChairReport} report @returns {Promise<ChairStatus>} */
+  chairPlayback(report) {
+    return this.request("POST", "/api/chair/playback", report);
+  }
+
+  /**
+   * STOP: every output of the chair off now. Sent with keepalive so it still goes out while the
+   * page unloads.
+   * @returns {Promise<ChairStatus>}
+   */
+  chairStop() {
+    const path = "/api/chair/stop";
+    return this.readJson(fetch(this.base + path, { method: "POST", keepalive: true, headers: { Accept: "application/json" } }), `POST ${path}`);
+  }
+
+  /**
+   * @param {{latency_ms?: number, comfort?: {scale?: number, mute?: Record<string, boolean>}}} settings
+   * @returns {Promise<ChairSettings>}
+   */
+  putChairSettings(settings) {
+    return this.request("PUT", "/api/chair/settings", settings);
+  }
+
+  /** @param {string} id @param {number} startS @param {number} endS @returns {Promise<ChairStatus>} */
+  chairPush(id, startS, endS) {
+    return this.request("POST", "/api/chair/push", { project_id: id, start_s: startS, end_s: endS });
+  }
+
+  /**
+   * Follow the chair's status (Server-Sent Events `status`; EventSource reconnects by itself).
+   * @param {(status: ChairStatus) => void} onStatus
+   * @param {(connected: boolean) => void} [onStream] the stream opened (true) or dropped (false)
+   * @returns {() => void} closes the stream
+   */
+  watchChair(onStatus, onStream = () => {}) {
+    const source = new EventSource(`${this.base}/api/chair/events`);
+    source.addEventListener("status", (e) => {
+      const data = parse(/** @type {MessageEvent} */ (e).data);
+      if (data) onStatus(data);
+    });
+    source.onopen = () => onStream(true);
+    source.onerror = () => onStream(false);
+    return () => source.close();
   }
 
   /**

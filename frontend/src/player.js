@@ -3,6 +3,10 @@
  * animation frame reads video.currentTime (timeupdate fires only a few times per second, too rarely
  * for a 100 ms grid) and reports it. When the browser cannot play the media (an unsupported codec),
  * a wall clock stands in so the timeline can still be played through.
+ *
+ * `sync` events say what the picture does, for followers such as the chair: "play" once frames
+ * actually advance (the video's `playing`, not `play`, which comes before any data), "pause" when
+ * it pauses, ends or stalls waiting for data, "seek" when a seek completed.
  */
 
 import { Emitter } from "./events.js";
@@ -12,6 +16,7 @@ import { Emitter } from "./events.js";
  *   time: {timeS: number, playing: boolean},
  *   state: {playing: boolean},
  *   "media-error": {message: string},
+ *   sync: {state: "play"|"pause"|"seek", timeS: number},
  * }} PlayerEvents
  */
 
@@ -39,6 +44,12 @@ export class Player extends Emitter {
     video.addEventListener("ended", () => this._stopped());
     video.addEventListener("seeked", () => {
       if (!this.playing) this.emit("time", { timeS: this.currentTime, playing: false });
+      this._sync("seek");
+    });
+    video.addEventListener("playing", () => this._sync("play"));
+    video.addEventListener("pause", () => this._sync("pause"));
+    video.addEventListener("waiting", () => {
+      if (!video.paused) this._sync("pause");
     });
     video.addEventListener("error", () => {
       this.mediaOk = false;
@@ -70,6 +81,7 @@ export class Player extends Emitter {
     this._clockStart = performance.now();
     this._clockPlaying = true;
     this._started();
+    this._sync("play");
   }
 
   pause() {
@@ -78,6 +90,7 @@ export class Player extends Emitter {
       this._clockTime = this.currentTime;
       this._clockPlaying = false;
       this._stopped();
+      this._sync("pause");
     }
   }
 
@@ -94,8 +107,14 @@ export class Player extends Emitter {
       this._clockTime = t;
       this._clockBase = t;
       this._clockStart = performance.now();
+      this._sync("seek");
     }
     this.emit("time", { timeS: t, playing: this.playing });
+  }
+
+  /** @param {"play"|"pause"|"seek"} state */
+  _sync(state) {
+    this.emit("sync", { state, timeS: this.currentTime });
   }
 
   _started() {

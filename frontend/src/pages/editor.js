@@ -10,6 +10,7 @@
 
 import { ApiError } from "../api.js";
 import { ChairDiagram } from "../chair.js";
+import { ChairSync } from "../chair-sync.js";
 import { FrameLoop } from "../core/frameloop.js";
 import { TimelineView } from "../core/timeline.js";
 import { h, promptDialog, toast } from "../dom.js";
@@ -25,6 +26,7 @@ import { TemperatureLane } from "../lanes/temperature.js";
 import { VibrationDetailLane } from "../lanes/vibration-detail.js";
 import { WaveformLane } from "../lanes/waveform.js";
 import { foldMarkers } from "../markers.js";
+import { ChairPanel } from "../panels/chair-panel.js";
 import { exportMenu } from "../panels/export-menu.js";
 import { JobProgress } from "../panels/job-progress.js";
 import { regenerateDialog } from "../panels/regenerate.js";
@@ -175,6 +177,12 @@ export class EditorPage {
     });
     this.importBtn = h("button", { class: "btn", type: "button", "data-testid": "import", title: "Replace the tracks by a timeline file (JSON or CSV); undoable", onclick: () => this.importInput.click() }, "Import…");
     this.exportSlot = h("div", { class: "export-slot" });
+    this.chairIndicator = h("span", { class: "badge chair-indicator", "data-state": "idle", "data-testid": "chair-indicator", title: "Chair connection" }, "Chair off");
+    this.stopBtn = h(
+      "button",
+      { class: "btn btn-danger btn-stop", type: "button", "data-testid": "chair-stop", "aria-keyshortcuts": "Escape", title: "Stop the chair: every output off now (Escape)", onclick: () => this.chairStop() },
+      "■ Stop chair",
+    );
     const header = h(
       "header",
       { class: "topbar" },
@@ -182,6 +190,8 @@ export class EditorPage {
       this.nameEl,
       this.saveEl,
       h("div", { class: "spacer" }),
+      this.chairIndicator,
+      this.stopBtn,
       this.undoBtn,
       this.redoBtn,
       this.regenBtn,
@@ -192,6 +202,12 @@ export class EditorPage {
     this.main = h("main", { class: "editor", "data-testid": "editor" });
     this.host.replaceChildren(header, this.main);
     this.exportSlot.append(exportMenu(this.api, this.projectId, this._exportFormats()));
+    // STOP wins over everything else Escape does, wherever the focus is (a text field, a dialog).
+    const onEscape = (/** @type {KeyboardEvent} */ e) => {
+      if (e.key === "Escape" && this.chairPanel && this.chairPanel.active) this.chairStop();
+    };
+    document.addEventListener("keydown", onEscape, true);
+    this.cleanups.push(() => document.removeEventListener("keydown", onEscape, true));
   }
 
   /** The formats /api/config lists ({name, description}), else JSON and CSV. */
@@ -225,7 +241,18 @@ export class EditorPage {
     for (const [n, v] of Object.entries(this.thresholds)) this.thresholdPanel.set(n, v);
     this.paramsInfo = h("p", { class: "params-info", "data-testid": "params-info" });
     const chairPanel = h("section", { class: "panel", "aria-labelledby": "chair-title" }, h("h2", { class: "panel-title", id: "chair-title" }, "At the playhead"), this.chairHost);
-    const side = h("aside", { class: "side" }, this.thresholdPanel.el, this.paramsInfo);
+    this.chairPanel = new ChairPanel(this.api, { projectId: this.projectId, range: () => this._pushRange() });
+    this.chairSync = new ChairSync(this.api, this.projectId, this.player, { onError: (m) => toast(`The chair did not follow: ${m}`, "warn") });
+    this.cleanups.push(
+      this.chairPanel.on("status", ({ status, active }) => {
+        this.chairSync.setActive(active);
+        this.chairIndicator.dataset.state = status.state;
+        this.chairIndicator.textContent = status.state === "connected" ? "Chair on" : status.state === "reconnecting" ? "Chair reconnecting…" : "Chair off";
+      }),
+      () => this.chairSync.destroy(),
+      () => this.chairPanel.destroy(),
+    );
+    const side = h("aside", { class: "side" }, this.thresholdPanel.el, this.paramsInfo, this.chairPanel.el);
     this.jobSlot = h("div", { class: "job-slot", hidden: true, "data-testid": "job-slot" });
     this.notice = h("div", { class: "notice", hidden: true, role: "status", "data-testid": "editor-notice" });
 
@@ -242,7 +269,7 @@ export class EditorPage {
       ["+ / − / 0", "zoom in / out / whole film"], ["Ctrl+wheel, pinch", "zoom at the pointer"], ["Wheel", "pan"],
       ["Alt+drag, middle drag", "pan"], ["Drag on lanes", "select a range (across heat-map rows: several actuators)"],
       ["Ctrl+Z / Ctrl+Shift+Z", "undo / redo"], ["Ctrl+C / Ctrl+V", "copy / paste at the playhead"],
-      ["Delete", "clear the selection, or delete the selected marker"], ["Escape", "drop the selection or the points"],
+      ["Delete", "clear the selection, or delete the selected marker"], ["Escape", "stop the chair (when connected); drop the selection or the points"],
     ];
     const keysMenu = h(
       "details",
@@ -294,6 +321,23 @@ export class EditorPage {
     this._wireEvents();
     this._updateToolbar();
     this._updateParamsInfo();
+    this.chairPanel.open();
+  }
+
+  /** What "Push" sends to the chair: the selection, else the whole film (seconds). */
+  _pushRange() {
+    const tl = this.timeline;
+    const sel = tl && tl.selection;
+    if (sel) return { startS: sel.t0 * this.tickS, endS: sel.t1 * this.tickS, label: "selection" };
+    return { startS: 0, endS: tl ? tl.durationS : 0, label: "whole film" };
+  }
+
+  /** STOP the chair: every output off now, the player paused, queued playback reports dropped. */
+  async chairStop() {
+    if (this.chairSync) this.chairSync.halt();
+    const stopping = this.chairPanel ? this.chairPanel.stop() : this.api.chairStop().catch((err) => toast(`STOP failed: ${errorText(err)}`, "error"));
+    if (this.player && this.player.playing) this.player.pause();
+    await stopping;
   }
 
   /** @param {string[]} features */
@@ -371,7 +415,10 @@ export class EditorPage {
       tl.on("scrub", ({ timeS }) => player.seek(timeS)),
       tl.on("seek", ({ timeS }) => player.seek(timeS)),
       tl.on("view", () => this._scheduleViewSave()),
-      tl.on("selection", () => this._updateToolbar()),
+      tl.on("selection", () => {
+        this._updateToolbar();
+        this.chairPanel.updateRange();
+      }),
       tl.on("selection-input", () => this._updateToolbar()),
     );
     const onKey = (/** @type {KeyboardEvent} */ e) => this._onKey(e);
@@ -994,6 +1041,9 @@ export class EditorPage {
       timing: { ...this.timing },
       waveformReady: !Number.isNaN(this.timing.waveformLoaded),
       saveState: this.saveEl ? this.saveEl.dataset.state || "" : "",
+      chair: this.chairPanel && this.chairPanel.status
+        ? { active: this.chairPanel.active, state: this.chairPanel.status.state, reporting: this.chairSync.active }
+        : null,
     };
   }
 

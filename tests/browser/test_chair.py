@@ -1,0 +1,262 @@
+"""The chair in the editor, end to end: a real browser plays a clip while the editor is connected
+(through its chair panel) to a virtual chair, and the chair's own log is checked frame by frame
+against the composed timeline after comfort scaling and clamps (autohaptics/chair/comfort.py);
+seek, pause, STOP (button and Escape), the panel's settings and pushing a selection.
+
+The module runs its own ``autohaptics serve`` so the test can read the composed timeline exactly
+(from the data folder) rather than through the 4-decimal JSON.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import uuid
+
+import httpx
+import numpy as np
+import pytest
+
+from autohaptics.chair import VirtualChair
+from autohaptics.server.store import Store
+from autohaptics.server.timelines import Timelines
+from browser_support import ServerError, media_clip, open_editor, start_server, stop_server, upload, wait_until
+
+pytestmark = pytest.mark.browser
+
+CLIP = "sintel_trailer_480x204_h264_aac.mp4"
+ARMRESTS = (2, 6)  # A3, A7 (layout zone "armrests")
+VIEWPORT = {"width": 1440, "height": 900}
+
+
+@pytest.fixture(scope="module")
+def chair_server(tmp_path_factory):
+    root = tmp_path_factory.mktemp("chair-e2e")
+    try:
+        proc, url = start_server(root)
+    except ServerError as exc:
+        pytest.fail(str(exc))
+    yield url, root / "data"
+    stop_server(proc)
+
+
+@pytest.fixture(scope="module")
+def chair_api(chair_server):
+    with httpx.Client(base_url=chair_server[0], timeout=60.0) as client:
+        yield client
+
+
+@pytest.fixture(scope="module")
+def film(chair_api) -> dict:
+    return upload(chair_api, media_clip(CLIP), name="sintel")
+
+
+@pytest.fixture
+def chair(tmp_path):
+    """A virtual chair under a unique name, so the server's port list shows it."""
+    with VirtualChair(name=f"e2e-{uuid.uuid4().hex[:8]}", log_path=tmp_path / "chair.jsonl") as vc:
+        yield vc
+
+
+@pytest.fixture
+def cpage(browser, chair_server, chair_api):
+    context = browser.new_context(viewport=VIEWPORT, base_url=chair_server[0])
+    pg = context.new_page()
+    errors: list[str] = []
+    pg.on("pageerror", lambda exc: errors.append(str(exc)))
+    pg.set_default_timeout(20_000)
+    yield pg
+    context.close()
+    chair_api.post("/api/chair/disconnect")
+    assert not errors, f"uncaught errors in the page: {errors}"
+
+
+def composed(data_dir, pid: str):
+    """The composed timeline exactly as the server composes it (same files, same code)."""
+    store = Store(data_dir)
+    try:
+        return Timelines(store).compose(pid).timeline
+    finally:
+        store.close()
+
+
+def expected_frame(tl, k: int, scale: float, muted_motors=(), neutral=33.0, lo=18.0, hi=40.0):
+    """The documented quantisation (chair/comfort.py), written out independently."""
+    motors = [0 if i in muted_motors else int(math.floor(min(max(float(v) * scale, 0.0), 1.0) * 255 + 0.5))
+              for i, v in enumerate(tl.vibration[k].astype(np.float64))]
+    fans = [int(math.floor(min(max(float(v) * scale, 0.0), 1.0) * 255 + 0.5)) for v in tl.fans[k].ravel()]
+    t = min(max(neutral + scale * (float(tl.temperature_c[k]) - neutral), lo), hi)
+    return motors, fans, int(math.floor(t * 100 + 0.5))
+
+
+def connect_in_the_panel(pg, device: str) -> None:
+    pg.click("[data-testid=chair-refresh]")
+    pg.wait_for_selector(f"[data-testid=chair-port] option[value='{device}']", state="attached")
+    pg.select_option("[data-testid=chair-port]", device)
+    pg.click("[data-testid=chair-connect]")
+    pg.wait_for_selector("[data-testid=chair-state][data-state=connected]")
+    pg.wait_for_function("() => window.autohaptics.state().chair && window.autohaptics.state().chair.reporting")
+
+
+def video_time(pg) -> float:
+    return pg.evaluate("() => document.querySelector('[data-testid=video]').currentTime")
+
+
+def seek_video(pg, t: float) -> None:
+    pg.evaluate("(t) => { document.querySelector('[data-testid=video]').currentTime = t; }", t)
+    pg.wait_for_function("(t) => { const v = document.querySelector('[data-testid=video]');"
+                         " return !v.seeking && Math.abs(v.currentTime - t) < 0.5; }", arg=t)
+
+
+def log_index(chair) -> int:
+    return len(chair.read_log())
+
+
+def frames_since(chair, index: int) -> list[dict]:
+    return [e for e in chair.read_log()[index:] if e["ev"] == "frame"]
+
+
+def runs(entries: list[dict]) -> list[list[int]]:
+    """Tick runs of the log: a new run after every STOP and wherever the tick does not go up by one."""
+    out: list[list[int]] = []
+    current: list[int] = []
+    for e in entries:
+        if e["ev"] == "stop":
+            if current:
+                out.append(current)
+            current = []
+        elif e["ev"] == "frame":
+            if current and e["tick"] != current[-1] + 1:
+                out.append(current)
+                current = []
+            current.append(e["tick"])
+    if current:
+        out.append(current)
+    return out
+
+
+def test_the_editor_plays_on_the_virtual_chair(cpage, chair_api, chair_server, film, chair):
+    pg, pid = cpage, film["id"]
+    open_editor(pg, pid)
+    pg.wait_for_function("() => document.querySelector('[data-testid=video]').readyState >= 2")
+    assert pg.is_visible("[data-testid=chair-stop]")
+    connect_in_the_panel(pg, chair.device)
+    chair.wait_for(lambda e: e["ev"] == "hello")
+
+    # Comfort from the panel: intensity 0.8 (four keyboard steps of 0.05), armrests muted, 0 ms.
+    pg.focus("[data-testid=chair-intensity]")
+    for _ in range(4):
+        pg.keyboard.press("ArrowLeft")
+    pg.click("[data-testid=chair-mute-armrests]")
+    pg.fill("[data-testid=chair-latency]", "0")
+    pg.press("[data-testid=chair-latency]", "Enter")
+    wait_until(lambda: chair_api.get("/api/chair/settings").json()["comfort"] == {
+        "scale": 0.8, "mute": {"back": False, "armrests": True, "seat": False, "heat": False, "fans": False}},
+        "the panel's comfort settings reach the server")
+    assert pg.get_attribute("[data-testid=chair-mute-armrests]", "aria-pressed") == "true"
+
+    seek_video(pg, 2.0)
+    start = log_index(chair)
+    pg.click("[data-testid=play]")
+    chair.wait_for(lambda e: e["ev"] == "frame" and e["tick"] >= 48, timeout_s=15.0)  # 2.8 s of film played
+
+    # A seek while playing: the ticks jump to the new position.
+    seek_video(pg, 30.0)
+    chair.wait_for(lambda e: e["ev"] == "frame" and e["tick"] >= 318, timeout_s=15.0)
+    assert pg.evaluate("() => window.autohaptics.state().playing")
+
+    # Pause: STOP on the chair and no frames afterwards.
+    pg.click("[data-testid=play]")
+    pg.wait_for_function("() => document.querySelector('[data-testid=video]').paused")
+    chair.wait_for(lambda e: e["ev"] == "stop" and e["t_ms"] > 0, count=1)
+    paused_at = log_index(chair)
+    time.sleep(0.6)
+    assert frames_since(chair, paused_at) == []
+
+    entries = chair.read_log()[start:]
+    status = chair_api.get("/api/chair/status").json()
+    skipped = status["playback"]["ticks_skipped"]
+    assert status["playback"]["drift_seeks"] == 0, status["playback"]
+    ticks = runs(entries)
+    before = [r for r in ticks if r[0] < 300]
+    after = [r for r in ticks if r[0] >= 300]
+    # Before the seek: one run from the play position (2.0 s) without duplicates or gaps (a gap only
+    # where the server skipped ticks after a stall, which it counts).
+    assert before and 20 <= before[0][0] <= 21, ticks
+    assert sum(len(r) for r in before) + skipped >= before[-1][-1] - before[0][0] + 1, ticks
+    flat = [t for r in before for t in r]
+    assert all(b > a for a, b in zip(flat, flat[1:])), ticks
+    assert len(before) <= 1 + skipped, ticks
+    # After the seek: from 30.0 s on, in order.
+    assert after and 300 <= after[0][0] <= 301, ticks
+    flat = [t for r in after for t in r]
+    assert all(b > a for a, b in zip(flat, flat[1:])), ticks
+
+    # Every frame holds the composed timeline after comfort and the device's clamps.
+    tl = composed(chair_server[1], pid)
+    frames = [e for e in entries if e["ev"] == "frame"]
+    assert len(frames) > 30
+    for e in frames:
+        assert (e["motors"], e["fans"], e["temp_target_cc"]) == expected_frame(tl, e["tick"], 0.8, ARMRESTS), e["tick"]
+    assert all(e["motors"][i] == 0 for e in frames for i in ARMRESTS)
+
+    # The panel shows what the chair got.
+    pg.wait_for_function("() => Number(document.querySelector('[data-testid=chair-frames]').textContent) > 30")
+    last = status["last_tick"]
+    assert pg.text_content("[data-testid=chair-last-tick]").startswith(str(last))
+    assert pg.text_content("[data-testid=chair-errors]") == "CRC 0 · length 0"
+
+
+def test_stop_button_and_escape_turn_everything_off_at_once(cpage, chair_api, film, chair):
+    pg, pid = cpage, film["id"]
+    open_editor(pg, pid)
+    pg.wait_for_function("() => document.querySelector('[data-testid=video]').readyState >= 2")
+    connect_in_the_panel(pg, chair.device)
+    for press in (lambda: pg.click("[data-testid=chair-stop]"), lambda: pg.keyboard.press("Escape")):
+        seek_video(pg, 10.0)
+        pg.click("[data-testid=play]")
+        chair.wait_for(lambda e: e["ev"] == "frame" and 105 <= e["tick"] < 200, timeout_s=15.0)
+        before = log_index(chair)
+        pg.locator("[data-testid=timeline]").focus()
+        press()
+        stop = chair.wait_for(lambda e: e["ev"] == "stop" and e["t_ms"] > 0, count=len(
+            [e for e in chair.read_log()[:before] if e["ev"] == "stop"]) + 1)
+        assert stop["motors"] == [0] * 9 and stop["fans"] == [0] * 153 and stop["temp_target_cc"] == 3300
+        assert stop["safe"] is True
+        pg.wait_for_function("() => document.querySelector('[data-testid=video]').paused")
+        settled = log_index(chair)
+        time.sleep(1.3)  # longer than a heartbeat: the heartbeat does not restart a stopped chair
+        assert frames_since(chair, settled) == []
+        # At most the frame that was on the wire when the button was pressed comes before the STOP.
+        between = [e for e in chair.read_log()[before:] if e["ev"] in ("frame", "stop")]
+        assert [e["ev"] for e in between].index("stop") <= 1
+    st = chair_api.get("/api/chair/status").json()
+    assert st["playback"]["state"] in ("stopped", "paused") and not st["playing"]
+
+
+def test_push_the_selection_and_disconnect(cpage, chair_api, film, chair):
+    pg, pid = cpage, film["id"]
+    open_editor(pg, pid)
+    connect_in_the_panel(pg, chair.device)
+    assert pg.text_content("[data-testid=chair-push]") == "Push whole film"
+    pg.evaluate("() => window.autohaptics.state()")
+    rect = pg.evaluate("() => window.autohaptics.laneRect('actuators')")
+    x0 = pg.evaluate("() => window.autohaptics.clientXOf(4.0)")
+    x1 = pg.evaluate("() => window.autohaptics.clientXOf(5.0)")
+    pg.mouse.move(x0, rect["y"] + 5)
+    pg.mouse.down()
+    pg.mouse.move(x1, rect["y"] + 5, steps=4)
+    pg.mouse.up()
+    sel = pg.evaluate("() => window.autohaptics.state().selection")
+    assert sel is not None
+    assert pg.text_content("[data-testid=chair-push]") == "Push selection"
+    pg.click("[data-testid=chair-push]")
+    pg.wait_for_selector("[data-testid=chair-push-progress]:not([hidden])")
+    chair.wait_for(lambda e: e["ev"] == "stop", timeout_s=10.0)
+    ticks = [e["tick"] for e in chair.frames()]
+    assert ticks == list(range(sel["t0"], sel["t1"])), ticks
+    pg.wait_for_function("() => document.querySelector('[data-testid=chair-push-progress]')"
+                         ".getAttribute('aria-valuenow') === '100'")
+    pg.click("[data-testid=chair-connect]")  # now "Disconnect"
+    pg.wait_for_selector("[data-testid=chair-state][data-state=idle]")
+    assert pg.text_content("[data-testid=chair-indicator]") == "Chair off"
