@@ -193,3 +193,39 @@ def test_approaching_object_on_the_right_blows_right_fans():
 def test_params_are_checked(cls, kwargs):
     with pytest.raises(ParameterError):
         cls(**kwargs)
+
+
+
+@pytest.fixture(scope="module")
+def encoded_pair(tmp_path_factory):
+    """One scene encoded as 320x180 @ 24 fps and 1280x720 @ 30 fps (H.264), decoded to 160 px gray
+    proxies: [(time_s, gray), ...] per encoding."""
+    from autohaptics import media
+
+    scene = synth.Scene(0.8, background=(synth.Segment(0, 0.8, (110, 110, 115), texture=BG),),
+                        shapes=(synth.Shape("circle", (230, 140, 40), xy0=(0.3, 0.5), xy1=(0.7, 0.5),
+                                            size0=(0.2, 0.35), texture=OBJ),))
+    out = []
+    for w, h, fps in ((320, 180, 24), (1280, 720, 30)):
+        path = synth.write_scene(tmp_path_factory.mktemp("enc") / f"m{w}.mp4", scene, width=w, height=h, fps=fps,
+                                 audio=False, quality="low")
+        out.append([(f.time_s, f.proxy(160, fmt="gray")) for f in media.iter_video(path)])
+    return out
+
+
+@pytest.mark.parametrize("method", ["dis", "farneback"])
+def test_same_motion_encoded_at_two_resolutions_and_frame_rates_agrees(encoded_pair, method):
+    """The mean motion (frame widths/s) of the same moment, from the 320x180 @ 24 fps and the
+    1280x720 @ 30 fps encodings analysed on 160 px proxies, agrees within 10 %."""
+    params = airflow.FlowParams(method=method)
+    scores = []
+    for frames in encoded_pair:
+        per_pair = []
+        for (ta, a), (tb, b) in zip(frames, frames[1:]):
+            if 0.2 <= ta <= 0.6:
+                assert not airflow.is_static(a, b)
+                flow = airflow.optical_flow(a, b, params=params)
+                per_pair.append(airflow.motion_score(airflow.motion_magnitude(flow, dt_s=tb - ta, width_px=160)))
+        scores.append(float(np.median(per_pair)))
+    assert scores[0] > 0.01  # the disc moves 0.5 frame widths/s over ~4 % of the frame
+    np.testing.assert_allclose(scores[1], scores[0], rtol=0.1)
