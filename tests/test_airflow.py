@@ -115,16 +115,23 @@ def test_grid_means_of_small_maps_samples_them(shape):
 
 
 def test_adaptive_threshold_by_hand():
-    """[0, 0, 0, .01, .02, .03, .2]: the ticks above the floor (.005) are [.01, .02, .03, .2]:
-    median .025, |m - median| = [.015 .005 .005 .175], MAD .01,
-    threshold = .025 + 3 * 1.4826 * .01 = 0.069478. Static ticks do not drag the median to 0."""
+    """[0, 0, 0, .01, .02, .03, .2]: the ticks above the floor (.005) are [.01, .02, .03, .2]; their
+    95th percentile (linear) sits at 0.95 * 3 = 2.85: .03 + .85 * (.2 - .03) = .1745; threshold =
+    0.3 * .1745 = .05235. Static ticks do not change it."""
     m = np.array([0, 0, 0, 0.01, 0.02, 0.03, 0.2, np.nan])
-    assert airflow.motion_threshold(m) == pytest.approx(0.069478, abs=1e-6)
+    assert airflow.motion_threshold(m) == pytest.approx(0.05235, abs=1e-9)
     mostly_static = np.concatenate([np.zeros(500), m])
-    assert airflow.motion_threshold(mostly_static) == pytest.approx(0.069478, abs=1e-6)
+    assert airflow.motion_threshold(mostly_static) == pytest.approx(0.05235, abs=1e-9)
     assert airflow.motion_threshold(np.zeros(50)) == airflow.AirflowParams().floor  # static clip: the floor
     assert airflow.motion_threshold(np.array([])) == airflow.AirflowParams().floor
     assert airflow.motion_threshold(m, params=airflow.AirflowParams(threshold=0.3)) == 0.3
+
+
+def test_a_calm_clips_only_motion_blows():
+    """One object approaching in an otherwise static clip: motion rising from 0.006 to 0.015
+    frame widths/s over 10 ticks. Every one of them is above the threshold (the floor here)."""
+    motion = np.concatenate([np.zeros(80), np.linspace(0.006, 0.015, 10), np.zeros(10)])
+    assert (motion[80:90] > airflow.motion_threshold(motion)).all()
 
 
 # ---------------------------------------------------------------- fan levels
@@ -189,6 +196,7 @@ def test_approaching_object_on_the_right_blows_right_fans():
     (airflow.FlowParams, {"method": "lucas"}), (airflow.FlowParams, {"dis_preset": "slow"}),
     (airflow.FlowParams, {"proxy_width": 4}), (airflow.AirflowParams, {"threshold": -1.0}),
     (airflow.AirflowParams, {"cell_rel": 1.5}), (airflow.AirflowParams, {"floor": -0.1}),
+    (airflow.AirflowParams, {"strong_rel": 1.5}),
 ])
 def test_params_are_checked(cls, kwargs):
     with pytest.raises(ParameterError):

@@ -37,12 +37,29 @@ def test_expansion_cue_finds_what_comes_toward_the_camera():
     flow = expansion_flow(H, W, cx=0.75, cy=0.4, radius=0.12, rate=0.05)
     p = depth.DepthParams(w_position=0.0, w_detail=0.0, w_expansion=1.0)
     near = depth.nearness_map(noise_frame(), params=p, flow=flow)
-    r, c = np.unravel_index(np.argmax(near), near.shape)
-    assert abs((c + 0.5) / W - 0.75) < 0.1 and abs((r + 0.5) / H - 0.4) < 0.15
+    # divergence 2 * 0.05 per frame = 2.4 /s at 24 fps: beyond expansion_full (1 /s), saturated
+    rows, cols = np.nonzero(near >= 0.99)
+    assert rows.size > 50
+    assert abs((cols.mean() + 0.5) / W - 0.75) < 0.03 and abs((rows.mean() + 0.5) / H - 0.4) < 0.05
     assert near[:, : W // 2].max() < 0.05  # nothing expands on the left
     # the default blend still puts the approaching region above the ground-plane prior
     default = depth.nearness_map(noise_frame(), flow=flow)
     assert default[int(0.4 * H), int(0.75 * W)] > default[int(0.4 * H), int(0.25 * W)] + 0.3
+
+
+def test_expansion_cue_is_a_rate():
+    """The cue is min(1, divergence / dt / expansion_full): a slow approach (divergence 0.01 per
+    frame = 0.24 /s at 24 fps, 0.3 /s at 30 fps) reads 0.24 and 0.3 in the middle of the disc, and
+    the same growth per second reads the same at any frame rate."""
+    p = depth.DepthParams(w_position=0.0, w_detail=0.0, w_expansion=1.0)
+    flow24 = expansion_flow(H, W, cx=0.5, cy=0.5, radius=0.3, rate=0.005)  # div = 2 * 0.005 per frame
+    mid = (H // 2, W // 2)
+    assert depth.nearness_map(noise_frame(), params=p, flow=flow24)[mid] == pytest.approx(0.24, abs=0.01)
+    assert depth.nearness_map(noise_frame(), params=p, flow=flow24, dt_s=1 / 30)[mid] == pytest.approx(0.3, abs=0.01)
+    flow30 = expansion_flow(H, W, cx=0.5, cy=0.5, radius=0.3, rate=0.005 * 24 / 30)  # same growth per second
+    assert depth.nearness_map(noise_frame(), params=p, flow=flow30, dt_s=1 / 30)[mid] == pytest.approx(0.24, abs=0.01)
+    with pytest.raises(ParameterError, match="dt_s"):
+        depth.nearness_map(noise_frame(), flow=flow24, dt_s=0.0)
 
 
 def test_flow_of_another_size_is_rescaled():
@@ -124,6 +141,7 @@ def test_onnx_errors_are_parameter_errors(tmp_path):
 
 
 @pytest.mark.parametrize("kwargs", [{"backend": "midas"}, {"output_kind": "inverse"}, {"w_position": -1.0},
+                                    {"expansion_full": 0.0},
                                     {"w_position": 0.0, "w_detail": 0.0, "w_expansion": 0.0}, {"proxy_width": 2}])
 def test_params_are_checked(kwargs):
     with pytest.raises(ParameterError):

@@ -67,13 +67,22 @@ def test_out_of_range_and_nan_inputs_stay_in_range():
 
 def test_neutral_aware_pulls_greys_to_skin_neutral():
     p = thermal.ThermalParams(neutral_aware=True)
-    # chroma 0 -> neutral; chroma 55 (half way between 20 and 90) -> half way to the formula
-    assert float(thermal.temperature_target(np.array([90.0, 90, 90]), params=p)) == pytest.approx(33.0)
-    plain = float(thermal.temperature_target(np.array([145.0, 90, 90])))
-    aware = float(thermal.temperature_target(np.array([145.0, 90, 90]), params=p))
-    assert aware == pytest.approx(33.0 + 0.5 * (plain - 33.0))
-    # a saturated colour keeps its full temperature
+    for grey in (0.0, 90.0, 255.0):
+        assert float(thermal.temperature_target(np.array([grey] * 3), params=p)) == pytest.approx(33.0)
+    # (145, 90, 90): DisR = sqrt(28300) = 168.226, DisG = sqrt(56350) = 237.382, r = 0.414750;
+    # re-mapped (r = 1/2 -> 33): 55 - 22 * 2r = 36.7510; chroma 55 is half way between 20 and 90,
+    # so half way back to 33: 34.8755
+    assert float(thermal.temperature_target(np.array([145.0, 90, 90]), params=p)) == pytest.approx(34.8755, abs=1e-4)
+    # saturated colours keep their full temperature
     assert float(thermal.temperature_target(np.array([255.0, 0, 0]), params=p)) == pytest.approx(55.0)
+    assert float(thermal.temperature_target(np.array([0.0, 255, 0]), params=p)) == pytest.approx(30.0)
+
+
+def test_neutral_aware_adding_red_never_cools():
+    """Light cyan (200, 255, 255) plus red is white: the pull must not make it colder."""
+    p = thermal.ThermalParams(neutral_aware=True)
+    cyan, white = thermal.temperature_target(np.array([[200.0, 255, 255], [255.0, 255, 255]]), params=p)
+    assert white >= cyan
 
 
 def test_custom_range():

@@ -10,6 +10,14 @@ The curve is a TARGET. 55 C on skin burns: the device profile clamps it to its o
 (:func:`clamp_to_device`, default at most 40 C) and real thermal elements need a rate limit
 (:func:`slew_limit`). Neutral colours (black, white, grey) land mid-range under the formula; the
 ``neutral_aware`` option pulls desaturated colours to a skin-neutral ``neutral_c``.
+
+neutral_aware (decision): r = 1/2 exactly when green = red (DisR^2 - DisG^2 = 510 (G - R)), which
+includes every grey. The option first re-maps r piecewise-linearly so that r = 1/2 lands on
+``neutral_c`` (r = 0 -> temp_high, r = 1 -> temp_low), then pulls towards ``neutral_c`` by chroma.
+Then adding red never cools: it raises the re-mapped temperature and, when the colour is on the
+cold side (R < G), it can only lower the chroma, i.e. pull a cold value up. Pulling the plain
+formula (greys at 42.5 C) towards 33 C broke that: light cyan (200, 255, 255) read 37.4 C and
+white, one step redder, 33 C.
 """
 
 from __future__ import annotations
@@ -32,7 +40,8 @@ class ThermalParams:
     """Colour-to-temperature mapping.
 
     temp_low, temp_high : target temperatures (C) of pure green and pure red (thesis: 30 and 55).
-    neutral_aware : pull desaturated colours towards ``neutral_c``.
+    neutral_aware : greys map to ``neutral_c`` and desaturated colours are pulled towards it
+        (module docstring).
     neutral_c : skin-neutral temperature, C (default 33).
     chroma_low, chroma_high : chroma (max - min channel, 0..255) below which a colour is fully
         neutral and above which it keeps its full temperature (linear between), neutral_aware only.
@@ -90,8 +99,13 @@ def temperature_target(mean_rgb: np.ndarray, *, params: ThermalParams = ThermalP
     Always within [temp_low, temp_high]; a brighter red is never colder.
     """
     c = np.clip(np.nan_to_num(np.asarray(mean_rgb, dtype=np.float64)), 0.0, 255.0)
-    t = params.temp_high - (params.temp_high - params.temp_low) * warmth_ratio(c)
-    if params.neutral_aware:
+    r = warmth_ratio(c)
+    if not params.neutral_aware:
+        t = params.temp_high - (params.temp_high - params.temp_low) * r
+    else:
+        warm = params.temp_high - (params.temp_high - params.neutral_c) * (2.0 * r)
+        cold = params.neutral_c - (params.neutral_c - params.temp_low) * (2.0 * r - 1.0)
+        t = np.where(r <= 0.5, warm, cold)
         chroma = c.max(axis=-1) - c.min(axis=-1)
         keep = np.clip((chroma - params.chroma_low) / (params.chroma_high - params.chroma_low), 0.0, 1.0)
         t = params.neutral_c + keep * (t - params.neutral_c)
