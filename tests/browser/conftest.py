@@ -16,6 +16,9 @@ import httpx
 import pytest
 
 from browser_support import CHROMIUM, CHROMIUM_ARGS, ServerError, media_clip, start_server, stop_server, upload
+# Whichever conftest module pytest imports first answers ``from conftest import ...``: offer the
+# shared-data names here too (import them from shared_data in new code).
+from shared_data import MEDIA, REPO, SHARED, SHARED_CLIPS, need, shared_clip  # noqa: F401,E402
 
 VIEWPORT = {"width": 1440, "height": 900}
 
