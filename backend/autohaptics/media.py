@@ -210,12 +210,7 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
         stream.thread_type = "AUTO"
         mapping = None
         for frame in _decode_tolerant(c, stream, report, info.path):
-            x = frame.to_ndarray()
-            if x.ndim == 1:
-                x = x[None, :]
-            if not frame.format.is_planar:
-                x = x.reshape(-1, frame.layout.nb_channels).T
-            x = _to_float(x)
+            x = _to_float(_samples(frame))
             if mapping is None:
                 mapping = _channel_roles(frame.layout, x.shape[0])
                 report.main_channels, report.lfe_channel = mapping
@@ -642,6 +637,28 @@ def _decode_tolerant(c, streams, report: AudioReport, path: str):
 def _ffmpeg_reason(exc: Exception) -> str:
     msg = getattr(exc, "strerror", None) or str(exc)
     return str(msg).split(":")[-1].strip() or type(exc).__name__
+
+
+_SAMPLE_DTYPES = {"u8": np.uint8, "s16": np.int16, "s32": np.int32, "s64": np.int64, "flt": np.float32,
+                  "dbl": np.float64}
+
+
+def _samples(frame: av.AudioFrame) -> np.ndarray:
+    """Decoded samples as [shape=(channels, n)], read straight from the frame's planes.
+
+    (PyAV's ``to_ndarray`` crashes the interpreter on 8-channel planar frames; the planes'
+    buffers are read here with numpy instead.)
+    """
+    name = frame.format.name
+    base = name[:-1] if name.endswith("p") else name
+    dtype = _SAMPLE_DTYPES.get(base)
+    nch = frame.layout.nb_channels
+    n = frame.samples
+    if dtype is None:
+        raise MediaError(f"unsupported audio sample format {name!r}")
+    if frame.format.is_planar:
+        return np.stack([np.frombuffer(frame.planes[i], dtype=dtype, count=n) for i in range(nch)])
+    return np.frombuffer(frame.planes[0], dtype=dtype, count=n * nch).reshape(n, nch).T
 
 
 def _to_float(x: np.ndarray) -> np.ndarray:
