@@ -20,7 +20,7 @@ from autohaptics.errors import ParameterError
 from autohaptics.pipeline import resolve_params
 from autohaptics.timeline import Timeline
 
-from conftest import SHARED_CLIPS, shared_clip
+from shared_data import SHARED_CLIPS, shared_clip
 
 SHORT = ("bbb_1s_1280x720_vp8_vorbis.webm", "bbb_1080p60_2s_h264_aac6ch.mp4")
 
