@@ -133,6 +133,7 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
     duration = max(info.duration_s, 1e-9)
 
     prev_sig = None  # signature of the previous analysed frame (cut detection)
+    prev_sal_gray = None  # luma of the previous saliency proxy (the saliency motion cue)
     pending = None  # (tick, gray, rgb, time) waiting for its successor frame (flow pair)
     acc = _Accumulator(out)
     last_tick = -1
@@ -174,8 +175,11 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
             if need_colour:
                 acc.add_colour(k, stages["colour"].run(thermal.mean_colour, rgb))
             if want_sal:
-                smap = stages["saliency"].run(saliency.saliency_map, _resized(rgb, saliency_params.proxy_width),
-                                              params=saliency_params, backend=sal_backend)
+                sal_rgb = _resized(rgb, saliency_params.proxy_width)
+                sal_gray = cv2.cvtColor(sal_rgb, cv2.COLOR_RGB2GRAY) if saliency_params.motion_weight > 0 else None
+                smap = stages["saliency"].run(saliency.saliency_map, sal_rgb, params=saliency_params,
+                                              backend=sal_backend, prev_gray=prev_sal_gray)
+                prev_sal_gray = sal_gray
                 acc.add_beta(k, fusion.actuator_weights(smap, params=fusion_params))
             if need_flow:
                 pending = (k, gray, rgb, frame.time_s)
