@@ -274,7 +274,7 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def test_dask_cluster_gives_the_local_timelines(tmp_path):
+def test_dask_cluster_gives_the_local_timelines(tmp_path, capsys):
     distributed = pytest.importorskip("distributed")
     clips = [shared_clip(c) for c in (*SHORT, "sintel_trailer_480x204_h264_aac.mp4")]
     broken = _corrupt(tmp_path / "broken.mp4")
@@ -286,6 +286,11 @@ def test_dask_cluster_gives_the_local_timelines(tmp_path):
                                   scheduler_port=_free_port(), dashboard_address=None) as cluster:
         remote = run_batch([*clips, broken], tmp_path / "dask", params, preset, scheduler=cluster.scheduler_address,
                            progress=lambda stage, f: fractions.append(f))
+        # the command line on the same cluster: everything done is skipped, the broken file fails again
+        rc = main(["batch", *map(str, clips), str(broken), "-o", str(tmp_path / "dask"), "--preset", "fast",
+                   "--scheduler", cluster.scheduler_address, "--quiet"])
+        assert rc == 1
+        assert f"0 done, {len(clips)} skipped (up to date), 1 failed" in capsys.readouterr().err
 
     for report in (local, remote):
         assert [r.status for r in report.results] == ["failed", "done", "done", "done"]
