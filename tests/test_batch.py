@@ -228,16 +228,19 @@ def test_usage_errors_exit_2(tmp_path, media_dir, capsys):
 def _killer(clip: Path, kills: int):
     """A progress callback that SIGKILLs the worker process that has ``clip`` open, ``kills`` times."""
     me = psutil.Process()
-    state = {"left": kills, "fractions": []}
+    state = {"left": kills, "fractions": [], "killed": set()}
 
     def progress(stage: str, fraction: float) -> None:
         state["fractions"].append(fraction)
         if state["left"] <= 0:
             return
         for child in me.children(recursive=True):
+            if child.pid in state["killed"]:  # a killed process can list its files until it is gone
+                continue
             try:
                 if any(f.path == str(clip) for f in child.open_files()):
                     os.kill(child.pid, signal.SIGKILL)
+                    state["killed"].add(child.pid)
                     state["left"] -= 1
                     return
             except psutil.Error:
