@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -148,7 +149,19 @@ def test_identical_timelines_have_zero_error():
     r = M.compare_timelines(tl, tl.copy())
     h = M.headline(r)
     assert h == {"vibration_mae": 0.0, "onset_f1": 1.0, "onset_precision": 1.0, "onset_recall": 1.0,
-                 "temperature_mae_c": 0.0, "fan_iou": 1.0, "tick_difference": 0}
+                 "chair_onset_f1": 1.0, "temperature_mae_c": 0.0, "fan_iou": 1.0, "tick_difference": 0}
+
+
+def test_chair_onsets_ignore_which_actuator_carries_the_event():
+    ref, test = _tl(20), _tl(20)
+    ref.vibration[5:9, 0] = 0.8  # an event on A1 ...
+    test.vibration[5:9, 1] = 0.8  # ... the same event on A2
+    ref.vibration[12:14, 4] = 0.5
+    test.vibration[13:14, 3:6] = 0.5  # one tick late, spread over A4..A6
+    r = M.compare_timelines(ref, test)
+    assert r["vibration"]["onsets"]["f1"] == pytest.approx(2 * (1 / 4) * (1 / 2) / (1 / 4 + 1 / 2))
+    assert r["vibration"]["chair_onsets"] == {"precision": 1.0, "recall": 1.0, "f1": 1.0, "matched": 2,
+                                              "ref_onsets": 2, "test_onsets": 2, "tolerance_ticks": 1}
 
 
 def test_different_sources_are_flagged():
@@ -191,3 +204,70 @@ def test_cli_compare_errors_are_one_line_with_exit_code_2(tmp_path):
     r = subprocess.run(exe + [str(tmp_path / "a.json"), str(tmp_path / "b.json"), "--any-source"],
                        capture_output=True, text=True)
     assert r.returncode == 0 and "warning: the two timelines come from different sources" in r.stdout
+
+
+# ------------------------------------------------------- bench accuracy helpers
+def test_bench_config_parsing():
+    from autohaptics.bench.accuracy import Config, parse_config
+
+    assert parse_config("dis:flow.method=dis,flow.proxy_width=320") == Config(
+        "dis", "balanced", (("flow.method", "dis"), ("flow.proxy_width", "320")))
+    assert parse_config("cheap:preset=fast,tracks=vibration,fans") == Config(
+        "cheap", "fast", (("tracks", "vibration,fans"),))  # a piece without '=' continues the value
+    assert parse_config("plain") == Config("plain", "balanced", ())
+    for bad, msg in (("x:nosuch.knob=1", "unknown parameter"), ("x:preset=turbo", "unknown preset"),
+                     (":a=1", "NAME:k=v"), ("x:,tracks", "expected k=v")):
+        with pytest.raises(ParameterError, match=msg):
+            parse_config(bad)
+
+
+def test_pareto_front_known_answer():
+    from autohaptics.bench.accuracy import pareto_front
+
+    pts = [(1.0, 0.5), (2.0, 0.2), (1.5, 0.6), (10.0, 0.0), (2.0, 0.3), (0.9, 0.9)]
+    assert pareto_front(pts) == [5, 0, 1, 3]
+    assert pareto_front([(1.0, 1.0), (1.0, 1.0)]) == [0, 1]  # ties dominate nothing
+
+
+def test_stage_figures_from_stats():
+    from autohaptics.bench.accuracy import analysis_stage_seconds, skip_shares
+
+    stats = {"audio": {"seconds": 1.5}, "video": {
+        "seconds": 9.0, "decode": {"seconds": 5.0}, "proxy": {"seconds": 1.0}, "flow": {"seconds": 0.5,
+        "computed": 30, "ticks_computed": 30, "ticks_skipped": 10}, "saliency": {"seconds": 0.25, "computed": 4,
+        "ticks_computed": 4, "ticks_skipped": 36}, "static": {"seconds": 0.1, "ticks_static": 7},
+        "cuts": {"seconds": 0.0, "cuts": 2}, "frames": {"ticks": 40}}}
+    assert analysis_stage_seconds(stats) == pytest.approx(1.5 + 1.0 + 0.5 + 0.25 + 0.1)
+    sk = skip_shares(stats)
+    assert sk["flow"] == {"computed": 30, "skipped": 10, "share_computed": 0.75, "seconds": 0.5, "calls": 30}
+    assert sk["saliency"]["share_computed"] == 0.1 and "depth" not in sk
+    assert (sk["static_ticks"], sk["cuts"], sk["ticks"]) == (7, 2, 40)
+
+
+def test_run_child_reports_the_childs_own_peak_memory():
+    from autohaptics.bench.accuracy import run_child
+
+    small = run_child([sys.executable, "-c", "pass"])
+    big = run_child([sys.executable, "-c", "import sys; b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096]); "
+                                           "print('done'); sys.exit(3)"])
+    assert small.returncode == 0 and big.returncode == 3 and big.stdout.strip() == "done"
+    assert small.peak_rss_mb < 60  # neither this (large) test process nor an earlier child counts
+    assert 300 < big.peak_rss_mb < 360
+    assert run_child([sys.executable, "-c", "import time; time.sleep(30)"], timeout_s=1).returncode == -9
+
+
+@pytest.mark.slow
+def test_bench_accuracy_end_to_end(tmp_path):
+    """A 2 s synthetic clip through every configuration: table, verdicts, plot and JSON."""
+    r = subprocess.run([sys.executable, "-m", "autohaptics.cli.main", "bench", "accuracy", "--synth", "64x36@24:2",
+                        "--out", str(tmp_path), "--config", "dis-medium:flow.dis_preset=medium"],
+                       capture_output=True, text=True, timeout=900)
+    assert r.returncode == 0, r.stderr
+    assert "skipping audit" in r.stdout and "balanced onset F1" in r.stdout
+    doc = json.loads((tmp_path / "accuracy.json").read_text())
+    clip = doc["clips"][0]
+    assert set(clip["configs"]) == {"reference", "balanced", "fast", "balanced-noskip", "dis-medium"}
+    assert clip["configs"]["reference"]["error"]["vibration_mae"] == 0.0
+    for c in clip["configs"].values():
+        assert c["wall_s"] > 0 and c["peak_rss_mb"] > 50 and 0 <= c["error"]["fan_iou"] <= 1
+    assert (tmp_path / Path(clip["plot"]).name).stat().st_size > 10_000
