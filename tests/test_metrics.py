@@ -230,10 +230,10 @@ def test_pareto_front_known_answer():
 
 
 def test_stage_figures_from_stats():
-    from autohaptics.bench.accuracy import analysis_stage_seconds, skip_shares
+    from autohaptics.bench.accuracy import analysis_stage_seconds, skip_shares, stage_seconds
 
     stats = {"audio": {"seconds": 1.5}, "video": {
-        "seconds": 9.0, "decode": {"seconds": 5.0}, "proxy": {"seconds": 1.0}, "flow": {"seconds": 0.5,
+        "seconds": 9.0, "decode_wait": {"seconds": 5.0}, "proxy": {"seconds": 1.0}, "flow": {"seconds": 0.5,
         "computed": 30, "ticks_computed": 30, "ticks_skipped": 10}, "saliency": {"seconds": 0.25, "computed": 4,
         "ticks_computed": 4, "ticks_skipped": 36}, "static": {"seconds": 0.1, "ticks_static": 7},
         "cuts": {"seconds": 0.0, "cuts": 2}, "frames": {"ticks": 40}}}
@@ -242,6 +242,8 @@ def test_stage_figures_from_stats():
     assert sk["flow"] == {"computed": 30, "skipped": 10, "share_computed": 0.75, "seconds": 0.5, "calls": 30}
     assert sk["saliency"]["share_computed"] == 0.1 and "depth" not in sk
     assert (sk["static_ticks"], sk["cuts"], sk["ticks"]) == (7, 2, 40)
+    st_ = stage_seconds(stats)
+    assert st_["video.decode_wait"] == 5.0 and st_["video"] == 9.0 and st_["audio"] == 1.5 and "video.frames" not in st_
 
 
 def test_run_child_reports_the_childs_own_peak_memory():

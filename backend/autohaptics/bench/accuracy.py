@@ -42,7 +42,6 @@ DEFAULT_CONFIGS = ("reference", "balanced", "fast")
 NOSKIP = "balanced-noskip"
 TARGETS = {"x_decode": 1.25, "vibration_mae": 0.02, "onset_f1": 0.97, "temperature_mae_c": 0.3, "fan_iou": 0.9,
            "fast_analysis_speedup": 2.0}
-VIDEO_STAGES = ("decode", "proxy", "cuts", "static", "colour", "saliency", "flow", "depth")
 SKIP_STAGES = ("saliency", "flow", "depth")
 
 
@@ -283,7 +282,8 @@ def bench_clip(video: Path, configs: list[Config], out: Path, *, repeat: int = 1
                  "x_decode": wall / decode_s if decode_s > 0 else float("nan"),
                  "analysis_s": wall - decode_s, "stages": stage_seconds(rs[0]["stats"]),
                  "analysis_stage_s": statistics.median(analysis_stage_seconds(r["stats"]) for r in rs),
-                 "skipping": skip_shares(rs[0]["stats"]), "timeline": str(work / f"{c.name}.json")}
+                 "skipping": skip_shares(rs[0]["stats"]), "timeline": str(work / f"{c.name}.json"),
+                 "stats": rs[0]["stats"]}
         if ref is not None:
             report = compare_timelines(ref, timelines[c.name])
             entry["error"] = headline(report)
@@ -297,13 +297,18 @@ def bench_clip(video: Path, configs: list[Config], out: Path, *, repeat: int = 1
     return result
 
 
-def stage_seconds(stats: dict) -> dict:
-    """Seconds per stage from a timeline's stats: audio, the video stages, derive, total."""
-    out = {"hash": _sec(stats.get("hash")), "audio": _sec(stats.get("audio"))}
+def _video_stages(stats: dict) -> dict[str, dict]:
+    """The per-stage blocks of stats["video"] (every dict with "seconds"), in the pipeline's order."""
     video = stats.get("video") or {}
-    for name in VIDEO_STAGES:
-        out[f"video.{name}"] = _sec(video.get(name))
-    out["video"] = _sec(video)
+    return {k: v for k, v in video.items() if isinstance(v, dict) and "seconds" in v}
+
+
+def stage_seconds(stats: dict) -> dict:
+    """Seconds per stage from a timeline's stats: audio, each video stage, the video pass, derive, total."""
+    out = {"hash": _sec(stats.get("hash")), "audio": _sec(stats.get("audio"))}
+    for name, block in _video_stages(stats).items():
+        out[f"video.{name}"] = _sec(block)
+    out["video"] = _sec(stats.get("video"))
     out["derive"] = _sec(stats.get("derive"))
     out["total"] = float(stats.get("total_seconds") or 0.0)
     return out
@@ -311,10 +316,10 @@ def stage_seconds(stats: dict) -> dict:
 
 def analysis_stage_seconds(stats: dict) -> float:
     """Seconds spent analysing, not decoding: the audio pass (its decoding is a small part) plus
-    every video stage but "decode". Measured inside one run, so less exposed to the machine's
-    load than wall time minus a separately measured decode."""
-    video = stats.get("video") or {}
-    return _sec(stats.get("audio")) + sum(_sec(video.get(n)) for n in VIDEO_STAGES if n != "decode")
+    every video stage but decoding ("decode", "decode_wait"). Measured inside one run, so less
+    exposed to the machine's load than wall time minus a separately measured decode."""
+    return _sec(stats.get("audio")) + sum(_sec(b) for n, b in _video_stages(stats).items()
+                                          if not n.startswith("decode"))
 
 
 def skip_shares(stats: dict) -> dict:
@@ -376,8 +381,8 @@ def print_tables(res: dict, log=print) -> None:
         "video stages except decode, from the stats)")
     log("\nwhere the time goes (seconds per stage, from the timelines' stats):")
     names = list(res["configs"])
-    keys = [k for k in next(iter(res["configs"].values()))["stages"]]
-    log(table([[k] + [res["configs"][n]["stages"][k] for n in names] for k in keys], ["stage"] + names))
+    keys = list(dict.fromkeys(k for n in names for k in res["configs"][n]["stages"]))
+    log(table([[k] + [res["configs"][n]["stages"].get(k, 0.0) for n in names] for k in keys], ["stage"] + names))
     audited = [n for n in ("balanced", NOSKIP) if n in res["configs"]]
     if audited:
         log("\nskipping audit (ticks computed / skipped per stage):")
