@@ -84,7 +84,7 @@ def synth_clip(name: str, *, duration_s: float = CLIP_S, rgb=(200, 40, 30), movi
 def write_streams(path: Path, *, frames=None, fps: float | Fraction = 24, times_s=None, audio=None,
                   sample_rate: int = 48_000, layout: str = "stereo", audio_codec: str = "aac",
                   video_codec: str = "libx264", rotation: int | None = None, audio_start_s: float = 0.0,
-                  options: dict | None = None) -> Path:
+                  options: dict | None = None, pix_fmt: str = "yuv420p", container: str | None = None) -> Path:
     """Write frames and samples exactly as given (PyAV), for what synth cannot express.
 
     frames : RGB uint8 arrays [shape=(h, w, 3)]; times_s : their presentation times, s (default
@@ -93,12 +93,12 @@ def write_streams(path: Path, *, frames=None, fps: float | Fraction = 24, times_
     """
     import av
 
-    with av.open(str(path), "w", options=options or {}) as c:
+    with av.open(str(path), "w", format=container, options=options or {}) as c:
         vs = as_ = None
         if frames is not None:
             vs = c.add_stream(video_codec, rate=Fraction(fps).limit_denominator(1001))
             vs.height, vs.width = frames[0].shape[:2]
-            vs.pix_fmt = "yuv420p"
+            vs.pix_fmt = pix_fmt
             if times_s is not None:
                 vs.time_base = Fraction(1, 1000)
             if rotation is not None:
@@ -308,6 +308,10 @@ CASES: list[Case] = [
          truncated(build_with("faststart.mp4", lambda p: write_streams(
              p, frames=_frames(48), audio=_noise(2.0), options={"movflags": "faststart"})), "truncated_fs.mp4"),
          "error", "truncated or damaged file"),
+    Case("truncated_mp4_faststart_allowed",
+         truncated(build_with("faststart.mp4", lambda p: write_streams(
+             p, frames=_frames(48), audio=_noise(2.0), options={"movflags": "faststart"})), "truncated_fs.mp4"),
+         "timeline", args=("--allow-truncated",), duration_s=2.0),
     Case("truncated_webm_50pct", truncated(_webm, "truncated.webm"), "error", "truncated or damaged file"),
     Case("truncated_webm_allowed", truncated(_webm, "truncated.webm"), "timeline", args=("--allow-truncated",),
          duration_s=CLIP_S),
@@ -343,6 +347,13 @@ CASES: list[Case] = [
          args=("--preset", "reference"), duration_s=CLIP_S),
     Case("frames_7680x4320", _8k, "timeline", duration_s=3 / 24),
     Case("frames_7680x4320_reference", _8k, "timeline", args=("--preset", "reference"), duration_s=3 / 24),
+    Case("odd_size_17x15_yuv444", build_with("odd.mkv", lambda p: write_streams(
+        p, frames=_frames(24, size=(15, 17)), audio=_noise(CLIP_S), pix_fmt="yuv444p")), "timeline",
+         duration_s=CLIP_S),
+    Case("mpeg_ts_mpeg2_mp2", build_with("stream.ts", lambda p: write_streams(
+        p, frames=_frames(24), audio=_noise(CLIP_S), video_codec="mpeg2video", audio_codec="mp2",
+        container="mpegts")), "timeline", duration_s=CLIP_S),
+    Case("avi_mpeg4_pcm", synth_clip("clip.avi"), "timeline", duration_s=CLIP_S, check=_vibrates),
     Case("variable_frame_rate", build_with("vfr.mkv", _vfr), "timeline"),
     Case("fps_23_976", synth_clip("ntsc.mp4", fps=Fraction(24000, 1001)), "timeline", duration_s=CLIP_S),
     Case("fps_120", synth_clip("fps120.mp4", fps=120), "timeline", duration_s=CLIP_S),
