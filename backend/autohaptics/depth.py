@@ -15,10 +15,18 @@ Backends:
   The expansion cue is on an ABSOLUTE scale (decision): the divergence is a relative growth rate
   (1/s; the flow's px per frame over px, divided by the frame interval), the same at any proxy
   size and frame rate; the cue is ``min(1, rate / expansion_full)``. For an object approaching at
-  constant speed the rate is 2 / (time to contact), so the default 1/s saturates at a contact
-  time of 2 s. A min-max normalised divergence (the first version) stretched flow noise to the
-  full 0..1 range whenever nothing approached, so "near" cells were a coin toss between two
-  encodes of one film; identical frames gave a full-range random expansion map.
+  constant speed the rate is 2 / (time to contact), so the default 0.5/s saturates at a contact
+  time of 4 s (measured divergences run low: DIS reads an expansion about 16 % short and the
+  smoothing spreads it). A min-max normalised divergence (the first version) stretched flow
+  noise to the full 0..1 range whenever nothing approached, so "near" cells were a coin toss
+  between two encodes of one film; identical frames gave a full-range random expansion map.
+  The rate map is grey-dilated by ``expansion_reach`` (0.05 frame widths) before smoothing: an
+  expanding object's divergence lies inside it while its image motion peaks at its boundary, so
+  without the dilation "strong motion AND near" was a thin band where the two fall-offs cross,
+  and the fans flickered between renders. Measured on a 5 s synthetic scene (a textured disc
+  growing from 8 % to 40 % of the frame width in 2 s, plus colour cuts and sounds) rendered at
+  320x180 @ 24 fps and 1280x720 @ 30 fps: fan-cell IoU 0.62 (first version with the 1/s scale)
+  -> 0.97; sample_scene 0.89 -> 0.91; Sintel's two encodes 0.858 -> 0.865.
 - ``"onnx"``: any monocular depth network exported to ONNX (e.g. a MiDaS-style model), loaded
   from a user-supplied file; ``output_kind`` says whether it outputs depth (larger = farther) or
   disparity / inverse depth (larger = nearer).
@@ -47,8 +55,10 @@ class DepthParams:
     proxy_width : width of the RGB proxy depth runs on, px (default 128).
     w_position, w_detail, w_expansion : weights of the embedded cues (normalised to sum 1; a zero
         weight skips the cue; expansion needs the flow).
-    expansion_full : relative growth rate (1/s) at which the expansion cue reaches 1 (default 1:
-        an approach with 2 s to contact).
+    expansion_full : relative growth rate (1/s) at which the expansion cue reaches 1 (default 0.5:
+        an approach with 4 s to contact).
+    expansion_reach : the expansion cue reaches this far (frame widths) beyond where it is
+        measured, so an expanding object's boundary counts as near too (0 = not at all).
     onnx_model, onnx_input_size (w, h), onnx_mean, onnx_std (0..1 scale), onnx_channel_order.
     output_kind : "depth" (larger = farther) | "disparity" (larger = nearer) for the ONNX output.
     """
@@ -58,7 +68,8 @@ class DepthParams:
     w_position: float = 0.4
     w_detail: float = 0.2
     w_expansion: float = 0.4
-    expansion_full: float = 1.0
+    expansion_full: float = 0.5
+    expansion_reach: float = 0.05
     onnx_model: str | None = None
     onnx_input_size: tuple[int, int] = (256, 256)
     onnx_mean: tuple[float, float, float] = (0.485, 0.456, 0.406)
@@ -79,6 +90,8 @@ class DepthParams:
             raise ParameterError("depth.backend 'onnx' needs depth.onnx_model (path of an .onnx file)")
         if not (0.0 < float(self.expansion_full) < 1e6):
             raise ParameterError(f"depth.expansion_full must be a positive rate (1/s), got {self.expansion_full!r}")
+        if not (0.0 <= float(self.expansion_reach) <= 0.5):
+            raise ParameterError(f"depth.expansion_reach must lie in 0..0.5 frame widths, got {self.expansion_reach!r}")
         if not (8 <= int(self.proxy_width) <= 4096):
             raise ParameterError(f"depth.proxy_width must lie in 8..4096 px, got {self.proxy_width!r}")
 
@@ -139,7 +152,11 @@ def _embedded(rgb: np.ndarray, params: DepthParams, flow: np.ndarray | None, dt:
                 f = cv2.resize(f, (w, h), interpolation=cv2.INTER_LINEAR) * np.array([sx, sy], np.float32)
             f = np.where(np.isfinite(f), f, 0.0)
             rate = (np.gradient(f[..., 0], axis=1) + np.gradient(f[..., 1], axis=0)) / dt  # 1/s
-            rate = cv2.GaussianBlur(np.maximum(rate, 0.0).astype(np.float32), (0, 0), max(1.0, 0.04 * w))
+            rate = np.maximum(rate, 0.0).astype(np.float32)
+            reach = int(round(float(params.expansion_reach) * w))
+            if reach >= 1:
+                rate = cv2.dilate(rate, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * reach + 1, 2 * reach + 1)))
+            rate = cv2.GaussianBlur(rate, (0, 0), max(1.0, 0.04 * w))
             cues.append(np.clip(rate / float(params.expansion_full), 0.0, 1.0))
             weights.append(params.w_expansion)
     if not cues:
