@@ -25,8 +25,6 @@ from autohaptics.timeline import NORMALISED_FEATURES, Timeline
 from stress_inputs import CASES, Worker, case, expected_ticks, long_film
 
 BUGS = {
-    "audio_7_1_aac": "PyAV 18 AudioFrame.planes reads past AVFrame.data for 8-channel planar audio "
-                     "(9 planes): media.iter_audio's frame.to_ndarray() segfaults",
     "unsupported_video_codec": "media._is_real_video reads s.codec_context.width, codec_context is None "
                                "for a codec without decoder: AttributeError ('internal error')",
     "unsupported_audio_codec": "media._audio_info reads s.codec_context.layout, codec_context is None "
