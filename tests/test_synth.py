@@ -73,6 +73,19 @@ def test_iter_frames_count_and_reuse():
     np.testing.assert_allclose([t for t, _ in frames[:3]], [0, 1001 / 30000, 2002 / 30000])
 
 
+def test_iter_frames_equals_render_frame_with_a_cached_background():
+    """A moving textured shape over a static textured background (rendered once per segment), a
+    fading segment and a panning one (rendered every frame): every frame equals render_frame."""
+    tex = synth.Texture("noise", 0.1, 0.4, seed=2)
+    sc = Scene(duration_s=1.5, background=(Segment(0, 0.5, (90, 100, 110), texture=tex),
+                                           Segment(0.5, 1.0, (200, 40, 30), rgb_end=(30, 40, 200), texture=tex),
+                                           Segment(1.0, 1.5, (120, 110, 100), texture=tex, pan=(0.3, 0.0))),
+               shapes=(Shape("circle", (240, 150, 40), xy0=(0.2, 0.5), xy1=(0.8, 0.4), size0=(0.1, 0.2),
+                             size1=(0.3, 0.5), texture=synth.Texture("checker", 0.2, 0.5)),))
+    for t, frame in synth.iter_frames(sc, width=64, height=36, fps=24):
+        np.testing.assert_array_equal(frame, synth.render_frame(sc, t, width=64, height=36))
+
+
 def test_audio_levels_and_channels():
     sc = Scene(duration_s=1.0, audio=(Tone(0.1, 0.9, 440.0, level_dbfs=-20.0, channels=(1,)),
                                       Noise(0.1, 0.9, level_dbfs=-30.0, colour="pink", channels=(0,))))

@@ -220,7 +220,11 @@ class Scene:
 def render_frame(scene: Scene, t: float, *, width: int, height: int) -> np.ndarray:
     """The picture at time ``t`` seconds, uint8 [shape=(height, width, 3)], RGB."""
     _check_size(width, height)
-    img = _background(scene, t, width, height)
+    return _render(scene, t, width, height, _background(scene, t, width, height))
+
+
+def _render(scene: Scene, t: float, width: int, height: int, img: np.ndarray) -> np.ndarray:
+    """Draw the shapes visible at ``t`` over ``img`` (float64 background, modified) and quantise."""
     for sh in scene.shapes:
         geom = _shape_geometry(sh, t, scene.duration_s)
         if geom is not None:
@@ -233,18 +237,27 @@ def iter_frames(scene: Scene, *, width: int, height: int, fps: float | Fraction
     """(time_s, rgb uint8 [shape=(height, width, 3)]) for every frame i at t = i / fps.
 
     The frame count is round(duration_s * fps), at least 1. A frame whose content cannot differ
-    from the previous one (static background, no moving or blinking shape) reuses it; the yielded
-    array must be treated as read-only.
+    from the previous one (static background, no moving or blinking shape) reuses it, and a static
+    background (no fade, no pan) is rendered once per segment with shapes drawn over a copy
+    (the same pixels as :func:`render_frame`); the yielded array must be treated as read-only.
     """
     rate = _fps_fraction(fps)
     _check_size(width, height)
     n = max(1, int(round(scene.duration_s * rate)))
     prev_key, prev = None, None
+    bg_key, bg = None, None
     for i in range(n):
         t = float(i / rate)
         key = _frame_key(scene, t)
         if key is None or key != prev_key:
-            prev = render_frame(scene, t, width=width, height=height)
+            seg = _segment_at(scene, t)
+            if seg is not None and seg.rgb_end is None and (seg.texture is None or seg.pan == (0.0, 0.0)):
+                if bg_key is not seg:
+                    bg_key, bg = seg, _background(scene, t, width, height)
+                img = bg.copy()
+            else:
+                img = _background(scene, t, width, height)
+            prev = _render(scene, t, width, height, img)
             prev.flags.writeable = False
             prev_key = key
         yield t, prev
