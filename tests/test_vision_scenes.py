@@ -1,5 +1,6 @@
 """The vision path end to end: synthetic scenes with known answers through pipeline.generate
-(default parameters), resolution and frame-rate invariance, and the real clips in ../shared/media.
+(default parameters), resolution and frame-rate invariance, and the real clips in ../shared/media
+(slow tier: five whole clips).
 
 Scenes are written with synth.write_scene (H.264 + AAC, 320x180 @ 24 fps unless stated) into a
 temporary folder. Ticks are 100 ms: tick k covers [0.1 k, 0.1 (k + 1)) s.
@@ -201,6 +202,7 @@ def clip_timeline(cache: dict, name: str) -> Timeline:
     return cache[name]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", SHARED_CLIPS)
 def test_every_shared_clip_generates_a_valid_timeline(clip_timelines, name):
     tl = clip_timeline(clip_timelines, name)
@@ -224,12 +226,14 @@ def sintel(clip_timelines) -> dict:
     return r
 
 
+@pytest.mark.slow
 def test_sintel_encodes_agree_on_vibration_and_temperature(sintel):
     assert sintel["ticks"] >= 520  # 52.2 s in common (the VP8 encode runs 0.5 s longer)
     assert sintel["vibration_mae"] <= 0.02
     assert sintel["temperature_mae"] <= 0.5
 
 
+@pytest.mark.slow
 def test_sintel_encodes_agree_on_which_ticks_blow(sintel, clip_timelines):
     a, b = (clip_timelines[name] for name in SINTEL)
     n = sintel["ticks"]
@@ -238,11 +242,12 @@ def test_sintel_encodes_agree_on_which_ticks_blow(sintel, clip_timelines):
     assert (on_a != on_b).sum() <= 0.05 * (on_a | on_b).sum()
 
 
+@pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason=(
     "measured 0.865: the two encodes blow on the same ticks (47 and 48 of 522) but the cell patterns "
     "differ: 180 cells flip on the motion test (>= 0.5 of the tick's strongest cell) and 148 on the "
     "nearness test (>= 0.5); VP8 at 640x272 and H.264 at 480x204 give different 160x68 flows (per-tick "
-    "mean motion agrees, correlation 0.998; per-cell relative motion differs by ~0.05). Smoothing the "
-    "cell grids or lower bars only reach 0.87-0.89 by turning more cells on"))
+    "mean motion agrees, correlation 0.998; per cell the relative motion differs by 0.06 and the nearness by 0.03 "
+    "on average). Smoothing the cell grids or lower bars only reach 0.87-0.89 by turning more cells on"))
 def test_sintel_encodes_agree_on_fan_cells(sintel):
     assert sintel["fan_iou"] >= 0.9
