@@ -12,6 +12,11 @@ Backends (the fusion that uses the map is fixed, the backend is a choice):
 
 Optionally a motion cue (frame difference with the previous frame) is blended in. A flat frame
 (black, one colour) has no salient region: its map is all zeros.
+
+ONNX outputs (decision): (1, C, H, W) and (1, H, W, C) are both read as maps, the channel axis
+being the smaller of axes 1 and 3 (the input's layout breaks a tie); the first version took the
+first index of every leading axis, which turned an NHWC (1, H, W, 1) output into its first image
+row. The map is resized back to the proxy (bilinear).
 """
 
 from __future__ import annotations
