@@ -104,7 +104,7 @@ def test_upload_job_progress_timeline_and_binary(client, data_dir):
         np.testing.assert_allclose(blocks[f"features.{name}"], values, atol=0.5 / 255 + 1e-4)
     # The job left its feature cache and generated timeline in the project, nothing in work/.
     pdir = data_dir / "projects" / pid
-    assert (pdir / "analysis.npz").is_file() and (pdir / "generated.json").is_file()
+    assert (pdir / "analysis.npz").is_file() and (pdir / "generated.npz").is_file()
     assert list((data_dir / "work").iterdir()) == []
     assert pid in [p["id"] for p in client.get("/api/projects").json()]
 
@@ -136,23 +136,25 @@ def test_edit_undo_redo_reload_and_regenerate_keep_edits(client, data_dir):
     set_op = {"op": "set", "lanes": ["A4"], "t0": 2, "t1": 6, "value": 0.9}
     r = client.post(f"/api/projects/{pid}/edits", json={"base_revision": rev, "op": set_op})
     assert r.status_code == 200, r.text
-    assert r.json() == {"revision": rev + 1, "cursor": 1, "op": set_op}
+    assert r.json() == {"revision": rev + 1, "cursor": 1, "op": set_op, "markers": []}
     # Two editors sent an edit based on the same revision: the second one is refused.
     stale = client.post(f"/api/projects/{pid}/edits", json={"base_revision": rev, "op": set_op})
     assert stale.status_code == 409 and "revision" in stale.json()["detail"]
     marker = {"op": "marker_add", "marker": {"id": "m1", "t_s": 0.3, "label": "door"}}
-    assert client.post(f"/api/projects/{pid}/edits", json={"base_revision": rev + 1, "op": marker}).status_code == 200
+    r = client.post(f"/api/projects/{pid}/edits", json={"base_revision": rev + 1, "op": marker})
+    assert r.status_code == 200 and r.json()["markers"] == [{"id": "m1", "t_s": 0.3, "label": "door"}]
 
     undo = client.post(f"/api/projects/{pid}/undo", json={"base_revision": rev + 2})
-    assert undo.json() == {"revision": rev + 3, "cursor": 1}
+    assert undo.json() == {"revision": rev + 3, "cursor": 1, "markers": []}
     assert client.get(f"/api/projects/{pid}/timeline").json()["markers"] == []
     assert client.post(f"/api/projects/{pid}/undo", json={"base_revision": rev}).status_code == 409
     redo = client.post(f"/api/projects/{pid}/redo", json={"base_revision": rev + 3})
-    assert redo.json() == {"revision": rev + 4, "cursor": 2}
+    assert redo.json() == {"revision": rev + 4, "cursor": 2, "markers": [{"id": "m1", "t_s": 0.3, "label": "door"}]}
     assert client.post(f"/api/projects/{pid}/redo", json={"base_revision": rev + 4}).json()["detail"] == \
         "nothing to redo"
     edits = client.get(f"/api/projects/{pid}/edits").json()
-    assert edits == {"revision": rev + 4, "cursor": 2, "ops": [set_op, marker]}
+    assert edits == {"revision": rev + 4, "cursor": 2, "ops": [set_op, marker],
+                     "markers": [{"id": "m1", "t_s": 0.3, "label": "door"}]}
 
     # A new server on the same data folder sees the same history and composition.
     with TestClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as other:

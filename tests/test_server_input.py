@@ -167,7 +167,7 @@ def test_edits_need_a_timeline_and_valid_ops(client, unchanged):
         assert r.status_code == 400 and "colour" in r.json()["detail"]
         r = client.post(f"/api/projects/{pid}/generate", content=b"{not json", headers={"Content-Type": "application/json"})
         assert r.status_code == 400
-        assert client.get(f"/api/projects/{pid}/edits").json() == {"revision": 0, "cursor": 0, "ops": []}
+        assert client.get(f"/api/projects/{pid}/edits").json() == {"revision": 0, "cursor": 0, "ops": [], "markers": []}
     finally:
         if pid:
             client.delete(f"/api/projects/{pid}")

@@ -51,6 +51,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         if interrupted:
             log.warning("%d job(s) were interrupted by a server restart", len(interrupted))
         timelines = Timelines(store)
+        moved = await anyio.to_thread.run_sync(timelines.migrate_imports)
+        if moved:
+            log.info("%d imported timeline(s) moved out of the edit list into imports/", moved)
         runner = JobRunner(store, workers=settings.jobs, mp_context=settings.mp_context, timelines=timelines)
         await anyio.to_thread.run_sync(runner.start)
         chair_service = ChairService(store, timelines)

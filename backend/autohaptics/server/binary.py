@@ -5,7 +5,8 @@ Layout::
     offset 0   4 bytes  magic "AHTL"
            4   u32 LE   format version (1)
            8   u32 LE   header length H (bytes)
-          12   H bytes  UTF-8 JSON header {n_ticks, tick_s, revision, blocks: [{name, dtype, shape, offset, scale}]}
+          12   H bytes  UTF-8 JSON header {n_ticks, tick_s, revision, blocks: [{name, dtype, shape, offset, scale}],
+                        markers (composed layer only)}
       12 + H   blocks, each starting at a multiple of 4 bytes, little-endian, at the header's offsets
 
 A ``u8`` block stores ``round(value / scale)`` with ``scale = 1/255`` (value = byte * scale); an
@@ -61,9 +62,29 @@ def timeline_blocks(tl: Timeline) -> list[Block]:
     return blocks
 
 
-def encode(tl: Timeline, *, revision: int) -> bytes:
-    """The binary form of ``tl`` (see the module docstring)."""
-    blocks = timeline_blocks(tl)
+def select_blocks(blocks: list[Block], names: list[str] | None) -> list[Block]:
+    """The blocks named in ``names`` (None: all), in file order. A name is a block name
+    (``vibration``, ``temperature_c``, ``fans``, ``fan_activity``, ``features.loudness``) or
+    ``features`` for every feature block; ParameterError for an unknown one."""
+    if names is None:
+        return list(blocks)
+    known = {b.name for b in blocks}
+    wanted = set()
+    for name in names:
+        if name == "features":
+            wanted.update(n for n in known if n.startswith("features."))
+        elif name in known:
+            wanted.add(name)
+        else:
+            raise ParameterError(f"unknown block {name!r}; blocks are {', '.join(sorted(known | {'features'}))}")
+    return [b for b in blocks if b.name in wanted]
+
+
+def encode(tl: Timeline, *, revision: int, blocks: list[Block] | None = None, header: dict | None = None) -> bytes:
+    """The binary form of ``tl`` (see the module docstring): ``blocks`` (default: every block of
+    ``tl``, see :func:`timeline_blocks`), ``header`` extra keys for the JSON header."""
+    blocks = timeline_blocks(tl) if blocks is None else blocks
+    extra = dict(header or {})
     entries: list[dict] = []
     # The header length changes the offsets and the offsets change the header: iterate until stable.
     header_len = 0
@@ -74,15 +95,15 @@ def encode(tl: Timeline, *, revision: int) -> bytes:
             entries.append({"name": b.name, "dtype": b.dtype, "shape": list(b.data.shape), "offset": offset,
                             "scale": U8_SCALE if b.dtype == "u8" else 1.0})
             offset = _align(offset + b.data.nbytes)
-        header = json.dumps({"n_ticks": int(tl.n_ticks), "tick_s": tl.tick_s, "revision": int(revision),
-                             "blocks": entries}, separators=(",", ":")).encode("utf-8")
-        if len(header) == header_len:
+        head = json.dumps({"n_ticks": int(tl.n_ticks), "tick_s": tl.tick_s, "revision": int(revision),
+                           "blocks": entries, **extra}, separators=(",", ":")).encode("utf-8")
+        if len(head) == header_len:
             break
-        header_len = len(header)
+        header_len = len(head)
     total = _align(entries[-1]["offset"] + blocks[-1].data.nbytes) if entries else _align(_PREFIX.size + header_len)
     out = bytearray(total)
     _PREFIX.pack_into(out, 0, MAGIC, VERSION, header_len)
-    out[_PREFIX.size:_PREFIX.size + header_len] = header
+    out[_PREFIX.size:_PREFIX.size + header_len] = head
     for b, e in zip(blocks, entries):
         raw = np.ascontiguousarray(b.data, dtype=_DTYPES[b.dtype]).tobytes()
         out[e["offset"]:e["offset"] + len(raw)] = raw

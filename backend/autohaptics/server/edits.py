@@ -15,13 +15,19 @@ range) by k / (n - 1) or (n - 1 - k) / (n - 1): the first tick of a fade-in and 
 a fade-out are 0 (temperature: neutral), the opposite ends keep their value. A one-tick fade
 gives 0.
 
+An ``import`` op arrives with its document (``timeline``); the service stores the document in a
+file and keeps the op as ``{"op": "import", "ref": ID, "name", "n_ticks"}`` (the stored form), so
+the edit list stays light. :func:`apply_ops` reads a stored import through ``imports(ref)``.
+
 Everything here is a pure function: Timeline in, new Timeline out; the input is never modified.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -52,6 +58,10 @@ _REQUIRED: dict[str, tuple[str, ...]] = {
     "import": ("timeline",),
 }
 OPS: tuple[str, ...] = tuple(_REQUIRED)
+IMPORT_STORED_FIELDS = ("ref", "name", "n_ticks")  # an import op as stored: its document lives in a file
+MARKER_OPS = ("marker_add", "marker_update", "marker_delete")
+_REF = re.compile(r"^[0-9a-f]{32}$")
+ImportResolver = Callable[[str], Timeline]
 
 
 # ------------------------------------------------------------------------- public
@@ -65,26 +75,58 @@ def validate_op(op: Any) -> dict:
 
 
 def apply_ops(generated: Timeline, ops: Sequence[dict], *, strict: bool = False,
-              markers: Sequence[dict] = ()) -> tuple[Timeline, list[dict]]:
+              markers: Sequence[dict] = (), imports: ImportResolver | None = None) -> tuple[Timeline, list[dict]]:
     """Compose ``ops`` in order over a copy of ``generated``, starting from ``markers``.
 
     Returns (composed timeline, markers sorted by time). ``strict`` (used when an operation is
     submitted) also rejects a range starting past the end of the timeline and marker operations
     naming a marker that does not exist (update/delete) or already exists (add); without it
     (recomposing stored history) such operations are no-ops or replacements, so stored history
-    always composes.
+    always composes. ``imports`` returns the document of a stored ``import`` op by its ``ref``.
     """
     tl = generated.copy()
     by_id: dict[str, dict] = {m["id"]: dict(m) for m in markers}
     for index, raw in enumerate(ops):
         op, parsed = _normalise(raw)
         try:
+            if op["op"] == "import" and parsed is None:
+                if imports is None:
+                    raise ParameterError(f"stored import {op['ref']} cannot be read here (no import store)")
+                parsed = imports(op["ref"])
             _APPLY[op["op"]](tl, by_id, op, parsed, strict)
         except ParameterError as exc:
             where = f"operation {index} ({op['op']})" if len(ops) > 1 else f"op '{op['op']}'"
             raise ParameterError(f"{where}: {exc}") from None
     tl.validate()
-    return tl, sorted(by_id.values(), key=lambda m: (m["t_s"], m["id"]))
+    return tl, _sorted_markers(by_id)
+
+
+def fold_markers(ops: Sequence[dict], duration_s: float) -> list[dict]:
+    """The markers after ``ops`` on a timeline of ``duration_s`` seconds, exactly as
+    :func:`apply_ops` composes them, without touching any track (other ops are skipped)."""
+    span = _Duration(float(duration_s))
+    by_id: dict[str, dict] = {}
+    for raw in ops:
+        if isinstance(raw, dict) and raw.get("op") in MARKER_OPS:
+            op, parsed = _normalise(raw)
+            _APPLY[op["op"]](span, by_id, op, parsed, False)
+    return _sorted_markers(by_id)
+
+
+def is_stored_import(op: dict) -> bool:
+    """An ``import`` op in its stored form (its document in a file)."""
+    return op.get("op") == "import" and "ref" in op
+
+
+@dataclass(frozen=True)
+class _Duration:
+    """What the marker operations read of a timeline."""
+
+    duration_s: float
+
+
+def _sorted_markers(by_id: dict[str, dict]) -> list[dict]:
+    return sorted(by_id.values(), key=lambda m: (m["t_s"], m["id"]))
 
 
 # -------------------------------------------------------------------- validation
@@ -94,6 +136,8 @@ def _normalise(op: Any) -> tuple[dict, Any]:
     name = op.get("op")
     if name not in _REQUIRED:
         raise ParameterError(f"field 'op' must be one of {', '.join(OPS)}; got {name!r}")
+    if name == "import" and "ref" in op:
+        return _stored_import(op), None
     required = _REQUIRED[name]
     unknown = sorted(set(op) - set(required) - {"op"})
     if unknown:
@@ -143,6 +187,21 @@ def _normalise(op: Any) -> tuple[dict, Any]:
             raise ParameterError(f"op 'import': field 'timeline': {exc}") from None
         out["timeline"] = doc
     return out, parsed
+
+
+def _stored_import(op: dict) -> dict:
+    unknown = sorted(set(op) - set(IMPORT_STORED_FIELDS) - {"op"})
+    if unknown:
+        raise ParameterError(f"op 'import': unknown field '{unknown[0]}' (a stored import has "
+                             f"{', '.join(IMPORT_STORED_FIELDS)})")
+    ref, name, n = op.get("ref"), op.get("name", ""), op.get("n_ticks")
+    if not isinstance(ref, str) or not _REF.match(ref):
+        raise ParameterError(f"op 'import': field 'ref' must be a stored import id, got {ref!r}")
+    if not isinstance(name, str):
+        raise ParameterError(f"op 'import': field 'name' must be a string, got {name!r}")
+    if not isinstance(n, int) or isinstance(n, bool) or n < 1:
+        raise ParameterError(f"op 'import': field 'n_ticks' must be a positive integer, got {n!r}")
+    return {"op": "import", "ref": ref, "name": name, "n_ticks": n}
 
 
 def _lane(name: str, field: str, value: Any) -> str:

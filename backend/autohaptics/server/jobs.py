@@ -10,7 +10,7 @@ Life of a job:
 2. In the worker, :func:`run_job` sends ``("started", id, time)`` then ``("progress", id, stage,
    fraction)`` messages on the Manager queue, runs :func:`pipeline.analyse` with the job's Manager
    Event as the cancel token, derives the timeline, and writes ``analysis.npz`` and
-   ``generated.json`` into the work folder (never into the project folder).
+   ``generated.npz`` into the work folder (never into the project folder).
 3. A reader thread turns queue messages into the job's live state (``running``, progress, stage),
    stores them and forwards them to SSE subscribers.
 4. When the future completes, a finisher thread moves the outputs into the project
@@ -45,7 +45,7 @@ from typing import Any
 
 from autohaptics.errors import AutohapticsError, CancelledError
 from autohaptics.progress import check_cancel
-from autohaptics.server.store import INTERRUPTED, Conflict, NotFound, Store, now_iso
+from autohaptics.server.store import GENERATED, INTERRUPTED, Conflict, NotFound, Store, now_iso
 
 log = logging.getLogger("autohaptics.server.jobs")
 
@@ -106,6 +106,7 @@ def run_job(spec: dict, events, cancel) -> dict:
     Raises CancelledError when ``cancel`` is set, MediaError / ParameterError for unusable input.
     """
     from autohaptics import pipeline
+    from autohaptics.server.generated import save_npz
     from autohaptics.server.timelines import derive_timeline, params_from_doc
 
     started = now_iso()
@@ -119,7 +120,7 @@ def run_job(spec: dict, events, cancel) -> dict:
         raise CancelledError("the project was deleted")
     analysis.save(work / "analysis.npz")
     tl = derive_timeline(analysis, spec["params"], name=spec["name"])
-    tl.save(work / "generated.json")
+    save_npz(tl, work / GENERATED)
     return {"started_at": started, "n_ticks": tl.n_ticks}
 
 
@@ -167,6 +168,7 @@ class JobRunner:
         self._pool: ProcessPoolExecutor | None = None
         self._finished: queue_mod.Queue = queue_mod.Queue()
         self._threads: list[threading.Thread] = []
+        self._params_locks: dict[str, threading.Lock] = {}
         self._stopping = False
 
     # ---------------------------------------------------------------- lifecycle
@@ -399,24 +401,33 @@ class JobRunner:
         status, error, result = _outcome(future, live)
         if self._stopping and status != "done":
             return  # stop() records it as interrupted
-        params = live.params
-        if status == "done":
+        # Under the project's parameter lock: a parameter change either lands before the current
+        # parameters are read here (and is derived with), or after the job is gone.
+        with self.params_lock(live.project_id):
+            params = live.params
+            if status == "done":
+                try:
+                    params = self._current_params(live)
+                except Exception as exc:  # the outputs are unusable: report, keep the previous timeline
+                    status, error = "failed", f"{type(exc).__name__}: {exc}"
+            if error:
+                error = error.replace(live.media_path, live.name)
             try:
-                params = self._current_params(live)
-            except Exception as exc:  # the outputs are unusable: report, keep the previous timeline
-                status, error = "failed", f"{type(exc).__name__}: {exc}"
-        if error:
-            error = error.replace(live.media_path, live.name)
-        try:
-            job = self.store.finish_job(job_id, status, error=error, params=params,
-                                        started_at=(result or {}).get("started_at") or live.started_at)
-        except Exception as exc:
-            log.exception("storing the end of job %s", job_id)
-            job = self.store.finish_job(job_id, "failed", error=f"{type(exc).__name__}: {exc}")
-        with self._lock:
-            live.status = job["status"] if job else "cancelled"
-            self._live.pop(job_id, None)
+                job = self.store.finish_job(job_id, status, error=error, params=params,
+                                            started_at=(result or {}).get("started_at") or live.started_at)
+            except Exception as exc:
+                log.exception("storing the end of job %s", job_id)
+                job = self.store.finish_job(job_id, "failed", error=f"{type(exc).__name__}: {exc}")
+            with self._lock:
+                live.status = job["status"] if job else "cancelled"
+                self._live.pop(job_id, None)
         self._publish_final(live, job)
+
+    def params_lock(self, project_id: str) -> threading.Lock:
+        """Held while a project's parameters are changed (PUT params) and while its job finishes,
+        so a change made during a job is never lost to the job's own parameters."""
+        with self._lock:
+            return self._params_locks.setdefault(project_id, threading.Lock())
 
     def _current_params(self, live: _Live) -> dict:
         """Parameters to derive with at the end of a job: the project's current ones when they changed
@@ -428,6 +439,7 @@ class JobRunner:
         if current == live.params or self.timelines is None:
             return live.params
         from autohaptics import pipeline
+        from autohaptics.server.generated import save_npz
         from autohaptics.server.timelines import derive_timeline, params_from_doc
 
         work = self.store.job_work_dir(live.job_id)
@@ -435,7 +447,7 @@ class JobRunner:
         p, _ = params_from_doc(current)
         if not pipeline.analysis_compatible(analysis, p):
             return live.params
-        derive_timeline(analysis, current, name=live.name).save(work / "generated.json")
+        save_npz(derive_timeline(analysis, current, name=live.name), work / GENERATED)
         return current
 
 

@@ -127,11 +127,21 @@ class RevisionOut(BaseModel):
     cursor: int
 
 
-class EditOut(RevisionOut):
+class MarkerOut(BaseModel):
+    id: str
+    t_s: float
+    label: str
+
+
+class HistoryOut(RevisionOut):
+    markers: list[MarkerOut]
+
+
+class EditOut(HistoryOut):
     op: dict[str, Any]
 
 
-class EditsOut(RevisionOut):
+class EditsOut(HistoryOut):
     ops: list[dict[str, Any]]
 
 

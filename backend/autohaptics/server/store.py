@@ -5,7 +5,9 @@ Layout of ``data_dir``::
     autohaptics.sqlite3          projects, jobs, edits, settings (service-wide, e.g. the chair's)
     projects/<id>/<uuid>.<ext>   the uploaded media (server-chosen name)
     projects/<id>/analysis.npz   the feature cache (pipeline.Analysis)
-    projects/<id>/generated.json the generated timeline (never edited; edits live in the database)
+    projects/<id>/generated.npz  the generated timeline (never edited; edits live in the database);
+                                 generated.json in projects from before (server/generated.py reads both)
+    projects/<id>/imports/<ref>.json  the document of each ``import`` edit (the op keeps ``ref``)
     projects/<id>/waveform-<N>.json  cached audio peaks
     uploads/<uuid>.part          uploads in flight (removed on failure and on start)
     work/<job id>/               a running job's outputs (moved into the project when it succeeds)
@@ -35,6 +37,8 @@ from pathlib import Path
 from autohaptics.errors import AutohapticsError
 
 DB_NAME = "autohaptics.sqlite3"
+GENERATED = "generated.npz"
+LEGACY_GENERATED = "generated.json"
 ACTIVE_JOB_STATES = ("queued", "running")
 INTERRUPTED = "interrupted by a server restart"
 _ID = re.compile(r"^[0-9a-f]{32}$")
@@ -161,7 +165,14 @@ class Store:
         return self.project_dir(pid) / "analysis.npz"
 
     def generated_path(self, pid: str) -> Path:
-        return self.project_dir(pid) / "generated.json"
+        """``generated.npz``; a project from before that format has ``legacy_generated_path`` instead."""
+        return self.project_dir(pid) / GENERATED
+
+    def legacy_generated_path(self, pid: str) -> Path:
+        return self.project_dir(pid) / LEGACY_GENERATED
+
+    def import_path(self, pid: str, ref: str) -> Path:
+        return self.project_dir(pid) / "imports" / f"{check_id(ref, 'import')}.json"
 
     def waveform_path(self, pid: str, points: int) -> Path:
         return self.project_dir(pid) / f"waveform-{int(points)}.json"
@@ -262,16 +273,14 @@ class Store:
         ndir.mkdir()
         try:
             for p in sdir.iterdir():
-                if not p.is_file() or p.name.endswith(".part"):
-                    continue
-                try:
-                    os.link(p, ndir / p.name)  # files are only ever replaced, never rewritten in place
-                except OSError:
-                    shutil.copy2(p, ndir / p.name)
+                if p.is_dir() and p.name == "imports":
+                    shutil.copytree(p, ndir / p.name, copy_function=_link_or_copy)
+                elif p.is_file() and not p.name.endswith(".part"):
+                    _link_or_copy(p, ndir / p.name)
             stamp = now_iso()
             with self._tx() as db:
                 row = self._require(db, pid)
-                has_tl = (ndir / "generated.json").is_file()
+                has_tl = (ndir / GENERATED).is_file() or (ndir / LEGACY_GENERATED).is_file()
                 status = row["status"] if row["status"] != "running" else ("ready" if has_tl else "new")
                 db.execute(
                     "INSERT INTO projects (id, name, created_at, updated_at, status, media_file, media_type, source,"
@@ -331,7 +340,7 @@ class Store:
 
     def finish_job(self, job_id: str, status: str, *, error: str | None = None, started_at: str | None = None,
                    params: dict | None = None) -> dict | None:
-        """Record a job's end. ``done``: its work folder's analysis.npz and generated.json replace the
+        """Record a job's end. ``done``: its work folder's analysis.npz and generated.npz replace the
         project's, the revision increases and ``params`` (what the timeline was derived with) are
         stored. Returns the job, or None when its project was deleted meanwhile. The work folder
         is removed in every case."""
@@ -349,8 +358,9 @@ class Store:
                 project_status = {"done": "ready", "failed": "failed", "cancelled": "cancelled"}[status]
                 if status == "done":
                     pdir = self.project_dir(pid)
-                    for name in ("analysis.npz", "generated.json"):
+                    for name in ("analysis.npz", GENERATED):
                         os.replace(work / name, pdir / name)
+                    (pdir / LEGACY_GENERATED).unlink(missing_ok=True)
                     db.execute("UPDATE projects SET revision=revision+1, has_timeline=1 WHERE id=?", (pid,))
                     if params is not None:
                         db.execute("UPDATE projects SET params=? WHERE id=?", (json.dumps(params), pid))
@@ -365,17 +375,36 @@ class Store:
                 self._all(f"SELECT id FROM jobs WHERE status IN {ACTIVE_JOB_STATES} ORDER BY created_at")]
 
     # ------------------------------------------------------------ generated data
-    def replace_generated(self, pid: str, write_to: Path, *, params: dict) -> int:
-        """Move a freshly written ``generated.json`` (``write_to``, in the project folder) into place,
-        store ``params`` and bump the revision; returns the new revision."""
+    def replace_generated(self, pid: str, write_to: Path, *, params: dict) -> tuple[int, tuple]:
+        """Move a freshly written ``generated.npz`` (``write_to``, on the data folder's file system) into
+        place, store ``params`` and bump the revision; returns the new revision and the new file's
+        identity (inode, mtime, size), for caches keyed by it."""
         with self._tx() as db:
             self._require(db, pid)
-            os.replace(write_to, self.generated_path(pid))
+            path = self.generated_path(pid)
+            os.replace(write_to, path)
+            self.legacy_generated_path(pid).unlink(missing_ok=True)
+            st = path.stat()
             stamp = now_iso()
             db.execute("UPDATE projects SET revision=revision+1, has_timeline=1, params=?, updated_at=?,"
                        " status=CASE WHEN status='running' THEN status ELSE 'ready' END WHERE id=?",
                        (json.dumps(params), stamp, pid))
-            return int(db.execute("SELECT revision FROM projects WHERE id=?", (pid,)).fetchone()[0])
+            revision = int(db.execute("SELECT revision FROM projects WHERE id=?", (pid,)).fetchone()[0])
+            return revision, (st.st_ino, st.st_mtime_ns, st.st_size)
+
+    def adopt_generated(self, pid: str, write_to: Path) -> tuple | None:
+        """A project from before the .npz format: put ``write_to`` (its generated.json converted) in
+        place of generated.json, unless a job or a re-derive wrote generated.npz meanwhile. The
+        revision does not change (same timeline). Returns the new file's identity, or None."""
+        with self._tx() as db:
+            self._require(db, pid)
+            path, legacy = self.generated_path(pid), self.legacy_generated_path(pid)
+            if path.exists() or not legacy.exists():
+                return None
+            os.replace(write_to, path)
+            legacy.unlink()
+            st = path.stat()
+            return st.st_ino, st.st_mtime_ns, st.st_size
 
     # --------------------------------------------------------------------- edits
     def edits(self, pid: str) -> dict:
@@ -425,6 +454,23 @@ class Store:
         row = db.execute("SELECT revision, cursor FROM projects WHERE id=?", (pid,)).fetchone()
         return {"revision": row["revision"], "cursor": row["cursor"]}
 
+    def embedded_imports(self) -> list[tuple[str, int, dict]]:
+        """(project id, seq, op) of every ``import`` op stored with its whole document (the form
+        before documents moved to ``imports/``)."""
+        rows = self._all("SELECT project_id, seq, op FROM edits WHERE op LIKE '{\"op\": \"import\"%' "
+                         "AND op LIKE '%\"timeline\"%'")
+        out = []
+        for r in rows:
+            op = json.loads(r["op"])
+            if op.get("op") == "import" and "timeline" in op:
+                out.append((r["project_id"], int(r["seq"]), op))
+        return out
+
+    def replace_op(self, pid: str, seq: int, op: dict) -> None:
+        """Rewrite one stored op in place (same meaning, other form: the revision does not change)."""
+        with self._tx() as db:
+            db.execute("UPDATE edits SET op=? WHERE project_id=? AND seq=?", (json.dumps(op), pid, int(seq)))
+
     # ------------------------------------------------------------------ settings
     def get_setting(self, key: str) -> dict | None:
         """A service-wide settings document (JSON object), or None when never stored."""
@@ -452,3 +498,10 @@ class Store:
                 "SELECT op FROM edits WHERE project_id=? AND seq<? ORDER BY seq", (pid, project["cursor"]))]
         return project["revision"], ops, project
 
+
+def _link_or_copy(src, dst) -> None:
+    """Hard link (files here are only ever replaced, never rewritten in place), else copy."""
+    try:
+        os.link(src, dst)
+    except OSError:
+        shutil.copy2(src, dst)

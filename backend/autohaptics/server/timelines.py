@@ -2,9 +2,13 @@
 
 - :func:`resolve` merges requested parameters into a project's stored ones and validates them
   through :func:`pipeline.resolve_params` (ParameterError -> 400).
-- :class:`Timelines` loads the generated timeline and the feature cache (kept in memory while
-  their files do not change), re-derives from the cache without decoding, and composes
-  ``apply_ops(generated, ops[:cursor])`` (kept per revision).
+- :class:`Timelines` loads the generated timeline (``generated.npz``) and the feature cache (kept
+  in memory while their files do not change), re-derives from the cache without decoding (the
+  derived timeline stays in memory), composes ``apply_ops(generated, ops[:cursor])`` (kept per
+  revision), and serves the binary form (kept per revision, layer and block list, gzipped on
+  request).
+- ``import`` edits: the document goes to ``projects/<id>/imports/<ref>.json``; the op stored in
+  the edit list is ``{"op": "import", "ref", "name", "n_ticks"}``.
 
 Stored parameters are ``{preset, mode, thresholds, overrides}``: ``thresholds`` are the effective
 four values, ``overrides`` the user's dotted overrides.
@@ -13,6 +17,8 @@ four values, ``overrides`` the user's dotted overrides.
 from __future__ import annotations
 
 import dataclasses
+import gzip
+import logging
 import threading
 import time
 from collections import OrderedDict
@@ -21,11 +27,18 @@ from pathlib import Path
 from typing import Any
 
 from autohaptics import pipeline
+from autohaptics.errors import ParameterError
 from autohaptics.importers import parse_timeline
+from autohaptics.server import binary
 from autohaptics.server import edits as edit_ops
+from autohaptics.server.generated import load_generated, load_npz, save_npz
 from autohaptics.server.store import Conflict, NotFound, Store, new_id
 from autohaptics.server.waveform import cached_peaks
+from autohaptics.timebase import TICK_S
 from autohaptics.timeline import Timeline
+
+log = logging.getLogger("autohaptics.server.timelines")
+GZIP_LEVEL = 1  # the fans block is mostly zeros: level 1 already shrinks it ~10x, at ~100 MB/s
 
 DEFAULT_PARAMS = {"preset": "balanced", "mode": None, "thresholds": {}, "overrides": {}}
 
@@ -90,33 +103,62 @@ class Timelines:
         self.store = store
         self._lock = threading.Lock()
         self._files: OrderedDict[Path, tuple[tuple, Any]] = OrderedDict()
+        self._loading: dict[Path, threading.Lock] = {}
         self._composed: OrderedDict[str, tuple[tuple, Composed]] = OrderedDict()
         self._json: OrderedDict[str, tuple[Composed, bytes]] = OrderedDict()
+        self._blocks: OrderedDict[tuple, list[binary.Block]] = OrderedDict()
+        self._bins: OrderedDict[tuple, bytes] = OrderedDict()
         self._waveform_locks: dict[str, threading.Lock] = {}
         self._size = cache_size
 
     # -------------------------------------------------------------------- loading
     def _cached(self, path: Path, load) -> Any:
-        try:
-            st = path.stat()
-        except FileNotFoundError:
-            return None
-        key = (st.st_ino, st.st_mtime_ns, st.st_size)
+        """``load(path)``, kept while the file is the same (inode, mtime, size); one load at a time
+        per file, so concurrent requests of a long film's timeline wait for one read."""
         with self._lock:
-            hit = self._files.get(path)
-            if hit is not None and hit[0] == key:
-                self._files.move_to_end(path)
-                return hit[1]
-        value = load(path)
+            gate = self._loading.setdefault(path, threading.Lock())
+        with gate:
+            key = _file_key(path)
+            if key is None:
+                return None
+            with self._lock:
+                hit = self._files.get(path)
+                if hit is not None and hit[0] == key:
+                    self._files.move_to_end(path)
+                    return hit[1]
+            value = load(path)
+            self._remember(path, key, value)
+            return value
+
+    def _remember(self, path: Path, key: tuple, value: Any) -> None:
         with self._lock:
             self._files[path] = (key, value)
-            while len(self._files) > 2 * self._size:
+            self._files.move_to_end(path)
+            while len(self._files) > 3 * self._size:
                 self._files.popitem(last=False)
-        return value
 
     def generated(self, pid: str) -> Timeline | None:
-        """The generated timeline of ``pid``, or None before the first successful job."""
-        return self._cached(self.store.generated_path(pid), Timeline.load)
+        """The generated timeline of ``pid``, or None before the first successful job. A project
+        from before the .npz format is converted once (its generated.json is replaced)."""
+        tl = self._cached(self.store.generated_path(pid), load_npz)
+        if tl is not None:
+            return tl
+        legacy = self.store.legacy_generated_path(pid)
+        tl = self._cached(legacy, load_generated)
+        if tl is not None:
+            self._adopt_legacy(pid, tl)
+        return tl
+
+    def _adopt_legacy(self, pid: str, tl: Timeline) -> None:
+        tmp = self.store.work_dir / f"adopt-{new_id()}.npz"
+        try:
+            save_npz(tl, tmp)
+            key = self.store.adopt_generated(pid, tmp)
+        finally:
+            tmp.unlink(missing_ok=True)
+        if key is not None:
+            self._remember(self.store.generated_path(pid), key, tl)
+            log.info("project %s: generated.json converted to generated.npz", pid)
 
     def analysis(self, pid: str) -> pipeline.Analysis | None:
         return self._cached(self.store.analysis_path(pid), pipeline.Analysis.load)
@@ -127,9 +169,17 @@ class Timelines:
             raise NotFound(f"project {pid} has no timeline yet; generate one first")
         return tl
 
+    def _import(self, pid: str, ref: str) -> Timeline:
+        tl = self._cached(self.store.import_path(pid, ref), Timeline.load)
+        if tl is None:
+            raise ParameterError(f"the imported timeline {ref} of project {pid} is missing "
+                                 f"({self.store.import_path(pid, ref)})")
+        return tl
+
     # -------------------------------------------------------------------- derive
     def rederive(self, pid: str, doc: dict) -> Derived | None:
-        """Derive from the cached analysis with parameters ``doc`` and store the result.
+        """Derive from the cached analysis with parameters ``doc`` and store the result (.npz);
+        the derived timeline stays in memory, so the next composition does not read it back.
 
         Returns None when there is no cache or ``doc`` changes analysis parameters (a job is
         needed). ``seconds`` covers loading the cache, deriving and writing the timeline.
@@ -143,12 +193,13 @@ class Timelines:
             return None
         project = self.store.get_project(pid)
         tl = derive_timeline(analysis, doc, name=project["name"])
-        tmp = self.store.work_dir / f"derive-{new_id()}.json"
+        tmp = self.store.work_dir / f"derive-{new_id()}.npz"
         try:
-            tl.save(tmp)
-            revision = self.store.replace_generated(pid, tmp, params=doc)
+            save_npz(tl, tmp)
+            revision, key = self.store.replace_generated(pid, tmp, params=doc)
         finally:
             tmp.unlink(missing_ok=True)
+        self._remember(self.store.generated_path(pid), key, tl)
         return Derived(revision=revision, seconds=time.perf_counter() - t0,
                        needs_analysis=bool(tl.stats.get("needs_analysis")))
 
@@ -162,7 +213,7 @@ class Timelines:
             hit = self._composed.get(pid)
             if hit is not None and hit[0] == key:
                 return hit[1]
-        tl, markers = edit_ops.apply_ops(generated, ops)
+        tl, markers = edit_ops.apply_ops(generated, ops, imports=lambda ref: self._import(pid, ref))
         tl.source["name"] = project["name"]
         composed = Composed(revision=revision, timeline=tl, markers=markers, ops=ops)
         with self._lock:
@@ -172,31 +223,83 @@ class Timelines:
                 self._composed.popitem(last=False)
         return composed
 
+    # --------------------------------------------------------------------- edits
+    def markers(self, pid: str, ops: list[dict]) -> list[dict]:
+        """The markers after ``ops`` (the applied ones), as the composition has them."""
+        generated = self.generated(pid)
+        n = generated.n_ticks if generated is not None else self.store.get_project(pid)["n_ticks"]
+        return edit_ops.fold_markers(ops, n * TICK_S)
+
+    def edits(self, pid: str) -> dict:
+        """``{revision, cursor, ops, markers}``; stored imports appear as their reference."""
+        e = self.store.edits(pid)
+        return {**e, "markers": self.markers(pid, e["ops"][:e["cursor"]])}
+
     def check_op(self, pid: str, op: Any, *, base_revision: int | None) -> dict:
         """Validate ``op`` against the composition at ``base_revision`` (strict); returns the
         normalised op. ``base_revision`` None checks against the current one.
 
         Conflict when the project has no timeline yet or the revision moved on; ParameterError
-        for an invalid op.
+        for an invalid op (a stored import must name one of this project's imports).
         """
         normalised = edit_ops.validate_op(op)
         if self.generated(pid) is None:
             raise Conflict("the project has no timeline yet; edits need a generated timeline")
-        composed = self.compose(pid)
-        if base_revision is not None and composed.revision != base_revision:
-            raise Conflict(f"the timeline changed meanwhile (revision {composed.revision}, the request was "
+        current = self.store.revision(pid)
+        if base_revision is not None and current != base_revision:
+            raise Conflict(f"the timeline changed meanwhile (revision {current}, the request was "
                            f"based on {base_revision}); reload and try again")
+        if normalised["op"] == "import":  # nothing in an import depends on the composition
+            if edit_ops.is_stored_import(normalised):
+                self._import(pid, normalised["ref"])
+            return normalised
+        composed = self.compose(pid)
         edit_ops.apply_ops(composed.timeline, [normalised], strict=True, markers=composed.markers)
         return normalised
 
     def append(self, pid: str, base_revision: int | None, op: Any) -> dict:
-        """Validate ``op`` and append it at the cursor: ``{revision, cursor, op}`` (the op as stored).
+        """Validate ``op`` and append it at the cursor: ``{revision, cursor, op, markers}`` (the op as
+        stored). An ``import`` with its document is stored as a reference to a file.
 
         ``base_revision`` None appends on top of the current revision."""
         normalised = self.check_op(pid, op, base_revision=base_revision)
+        if normalised["op"] == "import" and not edit_ops.is_stored_import(normalised):
+            return self._append_import(pid, base_revision, Timeline.from_dict(normalised["timeline"]),
+                                       name="timeline")
+        return self._append(pid, base_revision, normalised)
+
+    def _append(self, pid: str, base_revision: int | None, op: dict) -> dict:
         if base_revision is None:
-            base_revision = self.store.get_project(pid)["revision"]
-        return {**self.store.append_edit(pid, base_revision, normalised), "op": normalised}
+            base_revision = self.store.revision(pid)
+        res = self.store.append_edit(pid, base_revision, op)
+        return {**res, "op": op, "markers": self._markers_at(pid, res["cursor"])}
+
+    def _append_import(self, pid: str, base_revision: int | None, tl: Timeline, *, name: str) -> dict:
+        if self.generated(pid) is None:
+            raise Conflict("the project has no timeline yet; edits need a generated timeline")
+        for key in ("edits", "markers", "revision"):
+            tl.extra.pop(key, None)
+        ref = new_id()
+        path = self.store.import_path(pid, ref)
+        path.parent.mkdir(exist_ok=True)
+        tl.save(path)
+        op = {"op": "import", "ref": ref, "name": name, "n_ticks": int(tl.n_ticks)}
+        try:
+            return self._append(pid, base_revision, op)
+        except BaseException:
+            path.unlink(missing_ok=True)
+            raise
+
+    def undo(self, pid: str, base_revision: int) -> dict:
+        res = self.store.undo(pid, base_revision)
+        return {**res, "markers": self._markers_at(pid, res["cursor"])}
+
+    def redo(self, pid: str, base_revision: int) -> dict:
+        res = self.store.redo(pid, base_revision)
+        return {**res, "markers": self._markers_at(pid, res["cursor"])}
+
+    def _markers_at(self, pid: str, cursor: int) -> list[dict]:
+        return self.markers(pid, self.store.edits(pid)["ops"][:cursor])
 
     def import_file(self, pid: str, data: bytes, *, name: str, base_revision: int | None) -> dict:
         """Append an ``import`` op built from an uploaded timeline file (our JSON or CSV).
@@ -205,14 +308,41 @@ class Timelines:
         document's own ``edits`` / ``markers`` / ``revision`` keys are not imported."""
         suffix = Path(name).suffix.lower()
         fmt = suffix[1:] if suffix in (".json", ".csv") else None
-        doc = parse_timeline(data, fmt=fmt, name=name).to_dict()
-        for key in ("edits", "markers", "revision"):
-            doc.pop(key, None)
-        return self.append(pid, base_revision, {"op": "import", "timeline": doc})
+        tl = parse_timeline(data, fmt=fmt, name=name)
+        current = self.store.revision(pid)
+        if base_revision is not None and current != base_revision:
+            raise Conflict(f"the timeline changed meanwhile (revision {current}, the request was "
+                           f"based on {base_revision}); reload and try again")
+        return self._append_import(pid, base_revision, tl, name=name)
 
-    def timeline_json(self, pid: str) -> bytes:
-        """The composed timeline document as UTF-8 JSON (TIMELINE.md plus revision/edits/markers)."""
+    def migrate_imports(self) -> int:
+        """Move the documents of ``import`` ops stored inline (before imports/) into files; the
+        ops keep a reference. Returns how many were moved."""
+        moved = 0
+        for pid, seq, op in self.store.embedded_imports():
+            try:
+                tl = Timeline.from_dict(op["timeline"])
+            except ParameterError as exc:
+                log.warning("project %s: stored import op %d is not a valid timeline (%s); left as it is",
+                            pid, seq, exc)
+                continue
+            ref = new_id()
+            path = self.store.import_path(pid, ref)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tl.save(path)
+            self.store.replace_op(pid, seq, {"op": "import", "ref": ref, "name": "timeline",
+                                             "n_ticks": int(tl.n_ticks)})
+            moved += 1
+        return moved
+
+    # --------------------------------------------------------------- documents
+    def timeline_json(self, pid: str, *, layer: str = "composed") -> bytes:
+        """The composed timeline document as UTF-8 JSON (TIMELINE.md plus revision/edits/markers),
+        or the generated layer's (``layer="generated"``, plus ``revision``)."""
         composed = self.compose(pid)
+        if layer == "generated":
+            tl = self.require_generated(pid)
+            return dataclasses.replace(tl, extra={**tl.extra, "revision": composed.revision}).to_json().encode()
         with self._lock:
             hit = self._json.get(pid)
             if hit is not None and hit[0] is composed:
@@ -224,6 +354,55 @@ class Timelines:
                 self._json.popitem(last=False)
         return data
 
+    def timeline_bin(self, pid: str, *, layer: str = "composed", blocks: list[str] | None = None,
+                     gzipped: bool = False) -> tuple[bytes, str]:
+        """The binary timeline and its ETag, kept per (project, revision, layer, blocks, gzip).
+
+        ``blocks``: the block names to send (None: all; see :func:`binary.select_blocks`). The
+        composed layer's header carries the markers."""
+        composed = self.compose(pid)
+        names = None if blocks is None else tuple(sorted(set(blocks)))
+        tag = f"{pid}-{composed.revision}-{layer}-{','.join(names) if names else 'all'}"
+        key = (pid, composed.revision, id(composed.timeline), layer, names, gzipped)
+        with self._lock:
+            hit = self._bins.get(key)
+            if hit is not None:
+                self._bins.move_to_end(key)
+                return hit, tag
+        plain_key = key[:-1] + (False,)
+        with self._lock:
+            data = self._bins.get(plain_key)
+        if data is None:
+            tl = composed.timeline if layer == "composed" else self.require_generated(pid)
+            chosen = binary.select_blocks(self._quantised(key[:4], tl), None if names is None else list(names))
+            header = {"markers": composed.markers} if layer == "composed" else {}
+            data = binary.encode(tl, revision=composed.revision, blocks=chosen, header=header)
+            self._keep_bin(plain_key, data)
+        if gzipped:
+            data = gzip.compress(data, compresslevel=GZIP_LEVEL, mtime=0)
+            self._keep_bin(key, data)
+        return data, tag
+
+    def _quantised(self, key: tuple, tl: Timeline) -> list[binary.Block]:
+        with self._lock:
+            hit = self._blocks.get(key)
+            if hit is not None:
+                self._blocks.move_to_end(key)
+                return hit
+        blocks = binary.timeline_blocks(tl)
+        with self._lock:
+            self._blocks[key] = blocks
+            while len(self._blocks) > self._size:
+                self._blocks.popitem(last=False)
+        return blocks
+
+    def _keep_bin(self, key: tuple, data: bytes) -> None:
+        with self._lock:
+            self._bins[key] = data
+            self._bins.move_to_end(key)
+            while len(self._bins) > 4 * self._size:
+                self._bins.popitem(last=False)
+
     # ------------------------------------------------------------------ waveform
     def waveform(self, pid: str, points: int) -> dict:
         """Audio peaks of the project's media, computed once per ``points`` and cached on disk."""
@@ -233,3 +412,11 @@ class Timelines:
         with lock:
             return cached_peaks(self.store.media_path(project), self.store.waveform_path(pid, points),
                                 points=points)
+
+
+def _file_key(path: Path) -> tuple | None:
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        return None
+    return (st.st_ino, st.st_mtime_ns, st.st_size)

@@ -38,6 +38,11 @@ def generate(project_id: str, store: StoreDep, runner: RunnerDep, body: ParamsIn
             responses={202: {"model": ParamsOut, "description": "a new analysis was started"}})
 def put_params(project_id: str, body: ParamsIn, response: Response, store: StoreDep, runner: RunnerDep,
                timelines: TimelinesDep) -> dict:
+    with runner.params_lock(project_id):
+        return _put_params(project_id, body, response, store, runner, timelines)
+
+
+def _put_params(project_id: str, body: ParamsIn, response: Response, store, runner, timelines) -> dict:
     project = store.get_project(project_id)
     doc = _resolve(project, body)
     derived = timelines.rederive(project_id, doc)

@@ -13,9 +13,8 @@ from fastapi import APIRouter, Query, Request, Response
 
 from autohaptics.errors import ParameterError
 from autohaptics.export import export_timeline, get_format
-from autohaptics.server import binary
 from autohaptics.server.deps import SettingsDep, StoreDep, TimelinesDep
-from autohaptics.server.schemas import EditIn, EditOut, EditsOut, RevisionIn, RevisionOut
+from autohaptics.server.schemas import EditIn, EditOut, EditsOut, HistoryOut, RevisionIn
 from autohaptics.server.uploads import display_name, receive_upload
 
 router = APIRouter(tags=["timeline"])
@@ -35,22 +34,55 @@ _IMPORT_BODY = {
 
 @router.get("/api/projects/{project_id}/timeline", response_class=Response,
             responses={200: {"content": {"application/json": {}}, "description": "the composed timeline"}})
-def get_timeline(project_id: str, timelines: TimelinesDep) -> Response:
-    return Response(timelines.timeline_json(project_id), media_type="application/json")
+def get_timeline(project_id: str, timelines: TimelinesDep,
+                 layer: Literal["composed", "generated"] = Query(default="composed")) -> Response:
+    return Response(timelines.timeline_json(project_id, layer=layer), media_type="application/json")
 
 
 @router.get("/api/projects/{project_id}/timeline.bin", response_class=Response,
-            responses={200: {"content": {"application/octet-stream": {}}, "description": "binary timeline"}})
-def get_timeline_bin(project_id: str, timelines: TimelinesDep,
-                     layer: Literal["composed", "generated"] = Query(default="composed")) -> Response:
-    composed = timelines.compose(project_id)
-    tl = composed.timeline if layer == "composed" else timelines.require_generated(project_id)
-    return Response(binary.encode(tl, revision=composed.revision), media_type="application/octet-stream")
+            responses={200: {"content": {"application/octet-stream": {}}, "description": "binary timeline"},
+                       304: {"description": "not modified (If-None-Match)"}})
+def get_timeline_bin(project_id: str, request: Request, timelines: TimelinesDep,
+                     layer: Literal["composed", "generated"] = Query(default="composed"),
+                     blocks: str | None = Query(default=None, description="comma-separated block names, "
+                                                "e.g. vibration,temperature_c,features (default: all)")) -> Response:
+    names = [b.strip() for b in blocks.split(",") if b.strip()] if blocks is not None else None
+    if names is not None and not names:
+        raise ParameterError("blocks must name at least one block (or leave the parameter out for all)")
+    gzipped = _accepts_gzip(request.headers.get("accept-encoding", ""))
+    data, tag = timelines.timeline_bin(project_id, layer=layer, blocks=names, gzipped=gzipped)
+    etag = f'"{tag}{"-gz" if gzipped else ""}"'
+    headers = {"ETag": etag, "Cache-Control": "no-cache", "Vary": "Accept-Encoding"}
+    if etag in _etags(request.headers.get("if-none-match", "")):
+        return Response(status_code=304, headers=headers)
+    if gzipped:
+        headers["Content-Encoding"] = "gzip"
+    return Response(data, media_type="application/octet-stream", headers=headers)
+
+
+def _accepts_gzip(accept_encoding: str) -> bool:
+    for part in accept_encoding.split(","):
+        coding, _, params = part.strip().partition(";")
+        if coding.strip().lower() == "gzip":
+            q = params.strip()
+            return not (q.startswith("q=") and _float(q[2:]) == 0.0)
+    return False
+
+
+def _float(text: str) -> float | None:
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def _etags(if_none_match: str) -> set[str]:
+    return {t.strip().removeprefix("W/") for t in if_none_match.split(",") if t.strip()}
 
 
 @router.get("/api/projects/{project_id}/edits", response_model=EditsOut)
-def get_edits(project_id: str, store: StoreDep) -> dict:
-    return store.edits(project_id)
+def get_edits(project_id: str, timelines: TimelinesDep) -> dict:
+    return timelines.edits(project_id)
 
 
 @router.post("/api/projects/{project_id}/edits", response_model=EditOut,
@@ -59,16 +91,16 @@ def post_edit(project_id: str, body: EditIn, timelines: TimelinesDep) -> dict:
     return timelines.append(project_id, body.base_revision, body.op)
 
 
-@router.post("/api/projects/{project_id}/undo", response_model=RevisionOut,
+@router.post("/api/projects/{project_id}/undo", response_model=HistoryOut,
              responses={409: {"description": "stale base_revision, or nothing to undo"}})
-def undo(project_id: str, body: RevisionIn, store: StoreDep) -> dict:
-    return store.undo(project_id, body.base_revision)
+def undo(project_id: str, body: RevisionIn, timelines: TimelinesDep) -> dict:
+    return timelines.undo(project_id, body.base_revision)
 
 
-@router.post("/api/projects/{project_id}/redo", response_model=RevisionOut,
+@router.post("/api/projects/{project_id}/redo", response_model=HistoryOut,
              responses={409: {"description": "stale base_revision, or nothing to redo"}})
-def redo(project_id: str, body: RevisionIn, store: StoreDep) -> dict:
-    return store.redo(project_id, body.base_revision)
+def redo(project_id: str, body: RevisionIn, timelines: TimelinesDep) -> dict:
+    return timelines.redo(project_id, body.base_revision)
 
 
 def content_disposition(filename: str) -> str:

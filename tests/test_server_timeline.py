@@ -1,0 +1,270 @@
+"""Long-film plumbing of the timeline routes (docs/API.md "Timeline"): markers served with the edit
+list and the binary header, imported documents kept out of the edit list (in imports/), the binary
+timeline by blocks, gzipped and revalidated, the generated layer stored as .npz and kept in memory
+after a re-derive, and projects from before both formats.
+
+A 20 s synthetic film, generated in audio mode, is the project; each test works on its own copy.
+"""
+
+from __future__ import annotations
+
+import gzip
+import json
+import sqlite3
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+
+from autohaptics.server import generated as generated_file
+from autohaptics.server.app import create_app
+from autohaptics.server.binary import decode
+from autohaptics.server.settings import Settings
+from autohaptics.synth import Scene, Segment, Tone, write_scene
+from autohaptics.timeline import Timeline
+
+DURATION_S = 20.0
+N_TICKS = 200
+TERMINAL = ("done", "failed", "cancelled")
+
+
+@pytest.fixture(scope="module")
+def data_dir(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("server-timeline") / "data"
+
+
+@pytest.fixture(scope="module")
+def client(data_dir):
+    with TestClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def base_project(client, tmp_path_factory) -> dict:
+    path = tmp_path_factory.mktemp("film") / "film.mp4"
+    scene = Scene(duration_s=DURATION_S, background=(Segment(0.0, DURATION_S, (90, 90, 200)),),
+                  audio=(Tone(3.0, 6.0, 55.0, level_dbfs=-12.0), Tone(12.0, 13.0, 3000.0, level_dbfs=-18.0)),
+                  name="timeline test")
+    write_scene(path, scene, width=64, height=36, fps=5, quality="low", sample_rate=24000)
+    r = client.post("/api/projects", files={"file": ("film.mp4", path.read_bytes(), "video/mp4")}, data={"mode": "audio"})
+    assert r.status_code == 201, r.text
+    job_id = r.json()["job"]["id"]
+    for _ in range(1200):
+        job = client.get(f"/api/jobs/{job_id}").json()
+        if job["status"] in TERMINAL:
+            break
+        time.sleep(0.1)
+    assert job["status"] == "done", job
+    return client.get(f"/api/projects/{r.json()['id']}").json()
+
+
+@pytest.fixture
+def project(client, base_project):
+    r = client.post(f"/api/projects/{base_project['id']}/duplicate")
+    assert r.status_code == 201, r.text
+    yield r.json()
+    client.delete(f"/api/projects/{r.json()['id']}")
+
+
+def edit(client, pid: str, op: dict) -> dict:
+    rev = client.get(f"/api/projects/{pid}").json()["revision"]
+    r = client.post(f"/api/projects/{pid}/edits", json={"base_revision": rev, "op": op})
+    assert r.status_code == 200, r.text
+    return r.json()
+
+
+def known(n: int = N_TICKS) -> Timeline:
+    tl = Timeline.empty(n)
+    k = np.arange(n)
+    tl.vibration[:] = ((k[:, None] + np.arange(9)[None, :] * 5) % 20) / 20.0
+    tl.temperature_c[:] = 31.0 + (k % 10)
+    tl.fans[:, 4, 8] = (k % 4) / 4.0
+    return tl.validate()
+
+
+# ------------------------------------------------------------------------------ markers
+def test_markers_come_with_the_edit_list_every_history_answer_and_the_binary_header(client, project):
+    pid = project["id"]
+    assert client.get(f"/api/projects/{pid}/edits").json()["markers"] == []
+    a = edit(client, pid, {"op": "marker_add", "marker": {"id": "a", "t_s": 12.5, "label": "boom"}})
+    assert a["markers"] == [{"id": "a", "t_s": 12.5, "label": "boom"}]
+    b = edit(client, pid, {"op": "marker_add", "marker": {"id": "b", "t_s": 99.0, "label": "end"}})
+    # Held at the end of the film, as the composition does it; sorted by time.
+    assert b["markers"] == [{"id": "a", "t_s": 12.5, "label": "boom"}, {"id": "b", "t_s": DURATION_S, "label": "end"}]
+    c = edit(client, pid, {"op": "marker_update", "marker": {"id": "a", "t_s": 1.0}})
+    assert [m["id"] for m in c["markers"]] == ["a", "b"] and c["markers"][0]["t_s"] == 1.0
+    edits = client.get(f"/api/projects/{pid}/edits").json()
+    doc = client.get(f"/api/projects/{pid}/timeline").json()
+    header, _ = decode(client.get(f"/api/projects/{pid}/timeline.bin").content)
+    assert edits["markers"] == doc["markers"] == header["markers"] == c["markers"]
+    undo = client.post(f"/api/projects/{pid}/undo", json={"base_revision": c["revision"]}).json()
+    assert undo["markers"][0] == {"id": "a", "t_s": 12.5, "label": "boom"}
+    redo = client.post(f"/api/projects/{pid}/redo", json={"base_revision": undo["revision"]}).json()
+    assert redo["markers"] == c["markers"]
+    assert "markers" not in decode(client.get(f"/api/projects/{pid}/timeline.bin?layer=generated").content)[0]
+
+
+# ------------------------------------------------------------------------------ imports
+def test_an_import_is_stored_as_a_file_and_the_edit_list_stays_light(client, project, data_dir):
+    pid = project["id"]
+    doc = known().to_json().encode()
+    rev = project["revision"]
+    r = client.post(f"/api/projects/{pid}/import", files={"file": ("mine.json", doc, "application/json")},
+                    data={"base_revision": str(rev)})
+    assert r.status_code == 200, r.text
+    op = r.json()["op"]
+    assert set(op) == {"op", "ref", "name", "n_ticks"} and op["name"] == "mine.json" and op["n_ticks"] == N_TICKS
+    stored = data_dir / "projects" / pid / "imports" / f"{op['ref']}.json"
+    np.testing.assert_array_equal(Timeline.load(stored).vibration, known().vibration)
+    edits = client.get(f"/api/projects/{pid}/edits")
+    assert len(edits.content) < 1000 and edits.json()["ops"] == [op]
+    composed = client.app.state.timelines.compose(pid).timeline
+    np.testing.assert_array_equal(composed.vibration, known().vibration)
+    assert client.get(f"/api/projects/{pid}/timeline").json()["edits"] == [op]
+
+    # An import sent as an op with its document is stored the same way.
+    other = known(150)
+    other.vibration[:] = 0.5
+    res = edit(client, pid, {"op": "import", "timeline": other.to_dict()})
+    assert set(res["op"]) == {"op", "ref", "name", "n_ticks"} and res["op"]["n_ticks"] == 150
+    composed = client.app.state.timelines.compose(pid).timeline
+    assert np.all(composed.vibration[:150] == 0.5) and np.all(composed.vibration[150:] == 0)
+
+    # A stored import can be named again (it exists in this project); an unknown one cannot.
+    again = edit(client, pid, op)
+    assert again["op"] == op
+    bad = client.post(f"/api/projects/{pid}/edits", json={"base_revision": again["revision"], "op": {
+        "op": "import", "ref": "0" * 32, "name": "x", "n_ticks": 3}})
+    assert bad.status_code == 400 and "missing" in bad.json()["detail"]
+
+    # A copy of the project and a restarted server compose the same.
+    copy = client.post(f"/api/projects/{pid}/duplicate").json()
+    try:
+        with TestClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as restarted:
+            for p in (pid, copy["id"]):
+                t = restarted.app.state.timelines.compose(p).timeline
+                np.testing.assert_array_equal(t.vibration, known().vibration)
+    finally:
+        client.delete(f"/api/projects/{copy['id']}")
+
+
+def test_imports_stored_inline_by_an_older_server_move_to_files_on_start(client, project, data_dir):
+    pid = project["id"]
+    rev = client.get(f"/api/projects/{pid}").json()["revision"]
+    inline = {"op": "import", "timeline": known().to_dict()}
+    db = sqlite3.connect(data_dir / "autohaptics.sqlite3")
+    with db:
+        db.execute("INSERT INTO edits (project_id, seq, op, created_at) VALUES (?, 0, ?, 'then')",
+                   (pid, json.dumps(inline)))
+        db.execute("UPDATE projects SET cursor=1, revision=revision+1 WHERE id=?", (pid,))
+    db.close()
+    with TestClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as restarted:
+        edits = restarted.get(f"/api/projects/{pid}/edits").json()
+        assert edits["revision"] == rev + 1
+        (op,) = edits["ops"]
+        assert set(op) == {"op", "ref", "name", "n_ticks"}
+        assert (data_dir / "projects" / pid / "imports" / f"{op['ref']}.json").is_file()
+        np.testing.assert_array_equal(restarted.app.state.timelines.compose(pid).timeline.vibration,
+                                      known().vibration)
+
+
+# ------------------------------------------------------------------------------ binary
+def test_binary_blocks_gzip_and_revalidation(client, project):
+    pid = project["id"]
+    url = f"/api/projects/{pid}/timeline.bin"
+    plain = client.get(url, headers={"Accept-Encoding": "identity"})
+    assert plain.status_code == 200 and "content-encoding" not in plain.headers
+    header, full = decode(plain.content)
+    names = [b["name"] for b in header["blocks"]]
+    assert names[:4] == ["vibration", "temperature_c", "fans", "fan_activity"]
+
+    zipped = client.get(url, headers={"Accept-Encoding": "gzip, deflate"})
+    assert zipped.headers["content-encoding"] == "gzip" and zipped.content == plain.content  # httpx decodes
+    assert zipped.headers["vary"] == "Accept-Encoding" and zipped.headers["etag"] != plain.headers["etag"]
+    with client.stream("GET", url, headers={"Accept-Encoding": "gzip"}) as resp:
+        wire = b"".join(resp.iter_raw())
+    assert gzip.decompress(wire) == plain.content and len(wire) < len(plain.content) / 3  # mostly-zero fans
+
+    some = client.get(url, params={"blocks": "vibration,temperature_c,features"}, headers={"Accept-Encoding": "identity"})
+    h2, part = decode(some.content)
+    assert [b["name"] for b in h2["blocks"]] == [n for n in names if n not in ("fans", "fan_activity")]
+    np.testing.assert_array_equal(part["vibration"], full["vibration"])
+    assert h2["revision"] == header["revision"] and h2["markers"] == header["markers"]
+    fans = decode(client.get(url, params={"blocks": "fans"}).content)[1]
+    assert list(fans) == ["fans"]
+    np.testing.assert_array_equal(fans["fans"], full["fans"])
+    bad = client.get(url, params={"blocks": "vibration,smell"})
+    assert bad.status_code == 400 and "smell" in bad.json()["detail"]
+    assert client.get(url, params={"blocks": ","}).status_code == 400
+
+    etag = plain.headers["etag"]
+    again = client.get(url, headers={"Accept-Encoding": "identity", "If-None-Match": etag})
+    assert again.status_code == 304 and again.content == b""
+    res = edit(client, pid, {"op": "set", "lanes": ["A2"], "t0": 0, "t1": 5, "value": 1.0})
+    changed = client.get(url, headers={"Accept-Encoding": "identity", "If-None-Match": etag})
+    assert changed.status_code == 200 and changed.headers["etag"] != etag
+    assert decode(changed.content)[0]["revision"] == res["revision"]
+
+
+# -------------------------------------------------------------------- generated layer
+def test_generated_layer_is_npz_and_its_json_export(client, project, data_dir):
+    pid = project["id"]
+    pdir = data_dir / "projects" / pid
+    assert (pdir / "generated.npz").is_file() and not (pdir / "generated.json").exists()
+    tl = generated_file.load_npz(pdir / "generated.npz")
+    doc = client.get(f"/api/projects/{pid}/timeline", params={"layer": "generated"}).json()
+    assert doc["n_ticks"] == tl.n_ticks == N_TICKS and doc["revision"] == project["revision"]
+    np.testing.assert_allclose(np.asarray(doc["tracks"]["vibration"]), tl.vibration, atol=5e-5)
+    edit(client, pid, {"op": "clear", "lanes": ["A1"], "t0": 0, "t1": N_TICKS})
+    again = client.get(f"/api/projects/{pid}/timeline", params={"layer": "generated"}).json()
+    assert again["tracks"]["vibration"] == doc["tracks"]["vibration"] and "edits" not in again
+
+
+def test_rederive_keeps_the_derived_timeline_in_memory(client, project, monkeypatch):
+    pid = project["id"]
+    thresholds = {"loudness": 0.2, "sharpness": 0.2, "booming": 0.2, "low_energy": 0.2}
+    r = client.put(f"/api/projects/{pid}/params", json={"thresholds": thresholds})
+    assert r.status_code == 200 and r.json()["derived"], r.text
+
+    def no_reading(path):
+        raise AssertionError(f"{path} was read back after the re-derive")
+
+    monkeypatch.setattr("autohaptics.server.timelines.load_npz", no_reading)
+    composed = client.app.state.timelines.compose(pid)
+    assert composed.revision == r.json()["revision"]
+    assert composed.timeline.generator["params"]["thresholds"]["loudness"] == 0.2
+    assert client.get(f"/api/projects/{pid}/timeline.bin").status_code == 200
+
+
+def test_a_project_from_before_npz_is_converted_once(client, project, data_dir):
+    pid = project["id"]
+    pdir = data_dir / "projects" / pid
+    tl = generated_file.load_npz(pdir / "generated.npz")
+    tl.save(pdir / "generated.json")  # what older servers wrote
+    (pdir / "generated.npz").unlink()
+    with TestClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as restarted:
+        header, blocks = decode(restarted.get(f"/api/projects/{pid}/timeline.bin").content)
+        assert header["n_ticks"] == N_TICKS
+        assert (pdir / "generated.npz").is_file() and not (pdir / "generated.json").exists()
+        converted = generated_file.load_npz(pdir / "generated.npz")
+        np.testing.assert_allclose(converted.vibration, tl.vibration, atol=5e-5)  # JSON keeps 4 decimals
+        assert restarted.get(f"/api/projects/{pid}").json()["revision"] == project["revision"]
+
+
+def test_npz_round_trip_and_errors(tmp_path):
+    tl = known()
+    tl.features["loudness"] = np.linspace(0, 1, N_TICKS, dtype=np.float32)
+    tl.stats["note"] = "kept"
+    path = generated_file.save_npz(tl, tmp_path / "g.npz")
+    back = generated_file.load_npz(path)
+    for name in ("vibration", "temperature_c", "fans"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(tl, name))
+    np.testing.assert_array_equal(back.features["loudness"], tl.features["loudness"])
+    assert back.stats == tl.stats and back.generator == tl.generator and back.n_ticks == tl.n_ticks
+    (tmp_path / "bad.npz").write_bytes(b"not a zip")
+    with pytest.raises(Exception, match="bad.npz: not a generated timeline"):
+        generated_file.load_npz(tmp_path / "bad.npz")
+    with pytest.raises(Exception, match="missing.npz: no such file"):
+        generated_file.load_npz(tmp_path / "missing.npz")
