@@ -77,6 +77,20 @@ def test_flow_stays_on_the_moving_object():
     assert mag[:, far].mean() < 0.02 * expected
 
 
+@pytest.mark.parametrize("method", ["dis", "farneback"])
+def test_flow_does_not_depend_on_earlier_calls(method):
+    """No hidden state: flows computed in between (other sizes, other content) change nothing."""
+    params = airflow.FlowParams(method=method)
+    scene = pan_scene(0.6)
+    a, b = gray(scene, 0.5, 160, 68), gray(scene, 0.5 + 1 / 24, 160, 68)
+    first = airflow.optical_flow(a, b, params=params)
+    rng = np.random.default_rng(5)
+    for h, w in ((16, 16), (90, 160), (31, 47), (68, 160), (200, 300)):
+        x = rng.integers(0, 256, (h, w), dtype=np.uint8)
+        airflow.optical_flow(x, np.roll(x, 3, axis=1), params=params)
+    np.testing.assert_array_equal(airflow.optical_flow(a, b, params=params), first)
+
+
 def test_too_small_proxy_gives_zero_flow():
     a = np.random.default_rng(0).integers(0, 256, (15, 40), dtype=np.uint8)
     np.testing.assert_array_equal(airflow.optical_flow(a, np.roll(a, 2, axis=1)), np.zeros((15, 40, 2), np.float32))
