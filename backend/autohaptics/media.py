@@ -139,12 +139,19 @@ def probe(path: str | os.PathLike) -> MediaInfo:
     """
     p = Path(path)
     with open_container(p) as c:
-        vs = next((s for s in c.streams.video if _is_real_video(s)), None)
-        as_ = c.streams.audio[0] if c.streams.audio else None
+        undecodable = [f"{s.type} stream #{s.index} ({_codec_name(s)})" for s in c.streams
+                       if s.type in ("video", "audio") and s.codec_context is None]
+        vs = next((s for s in c.streams.video if s.codec_context is not None and _is_real_video(s)), None)
+        as_ = next((s for s in c.streams.audio if s.codec_context is not None), None)
         video = _video_info(vs) if vs is not None else None
         audio = _audio_info(as_) if as_ is not None else None
+        if undecodable and ((video is None and any(u.startswith("video") for u in undecodable))
+                            or (audio is None and any(u.startswith("audio") for u in undecodable))):
+            raise MediaError(f"{p}: unsupported codec: no decoder for {', '.join(undecodable)}")
         if video is None and audio is None:
             raise MediaError(f"{p}: no audio or video stream (container {c.format.name})")
+        if audio is not None and (audio.sample_rate <= 0 or audio.channels <= 0):
+            raise MediaError(f"{p}: audio stream #{audio.index} ({audio.codec}) declares no sample rate or channels")
         start_s = _container_start(c)
         duration = _duration_s(c, [s for s in (vs, as_) if s is not None])
         if duration is None:
@@ -209,8 +216,10 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
         stream = c.streams.audio[0]
         stream.thread_type = "AUTO"
         mapping = None
+        interleave = _Interleaver()
         for frame in _decode_tolerant(c, stream, report, info.path):
-            x = _to_float(_samples(frame))
+            frame_time = frame.time
+            x = _to_float(_samples(frame, interleave))
             if mapping is None:
                 mapping = _channel_roles(frame.layout, x.shape[0])
                 report.main_channels, report.lfe_channel = mapping
@@ -224,8 +233,8 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
                 mono += lfe_gain * x[lfe]
             mono = (mono / max(1, len(main))).astype(np.float32)
             # Align to the container clock: zero-fill gaps (and the lead-in), drop overlaps.
-            if frame.time is not None:
-                t0 = float(frame.time) - info.start_s
+            if frame_time is not None:
+                t0 = float(frame_time) - info.start_s
                 gap = t0 - next_t_in
                 if gap > 1.0 / sr_in * 2:
                     emit(to_out_rate(np.zeros(int(round(gap * sr_in)), np.float32)))
@@ -492,8 +501,9 @@ def check_truncation(info: MediaInfo, decoded_s: float, stream: str) -> None:
     declared = info.duration_s
     missing = declared - decoded_s
     if missing > max(TRUNCATION_TOLERANCE_S, TRUNCATION_TOLERANCE_FRAC * declared):
+        what = f"the {stream} streams decode" if " and " in stream else f"the {stream} stream decodes"
         raise MediaError(
-            f"{info.path}: truncated or damaged file: the {stream} stream decodes {decoded_s:.2f} s "
+            f"{info.path}: truncated or damaged file: {what} {decoded_s:.2f} s "
             f"of the {declared:.2f} s the container declares")
 
 
@@ -527,6 +537,17 @@ def _stream_by_index(c, index: int):
         if s.index == index:
             return s
     raise MediaError(f"stream #{index} vanished")
+
+
+def _codec_name(s) -> str:
+    for attr in ("codec_tag", "name"):
+        try:
+            value = getattr(s, attr, None) if attr == "codec_tag" else s.codec.name
+            if value:
+                return str(value)
+        except (AttributeError, ValueError):
+            continue
+    return "unknown codec"
 
 
 def _is_real_video(s) -> bool:
@@ -643,12 +664,51 @@ _SAMPLE_DTYPES = {"u8": np.uint8, "s16": np.int16, "s32": np.int32, "s64": np.in
                   "dbl": np.float64}
 
 
-def _samples(frame: av.AudioFrame) -> np.ndarray:
+_PACKABLE_LAYOUTS = {"3.0", "quad", "4.0", "5.0", "5.1", "5.0(side)", "5.1(side)", "6.0", "6.1", "7.0", "7.1",
+                     "7.1(wide)", "7.1(wide-side)", "octagonal", "hexagonal"}
+
+
+class _Interleaver:
+    """Planar -> packed float at the same rate and layout, through one libswresample context
+    (same-rate format conversion holds no samples back)."""
+
+    def __init__(self):
+        self.key = None
+        self.resampler = None
+
+    def __call__(self, frame: av.AudioFrame) -> av.AudioFrame:
+        key = (frame.layout.name, frame.sample_rate)
+        if key != self.key:
+            self.key = key
+            self.resampler = av.AudioResampler(format="flt", layout=frame.layout.name, rate=frame.sample_rate)
+        frame.pts = None
+        return _join_packed(self.resampler.resample(frame), frame)
+
+
+def _join_packed(out: list, frame: av.AudioFrame) -> av.AudioFrame:
+    if len(out) == 1:
+        return out[0]
+    if not out:
+        packed = av.AudioFrame(format="flt", layout=frame.layout.name, samples=0)
+        packed.sample_rate = frame.sample_rate
+        return packed
+    data = np.concatenate([np.frombuffer(f.planes[0], np.float32, count=f.samples * f.layout.nb_channels)
+                           for f in out])
+    packed = av.AudioFrame.from_ndarray(data.reshape(1, -1), format="flt", layout=frame.layout.name)
+    packed.sample_rate = frame.sample_rate
+    return packed
+
+
+def _samples(frame: av.AudioFrame, interleave: "_Interleaver | None" = None) -> np.ndarray:
     """Decoded samples as [shape=(channels, n)], read straight from the frame's planes.
 
     (PyAV's ``to_ndarray`` crashes the interpreter on 8-channel planar frames; the planes'
     buffers are read here with numpy instead.)
     """
+    if frame.format.is_planar and frame.layout.nb_channels > 2 and frame.layout.name in _PACKABLE_LAYOUTS:
+        # Many-channel planar frames: PyAV's plane accessors read past AVFrame.data (8 pointers)
+        # for such layouts; let libswresample interleave them first (same rate, same layout).
+        frame = (interleave or _Interleaver())(frame)
     name = frame.format.name
     base = name[:-1] if name.endswith("p") else name
     dtype = _SAMPLE_DTYPES.get(base)

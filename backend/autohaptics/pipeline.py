@@ -216,15 +216,37 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
                            fusion_params=params.fusion, flow_params=params.flow, airflow_params=params.airflow,
                            cut_params=params.cuts, depth_params=params.depth, need_saliency=need_saliency,
                            need_flow=need_flow, need_colour=need_colour, progress=video_progress, cancel=cancel)
-        if not params.allow_truncated:
-            media.check_truncation(info, video.stats["frames"].get("last_time_s", info.duration_s) + TICK_S,
-                                   "video")
         stats["video"] = {"seconds": time.perf_counter() - t0, **video.stats}
     else:
         stats["video"] = {"skipped": "no track needs the picture"}
+    if not params.allow_truncated:
+        _check_truncation(info, audio_end=stats["audio"].get("decoded_s") if audio is not None else None,
+                          video_end=(video.stats["frames"]["last_time_s"] + 1.0 / max(info.video.fps, 1.0))
+                          if video is not None else None)
     progress("done", 1.0)
     return Analysis(info=info.to_dict(), sha256=sha, n_ticks=n, params=params_to_dict(params),
                     audio=audio, video=video, stats=stats)
+
+
+def _check_truncation(info: media.MediaInfo, *, audio_end: float | None, video_end: float | None) -> None:
+    """MediaError when the decoded streams end clearly before the file says they should.
+
+    A file cut short ends every stream early; a film whose audio simply outlasts its picture (or
+    the reverse) is not truncated: the LATEST decoded end is compared with the container's
+    duration. A stream decoded alone is compared with its own declared duration when the
+    container gives one (else with the container's, when it is the only stream).
+    """
+    ends = {name: end for name, end in (("audio", audio_end), ("video", video_end)) if end is not None}
+    if not ends:
+        return
+    if len(ends) == 2 or (info.audio is None) != (info.video is None):
+        name = max(ends, key=ends.get)
+        media.check_truncation(info, ends[name], name if len(ends) == 1 else "audio and video")
+        return
+    (name, end), = ends.items()
+    declared = getattr(info, name).duration_s
+    if declared:
+        media.check_truncation(dataclasses.replace(info, duration_s=declared), end, name)
 
 
 def _saliency_needed(params: GenerateParams, audio: dict | None, n: int) -> np.ndarray:
@@ -250,8 +272,6 @@ def _audio_pass(info: media.MediaInfo, params: GenerateParams, n: int, stats: di
 
     chunks = media.iter_audio(info.path, info=info, lfe_gain_db=params.lfe_gain_db, report=report)
     feats = af.compute_audio_features(chunks, params=params.audio, progress=chunk_progress, cancel=cancel)
-    if not params.allow_truncated:
-        media.check_truncation(info, report.duration_s, "audio")
     n_frames = n * FRAMES_PER_TICK
     out = {}
     for name in inten.FEATURES:
