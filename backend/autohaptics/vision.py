@@ -222,7 +222,7 @@ def _flow_pair(k, gray0, gray1, rgb0, dt, out: VideoAnalysis, acc: "_Accumulator
     acc.add_motion(k, score, cells)
     if score > floor:
         near = stages["depth"].run(depth.nearness_map, _resized(rgb0, depth_params.proxy_width),
-                                   params=depth_params, backend=depth_backend, flow=flow)
+                                   params=depth_params, backend=depth_backend, flow=flow, dt_s=dt)
         acc.add_near(k, airflow.grid_means(near))
         out.depth_mask[k] = True
 
