@@ -31,7 +31,7 @@ import av
 import cv2
 import numpy as np
 
-from autohaptics.errors import MediaError
+from autohaptics.errors import MediaError, ParameterError
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
 
 _PLANAR_YUV8 = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj444p", "yuv440p", "yuvj440p"}
@@ -390,9 +390,17 @@ def _yuv_to_rgb(y: np.ndarray, u: np.ndarray, v: np.ndarray, frame: av.VideoFram
     return np.clip(rgb + 0.5, 0.0, 255.0).astype(np.uint8)
 
 
-def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefetch: int = 0) -> Iterator[Frame]:
+DECODE_MODES = ("full", "fast")
+
+
+def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefetch: int = 0,
+               decode: str = "full") -> Iterator[Frame]:
     """Decode the video stream frame by frame (presentation order); nothing is converted here.
 
+    decode : "full" decodes every frame exactly; "fast" asks FFmpeg to skip non-reference frames
+        (in H.264/HEVC typically the B-frames: about half the frames) and the in-loop deblocking
+        filter (invisible on small proxies, not decoded exactly). The frames that come out keep
+        their true timestamps.
     prefetch : when > 0, decode in a background thread up to this many frames ahead, so FFmpeg's
         decoder threads keep working while the caller analyses a frame (PyAV releases the GIL
         while decoding). Frames stay valid after the step that yielded them in this mode.
@@ -401,18 +409,23 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
     info = info or probe(path)
     if info.video is None:
         raise MediaError(f"{info.path}: no video stream")
+    if decode not in DECODE_MODES:
+        raise ParameterError(f"decode must be one of {DECODE_MODES}, got {decode!r}")
     if prefetch > 0:
-        yield from _prefetched(lambda: _iter_video(info), prefetch)
+        yield from _prefetched(lambda: _iter_video(info, decode), prefetch)
     else:
-        yield from _iter_video(info)
+        yield from _iter_video(info, decode)
 
 
-def _iter_video(info: MediaInfo) -> Iterator[Frame]:
+def _iter_video(info: MediaInfo, decode: str = "full") -> Iterator[Frame]:
     report = AudioReport()
     n = 0
     with open_container(info.path) as c:
         stream = _stream_by_index(c, info.video.index)
         stream.thread_type = "AUTO"
+        if decode == "fast":
+            stream.codec_context.skip_frame = "NONREF"
+            stream.codec_context.options = {"skip_loop_filter": "all"}
         last_t = -math.inf
         for frame in _decode_tolerant(c, stream, report, info.path):
             t = float(frame.time) - info.start_s if frame.time is not None else n / max(info.video.fps, 1e-9)

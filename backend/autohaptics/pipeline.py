@@ -409,19 +409,36 @@ def _random_vibration(n: int, seed: int, active_fraction: float) -> np.ndarray:
     return vib
 
 
+def sustained_motion(motion: np.ndarray) -> np.ndarray:
+    """The motion a tick shares with a neighbour: min(m[k], max(m[k-1], m[k+1])), frame widths/s.
+
+    A one-tick spike (an object popping in or a flash between a frame and its successor: optical
+    flow reads nonsense there, and 100 ms of wind cannot be felt anyway) falls to its neighbours'
+    level; motion that lasts two ticks or more keeps its value.
+    """
+    m = np.asarray(motion, dtype=np.float64)
+    if m.size < 2:
+        return m.copy()
+    left = np.concatenate([[0.0], m[:-1]])
+    right = np.concatenate([m[1:], [0.0]])
+    return np.minimum(m, np.maximum(left, right))
+
+
 def _fans(params: GenerateParams, video: VideoAnalysis, stats: dict) -> np.ndarray:
-    """(n, 9, 17) fan levels: ticks whose motion exceeds the (manual or adaptive) threshold, not at a
-    cut, with depth computed: strong motion AND near (airflow.fan_levels)."""
+    """(n, 9, 17) fan levels: ticks whose sustained motion exceeds the (manual or adaptive)
+    threshold, not at a cut, with depth computed: strong motion AND near (airflow.fan_levels)."""
     n = video.motion.size
     valid = ~video.cut
-    threshold = airflow.motion_threshold(video.motion[valid], params=params.airflow)
-    on = valid & (video.motion > threshold) & video.depth_mask
+    motion = sustained_motion(np.where(valid, video.motion, 0.0))
+    threshold = airflow.motion_threshold(motion[valid], params=params.airflow)
+    on = valid & (motion > threshold) & video.depth_mask
     fans = np.zeros((n,) + video.cell_motion.shape[1:], np.float32)
     for k in np.flatnonzero(on):
         fans[k] = airflow.fan_levels(video.cell_motion[k].astype(np.float32), video.nearness[k].astype(np.float32),
                                      params=params.airflow)
     stats["airflow"] = {"threshold_fw_per_s": float(threshold), "ticks_on": int(on.sum()),
-                        "ticks_at_cuts": int(video.cut.sum())}
+                        "ticks_at_cuts": int(video.cut.sum()),
+                        "spikes_ignored": int(((video.motion > threshold) & valid & ~(motion > threshold)).sum())}
     return fans
 
 

@@ -34,6 +34,9 @@ from autohaptics.progress import CancelToken, ProgressFn, check_cancel
 from autohaptics.timebase import tick_of_time
 
 ANALYSIS_MODES = ("tick", "every")
+# Cut signatures are always taken from an RGB proxy this wide, so every two frames compare alike
+# (a histogram of a 128 px proxy is wider than one of a 48 px proxy of the same picture).
+SIGNATURE_WIDTH = 48
 
 
 @dataclass(frozen=True)
@@ -47,13 +50,21 @@ class VideoParams:
     skip : skip what a scene does not need (see the module docstring). False computes everything.
     prefetch : frames decoded ahead in a background thread, overlapping decoding with analysis
         (0 = decode in the calling thread).
+    decode : "full" (every frame, exactly) or "fast" (FFmpeg skips non-reference frames and the
+        deblocking filter: about half the decoding work on H.264; flow pairs then span the next
+        decoded frame, with its true time interval).
     """
 
     analysis: str = "tick"
     skip: bool = True
     prefetch: int = 8
+    decode: str = "full"
 
     def __post_init__(self):
+        if self.decode not in media.DECODE_MODES:
+            raise ParameterError(f"video.decode must be one of {media.DECODE_MODES}, got {self.decode!r}")
+        if not (0 <= int(self.prefetch) <= 256):
+            raise ParameterError(f"video.prefetch must lie in 0..256 frames, got {self.prefetch!r}")
         if self.analysis not in ANALYSIS_MODES:
             raise ParameterError(f"video.analysis must be one of {ANALYSIS_MODES}, got {self.analysis!r}")
 
@@ -140,7 +151,7 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
     last_time = 0.0
     t_decode = time.perf_counter()
 
-    for frame in media.iter_video(info.path, info=info, prefetch=video.prefetch):
+    for frame in media.iter_video(info.path, info=info, prefetch=video.prefetch, decode=video.decode):
         stages["decode_wait"].seconds += time.perf_counter() - t_decode
         last_time = frame.time_s
         k = min(int(tick_of_time(frame.time_s)), n - 1)
@@ -154,20 +165,23 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
             t_decode = time.perf_counter()
             continue
         want_sal = analyse_this and bool(need_saliency[k])
-        rgb = None
+        rgb = sig_rgb = None
         if analyse_this and (need_colour or want_sal or need_flow):
             rgb, gray = stages["proxy"].run(frame.rgb_and_gray, rgb_width, flow_params.proxy_width)
+            sig_rgb = _resized(rgb, SIGNATURE_WIDTH)
+        elif is_successor:  # colour matters for the in-pair cut check: a tiny RGB from the same read
+            sig_rgb, gray = stages["proxy"].run(frame.rgb_and_gray, SIGNATURE_WIDTH, flow_params.proxy_width)
         else:
             gray = stages["proxy"].run(frame.gray, flow_params.proxy_width)
+        sig = stages["cuts"].run(cuts.frame_signature, sig_rgb if sig_rgb is not None else gray)
         if is_successor:
-            pk, pgray, prgb, pt = pending
+            pk, pgray, prgb, psig, pt = pending
             pending = None
             dt = max(frame.time_s - pt, 1e-3)
-            _flow_pair(pk, pgray, gray, prgb, dt, out, acc, stages, flow_params, airflow_params, cut_params,
-                       depth_params, depth_backend, floor, video.skip)
+            _flow_pair(pk, pgray, gray, prgb, psig, sig, dt, out, acc, stages, flow_params, airflow_params,
+                       cut_params, depth_params, depth_backend, floor, video.skip)
         if analyse_this:
             out.frame_mask[k] = True
-            sig = stages["cuts"].run(cuts.frame_signature, rgb if rgb is not None else gray)
             if first_in_tick and prev_sig is not None and prev_sig.shape == sig.shape \
                     and cuts.is_cut(prev_sig, sig, params=cut_params):
                 out.cut[k] = True
@@ -182,7 +196,7 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
                 prev_sal_gray = sal_gray
                 acc.add_beta(k, fusion.actuator_weights(smap, params=fusion_params))
             if need_flow:
-                pending = (k, gray, rgb, frame.time_s)
+                pending = (k, gray, rgb, sig, frame.time_s)
         last_tick = k
         if frame.index % 16 == 0:
             check_cancel(cancel)
@@ -204,10 +218,10 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
     return out
 
 
-def _flow_pair(k, gray0, gray1, rgb0, dt, out: VideoAnalysis, acc: "_Accumulator", stages, flow_params,
-               airflow_params, cut_params, depth_params, depth_backend, floor, skip) -> None:
+def _flow_pair(k, gray0, gray1, rgb0, sig0, sig1, dt, out: VideoAnalysis, acc: "_Accumulator", stages,
+               flow_params, airflow_params, cut_params, depth_params, depth_backend, floor, skip) -> None:
     """Motion (and depth when the motion is high enough) for tick k from one frame pair."""
-    if cuts.is_cut(cuts.frame_signature(gray0), cuts.frame_signature(gray1), params=cut_params):
+    if sig0.shape == sig1.shape and cuts.is_cut(sig0, sig1, params=cut_params):
         out.cut[k] = True
         return
     if skip and stages["static"].run(airflow.is_static, gray0, gray1, params=airflow_params):
