@@ -107,8 +107,11 @@ def test_fan_iou_known_answer():
     assert r["iou"] == pytest.approx((2 / 6 + 0) / 2)
     assert r["iou_pooled"] == pytest.approx(2 / 7)
     assert M.fan_iou(a, a)["iou"] == 1.0
+    assert (r["ticks_both_on"], r["iou_both_on"]) == (1, pytest.approx(2 / 6))
+    assert (r["ticks_precision"], r["ticks_recall"], r["ticks_f1"]) == (1.0, 0.5, pytest.approx(2 / 3))
     assert M.fan_iou(np.zeros((3, 9, 17)), np.zeros((3, 9, 17))) == {
-        "iou": 1.0, "iou_pooled": 1.0, "ticks": 0, "ref_ticks_on": 0, "test_ticks_on": 0}
+        "iou": 1.0, "iou_pooled": 1.0, "ticks": 0, "ref_ticks_on": 0, "test_ticks_on": 0, "ticks_precision": 1.0,
+        "ticks_recall": 1.0, "ticks_f1": 1.0, "ticks_both_on": 0, "iou_both_on": 1.0}
     # a level threshold: cells at 0.5 no longer count as on
     assert M.fan_iou(a, b, on_level=0.6)["ticks"] == 2
 
@@ -129,6 +132,7 @@ def test_compare_timelines_known_answer_and_different_lengths():
     assert r["same_source"] is True
     assert r["vibration"]["mae"] == pytest.approx(0.6 / (30 * 9), rel=1e-6)
     assert r["vibration"]["mae_per_actuator"]["A5"] == pytest.approx(0.6 / 30, rel=1e-6)
+    assert r["vibration"]["chair_mae"] == pytest.approx(0.6 / 30, rel=1e-6)
     assert r["vibration"]["onsets"]["f1"] == 1.0
     assert r["temperature"]["mae_c"] == pytest.approx(1.0)
     assert r["fans"]["iou"] == 1.0 and r["fans"]["mae"] == pytest.approx(0.5 / (30 * 153))
@@ -149,7 +153,8 @@ def test_identical_timelines_have_zero_error():
     r = M.compare_timelines(tl, tl.copy())
     h = M.headline(r)
     assert h == {"vibration_mae": 0.0, "onset_f1": 1.0, "onset_precision": 1.0, "onset_recall": 1.0,
-                 "chair_onset_f1": 1.0, "temperature_mae_c": 0.0, "fan_iou": 1.0, "tick_difference": 0}
+                 "chair_onset_f1": 1.0, "chair_mae": 0.0, "temperature_mae_c": 0.0, "fan_iou": 1.0,
+                 "fan_ticks_f1": 1.0, "fan_iou_both_on": 1.0, "tick_difference": 0}
 
 
 def test_chair_onsets_ignore_which_actuator_carries_the_event():

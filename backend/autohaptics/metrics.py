@@ -5,7 +5,8 @@ gathers them into one JSON-serialisable report. ``ref`` is the reference, ``test
 under test; where the two differ in length only the common ticks ``0 .. min(n_ref, n_test) - 1``
 are compared and the difference is reported.
 
-- vibration: mean absolute error over ticks x actuators (0..1), per actuator too, and onset
+- vibration: mean absolute error over ticks x actuators (0..1), per actuator too, of the chair's
+  strongest actuator per tick (``chair_mae``: the timing and level, without the spatial spread), and onset
   agreement. An onset is a tick where an actuator goes from 0 to above 0 (the tick before
   tick 0 counts as 0); a test onset matches a reference onset of the same actuator within
   +-``tolerance`` ticks (default 1), each onset matched at most once. Precision = matched /
@@ -17,7 +18,9 @@ are compared and the difference is reported.
 - fans: a cell is on above ``on_level`` (default 0). Over the ticks where either side has any
   fan on, the IoU of the two sets of on-cells, averaged over those ticks (``iou``) and pooled
   (sum of intersections / sum of unions, ``iou_pooled``); 1 when neither side blows at all.
-  Also the mean absolute error of the fan levels over all ticks and cells.
+  Split into WHETHER and WHERE: precision/recall/F1 of the ticks that blow at all
+  (``ticks_f1``...), and the mean IoU over the ticks where both blow (``iou_both_on``). Also the
+  mean absolute error of the fan levels over all ticks and cells.
 - features: mean absolute error of every per-tick curve present in both.
 """
 
@@ -153,8 +156,9 @@ def fan_iou(ref: np.ndarray, test: np.ndarray, *, on_level: float = 0.0) -> dict
 
     ref, test : fans [shape=(n_ref, 9, 17)] and [shape=(n_test, 9, 17)], 0..1; a cell is on above
     ``on_level``. Returns {"iou" (mean of the per-tick IoU), "iou_pooled" (sum of intersections /
-    sum of unions), "ticks" (ticks where either side blows), "ref_ticks_on", "test_ticks_on"};
-    both IoUs are 1.0 when no tick has a fan on.
+    sum of unions), "ticks" (ticks where either side blows), "ref_ticks_on", "test_ticks_on",
+    "ticks_precision" / "ticks_recall" / "ticks_f1" (agreement on which ticks blow at all),
+    "ticks_both_on", "iou_both_on" (mean IoU where both blow)}; IoUs are 1.0 when nothing blows.
     """
     a, b = _pair(ref, test, "fans", (FAN_ROWS, FAN_COLS))
     on_a = (a > on_level).reshape(a.shape[0], -1)
@@ -167,8 +171,14 @@ def fan_iou(ref: np.ndarray, test: np.ndarray, *, on_level: float = 0.0) -> dict
     else:
         iou = float((inter[active] / union[active]).mean())
         pooled = float(inter[active].sum() / union[active].sum())
+    tick_a, tick_b = on_a.any(axis=1), on_b.any(axis=1)
+    both = tick_a & tick_b
+    whether = prf(int(both.sum()), int(tick_a.sum()), int(tick_b.sum()))
+    where = float((inter[both] / union[both]).mean()) if both.any() else 1.0
     return {"iou": iou, "iou_pooled": pooled, "ticks": int(active.sum()),
-            "ref_ticks_on": int(on_a.any(axis=1).sum()), "test_ticks_on": int(on_b.any(axis=1).sum())}
+            "ref_ticks_on": int(tick_a.sum()), "test_ticks_on": int(tick_b.sum()),
+            "ticks_precision": whether["precision"], "ticks_recall": whether["recall"], "ticks_f1": whether["f1"],
+            "ticks_both_on": int(both.sum()), "iou_both_on": where}
 
 
 # ------------------------------------------------------------------------ report
@@ -185,6 +195,7 @@ def compare_tracks(ref_vibration: np.ndarray, test_vibration: np.ndarray, ref_te
     fa, fb = _pair(ref_fans, test_fans, "fans", (FAN_ROWS, FAN_COLS))
     return {
         "vibration": {"mae": mae(va, vb), "max_abs": max_abs_error(va, vb),
+                      "chair_mae": mae(va.max(axis=1, initial=0.0), vb.max(axis=1, initial=0.0)),
                       "mae_per_actuator": {a: float(v) for a, v in zip(ACTUATOR_IDS, per_act)},
                       "onsets": onset_scores(va, vb, tolerance=tolerance),
                       "chair_onsets": _without_per_actuator(onset_scores(va.max(axis=1, initial=0.0),
@@ -240,8 +251,11 @@ def headline(report: dict) -> dict:
         "onset_precision": report["vibration"]["onsets"]["precision"],
         "onset_recall": report["vibration"]["onsets"]["recall"],
         "chair_onset_f1": report["vibration"]["chair_onsets"]["f1"],
+        "chair_mae": report["vibration"]["chair_mae"],
         "temperature_mae_c": report["temperature"]["mae_c"],
         "fan_iou": report["fans"]["iou"],
+        "fan_ticks_f1": report["fans"]["ticks_f1"],
+        "fan_iou_both_on": report["fans"]["iou_both_on"],
         "tick_difference": report["n_ticks"]["difference"],
     }
 
@@ -253,7 +267,8 @@ def format_report(report: dict) -> str:
     o = v["onsets"]
     lines = [
         f"ticks: ref {n['ref']}, test {n['test']}, compared {n['common']} (difference {n['difference']:+d})",
-        f"vibration: MAE {v['mae']:.4f}, max {v['max_abs']:.4f}; onsets (+-{o['tolerance_ticks']} tick) "
+        f"vibration: MAE {v['mae']:.4f}, max {v['max_abs']:.4f}, chair (strongest actuator) MAE "
+        f"{v['chair_mae']:.4f}; onsets (+-{o['tolerance_ticks']} tick) "
         f"F1 {o['f1']:.3f}, precision {o['precision']:.3f}, recall {o['recall']:.3f} "
         f"({o['matched']} matched of {o['ref_onsets']} ref / {o['test_onsets']} test)",
         f"chair as a whole: onsets F1 {v['chair_onsets']['f1']:.3f}, precision {v['chair_onsets']['precision']:.3f}, "
@@ -261,7 +276,9 @@ def format_report(report: dict) -> str:
         f"{v['chair_onsets']['ref_onsets']} ref / {v['chair_onsets']['test_onsets']} test)",
         f"temperature: MAE {t['mae_c']:.3f} C, max {t['max_abs_c']:.3f} C",
         f"fans: IoU {f['iou']:.3f} (pooled {f['iou_pooled']:.3f}) over {f['ticks']} ticks "
-        f"(ref on {f['ref_ticks_on']}, test on {f['test_ticks_on']}), level MAE {f['mae']:.4f}",
+        f"(ref on {f['ref_ticks_on']}, test on {f['test_ticks_on']}), level MAE {f['mae']:.4f}; "
+        f"which ticks blow: F1 {f['ticks_f1']:.3f}; which cells where both blow ({f['ticks_both_on']} ticks): "
+        f"IoU {f['iou_both_on']:.3f}",
     ]
     if report["features"]:
         width = max(len(k) for k in report["features"])

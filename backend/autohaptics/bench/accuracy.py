@@ -280,7 +280,7 @@ def bench_clip(video: Path, configs: list[Config], out: Path, *, repeat: int = 1
         entry = {"preset": c.preset, "overrides": dict(c.overrides), "wall_s": wall, "runs_s": [r["wall_s"] for r in rs],
                  "cpu_s": statistics.median(r["cpu_s"] for r in rs), "peak_rss_mb": max(r["peak_rss_mb"] for r in rs),
                  "x_decode": wall / decode_s if decode_s > 0 else float("nan"),
-                 "analysis_s": wall - decode_s, "stages": stage_seconds(rs[0]["stats"]),
+                 "analysis_s": wall - decode_s, "stages": _median_stages([stage_seconds(r["stats"]) for r in rs]),
                  "analysis_stage_s": statistics.median(analysis_stage_seconds(r["stats"]) for r in rs),
                  "skipping": skip_shares(rs[0]["stats"]), "timeline": str(work / f"{c.name}.json"),
                  "stats": rs[0]["stats"]}
@@ -312,6 +312,11 @@ def stage_seconds(stats: dict) -> dict:
     out["derive"] = _sec(stats.get("derive"))
     out["total"] = float(stats.get("total_seconds") or 0.0)
     return out
+
+
+def _median_stages(runs: list[dict]) -> dict:
+    keys = list(dict.fromkeys(k for r in runs for k in r))
+    return {k: statistics.median(r.get(k, 0.0) for r in runs) for k in keys}
 
 
 def analysis_stage_seconds(stats: dict) -> float:
@@ -372,13 +377,16 @@ def print_tables(res: dict, log=print) -> None:
     for name, c in res["configs"].items():
         e = c.get("error") or {}
         rows.append([name, c["wall_s"], c["x_decode"], c["x_decode_cpu"], c["analysis_stage_s"], c["peak_rss_mb"],
-                     e.get("vibration_mae", ""), e.get("onset_f1", ""), e.get("onset_precision", ""),
-                     e.get("onset_recall", ""), e.get("chair_onset_f1", ""), e.get("temperature_mae_c", ""),
-                     e.get("fan_iou", "")])
+                     e.get("vibration_mae", ""), e.get("chair_mae", ""), e.get("onset_f1", ""),
+                     e.get("onset_precision", ""), e.get("onset_recall", ""), e.get("chair_onset_f1", ""),
+                     e.get("temperature_mae_c", ""), e.get("fan_iou", ""), e.get("fan_ticks_f1", ""),
+                     e.get("fan_iou_both_on", "")])
     log(table(rows, ["config", "wall_s", "x_decode", "x_decode_cpu", "analysis_s", "peak_MiB", "vib_MAE",
-                     "onset_F1", "onset_P", "onset_R", "chair_F1", "temp_MAE_C", "fan_IoU"]))
+                     "chair_MAE", "onset_F1", "onset_P", "onset_R", "chair_F1", "temp_MAE_C", "fan_IoU",
+                     "fan_ticks_F1", "fan_IoU_both"]))
     log("(x_decode: wall / bare decode wall; x_decode_cpu: the same in CPU seconds; analysis_s: audio pass + "
-        "video stages except decode, from the stats)")
+        "video stages except decode, from the stats; chair_*: the strongest actuator per tick; fan_ticks_F1: "
+        "agreement on which ticks blow; fan_IoU_both: cell IoU where both blow)")
     log("\nwhere the time goes (seconds per stage, from the timelines' stats):")
     names = list(res["configs"])
     keys = list(dict.fromkeys(k for n in names for k in res["configs"][n]["stages"]))
