@@ -13,7 +13,9 @@
  *   status: "new"|"running"|"ready"|"failed"|"cancelled", duration_s?: number|null, n_ticks?: number|null,
  *   source?: any, job?: Job|null, params?: Params, revision?: number, cursor?: number, has_timeline?: boolean,
  *   media_type?: string, view?: Record<string, any>|null}} Project
- * @typedef {{revision: number, cursor: number, ops: Array<Record<string, any>>}} EditList
+ * @typedef {{id: string, t_s: number, label: string}} Marker
+ * @typedef {{revision: number, cursor: number, ops: Array<Record<string, any>>, markers: Marker[]}} EditList
+ * @typedef {{revision: number, cursor: number, markers: Marker[]}} HistoryAnswer
  * @typedef {{points: number, duration_s: number, has_audio?: boolean, min: number[], max: number[]}} Waveform
  * @typedef {{device: string, description: string, kind: "usb"|"serial"|"virtual", likely_chair: boolean}} ChairPort
  * @typedef {{latency_ms: number, comfort: {scale: number, mute: Record<string, boolean>}}} ChairSettings
@@ -164,19 +166,21 @@ export class Api {
   }
 
   /**
-   * The binary timeline (docs/API.md "Binary timeline").
+   * The binary timeline (docs/API.md "Binary timeline"); the browser asks for it gzipped and
+   * revalidates a cached copy by its ETag.
    * @param {string} id
    * @param {"composed"|"generated"} [layer]
+   * @param {string|null} [blocks] comma-separated block names (null: every block)
    * @returns {Promise<ArrayBuffer>}
    */
-  timelineBin(id, layer = "composed") {
-    const path = this.timelineBinPath(id, layer);
+  timelineBin(id, layer = "composed", blocks = null) {
+    const path = this.timelineBinPath(id, layer, blocks);
     return this.readBuffer(fetch(this.base + path), `GET ${path}`);
   }
 
-  /** @param {string} id @param {"composed"|"generated"} [layer] */
-  timelineBinPath(id, layer = "composed") {
-    return `/api/projects/${enc(id)}/timeline.bin?layer=${layer}`;
+  /** @param {string} id @param {"composed"|"generated"} [layer] @param {string|null} [blocks] */
+  timelineBinPath(id, layer = "composed", blocks = null) {
+    return `/api/projects/${enc(id)}/timeline.bin?layer=${layer}${blocks ? `&blocks=${blocks}` : ""}`;
   }
 
   /** @param {string} id @returns {Promise<EditList>} */
@@ -188,18 +192,18 @@ export class Api {
    * @param {string} id
    * @param {number} baseRevision
    * @param {Record<string, any>} op
-   * @returns {Promise<{revision: number, cursor: number, op: Record<string, any>}>}
+   * @returns {Promise<HistoryAnswer & {op: Record<string, any>}>}
    */
   postEdit(id, baseRevision, op) {
     return this.request("POST", `/api/projects/${enc(id)}/edits`, { base_revision: baseRevision, op });
   }
 
-  /** @param {string} id @param {number} baseRevision @returns {Promise<{revision: number, cursor: number}>} */
+  /** @param {string} id @param {number} baseRevision @returns {Promise<HistoryAnswer>} */
   undo(id, baseRevision) {
     return this.request("POST", `/api/projects/${enc(id)}/undo`, { base_revision: baseRevision });
   }
 
-  /** @param {string} id @param {number} baseRevision @returns {Promise<{revision: number, cursor: number}>} */
+  /** @param {string} id @param {number} baseRevision @returns {Promise<HistoryAnswer>} */
   redo(id, baseRevision) {
     return this.request("POST", `/api/projects/${enc(id)}/redo`, { base_revision: baseRevision });
   }
@@ -292,7 +296,7 @@ export class Api {
    * @param {string} id
    * @param {File} file
    * @param {number} baseRevision
-   * @returns {{promise: Promise<{revision: number, cursor: number, op: Record<string, any>}>, abort: () => void}}
+   * @returns {{promise: Promise<HistoryAnswer & {op: Record<string, any>}>, abort: () => void}}
    */
   importFile(id, file, baseRevision) {
     return this._multipart(`/api/projects/${enc(id)}/import`, file, { base_revision: String(baseRevision) }, () => {});

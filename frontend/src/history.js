@@ -32,6 +32,8 @@ export class EditSession extends Emitter {
     this.cursor = edits.cursor;
     /** @type {Array<Record<string, any>>} */
     this.ops = edits.ops;
+    /** @type {import("./api.js").Marker[]} the markers at the cursor, as the server composes them */
+    this.markers = edits.markers || [];
     this._pending = 0;
     /** @type {unknown} the failure of the latest request, null when it succeeded */
     this._lastError = null;
@@ -123,11 +125,16 @@ export class EditSession extends Emitter {
 
   /** Re-read the edit list (after a conflict, a regeneration, or on demand). */
   async reload() {
-    const e = await this.api.edits(this.projectId);
+    this._take(await this.api.edits(this.projectId));
+    this.emit("changed", { ...this.state(), reason: "reload" });
+  }
+
+  /** @param {import("./api.js").EditList} e */
+  _take(e) {
     this.revision = e.revision;
     this.cursor = e.cursor;
     this.ops = e.ops;
-    this.emit("changed", { ...this.state(), reason: "reload" });
+    this.markers = e.markers || [];
   }
 
   /**
@@ -140,12 +147,13 @@ export class EditSession extends Emitter {
   }
 
   /**
-   * @param {{revision: number, cursor: number}} res
+   * @param {{revision: number, cursor: number, markers: import("./api.js").Marker[]}} res
    * @param {"edit"|"undo"|"redo"} reason
    */
   _apply(res, reason) {
     this.revision = res.revision;
     this.cursor = res.cursor;
+    this.markers = res.markers;
     this.emit("changed", { ...this.state(), reason });
   }
 
@@ -154,10 +162,7 @@ export class EditSession extends Emitter {
     if (err instanceof ApiError && err.status === 409) {
       const message = `${err.detail} The latest edits were reloaded; your last change was not applied.`;
       try {
-        const e = await this.api.edits(this.projectId);
-        this.revision = e.revision;
-        this.cursor = e.cursor;
-        this.ops = e.ops;
+        this._take(await this.api.edits(this.projectId));
         this.emit("changed", { ...this.state(), reason: "conflict" });
       } catch (reloadErr) {
         this._lastError = reloadErr;

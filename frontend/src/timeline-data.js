@@ -1,7 +1,14 @@
 /**
  * The composed timeline as the editor holds it: typed arrays straight from /timeline.bin plus
  * min/max pyramids per drawn curve. Read-only; a new instance replaces it after every change.
+ *
+ * The fan grid (the `fans` block, 153 bytes a tick: 11 MB for two hours) may come after the rest
+ * (`?blocks=`): the lanes only draw `fan_activity`; the grid is for the overlay and copying.
+ * `withFans()` returns the same timeline with it.
  */
+
+/** The blocks of the first request: everything but the fan grid. */
+export const FIRST_BLOCKS = "vibration,temperature_c,fan_activity,features";
 
 import { parseTimelineBin } from "./binary.js";
 import { MinMaxPyramid, channel } from "./pyramid.js";
@@ -42,10 +49,10 @@ export class TimelineData {
     checkShape(temp.info, [n]);
     /** @type {Float32Array} */
     this.temperature = /** @type {Float32Array} */ (temp.data);
-    const fans = need("fans");
-    checkShape(fans.info, [n, FAN_ROWS, FAN_COLS]);
-    /** @type {Uint8Array} (n, 9, 17) bytes */
-    this.fans = /** @type {Uint8Array} */ (fans.data);
+    /** @type {Uint8Array|null} (n, 9, 17) bytes; null until the `fans` block is loaded */
+    this.fans = null;
+    const fans = blocks.get("fans");
+    if (fans) this.fans = fansOf(fans, n);
     const act = need("fan_activity");
     checkShape(act.info, [n]);
     /** @type {Uint8Array} fraction of fans on x 255 */
@@ -79,6 +86,27 @@ export class TimelineData {
     return new TimelineData(parseTimelineBin(buf));
   }
 
+  /** The fan grid is here (or not yet). */
+  get hasFans() {
+    return this.fans !== null;
+  }
+
+  /**
+   * This timeline with the fan grid of a `?blocks=fans` response of the same revision.
+   * @param {ArrayBuffer} buf
+   */
+  withFans(buf) {
+    const { header, blocks } = parseTimelineBin(buf);
+    if (Number(header.revision) !== this.revision || header.n_ticks !== this.nTicks) {
+      throw new Error(`the fan grid is of revision ${header.revision}, the timeline of ${this.revision}`);
+    }
+    const b = blocks.get("fans");
+    if (!b) throw new Error('binary timeline has no "fans" block');
+    const copy = Object.assign(Object.create(TimelineData.prototype), this);
+    copy.fans = fansOf(b, this.nTicks);
+    return /** @type {TimelineData} */ (copy);
+  }
+
   get durationS() {
     return this.nTicks * this.tickS;
   }
@@ -99,7 +127,8 @@ export class TimelineData {
     for (let i = 0; i < N_ACTUATORS; i++) vibration.push(this.vibration[k * N_ACTUATORS + i] / 255);
     const cells = FAN_ROWS * FAN_COLS;
     const grid = new Float32Array(cells);
-    for (let i = 0; i < cells; i++) grid[i] = this.fans[k * cells + i] / 255;
+    const fans = this.fans;
+    if (fans) for (let i = 0; i < cells; i++) grid[i] = fans[k * cells + i] / 255;
     /** @type {Record<string, number>} */
     const features = {};
     for (const [name, data] of this.features) features[name] = data[k] / 255;
@@ -129,11 +158,13 @@ export class TimelineData {
       if (lane === "temperature") {
         for (let k = t0; k < t1; k++) values.push(round4(this.temperature[k]));
       } else if (lane === "fans") {
+        const fans = this.fans;
+        if (!fans) throw new Error("The fan grid is still loading; copy again in a moment.");
         for (let k = t0; k < t1; k++) {
           const rows = [];
           for (let r = 0; r < FAN_ROWS; r++) {
             const row = [];
-            for (let c = 0; c < FAN_COLS; c++) row.push(round4(this.fans[(k * FAN_ROWS + r) * FAN_COLS + c] / 255));
+            for (let c = 0; c < FAN_COLS; c++) row.push(round4(fans[(k * FAN_ROWS + r) * FAN_COLS + c] / 255));
             rows.push(row);
           }
           values.push(rows);
@@ -147,6 +178,16 @@ export class TimelineData {
     }
     return out;
   }
+}
+
+/**
+ * @param {{info: import("./binary.js").BlockInfo, data: any}} block
+ * @param {number} n
+ * @returns {Uint8Array}
+ */
+function fansOf(block, n) {
+  checkShape(block.info, [n, FAN_ROWS, FAN_COLS]);
+  return /** @type {Uint8Array} */ (block.data);
 }
 
 /** @param {number} v */

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import json
 import struct
+import zlib
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,25 +43,42 @@ class Block:
     data: np.ndarray  # already quantised to the block's dtype
 
 
+_CHUNK = 1 << 20  # values quantised at a time (float64 temporaries stay in the cache, not 88 MB)
+
+
 def _u8(values: np.ndarray) -> np.ndarray:
-    return np.rint(np.clip(np.asarray(values, dtype=np.float64), 0.0, 1.0) * 255.0).astype(np.uint8)
+    """round(clip(v, 0, 1) * 255) in float64, chunk by chunk."""
+    src = np.ascontiguousarray(values).reshape(-1)
+    out = np.empty(src.shape, np.uint8)
+    for a in range(0, src.size, _CHUNK):
+        chunk = np.clip(src[a:a + _CHUNK].astype(np.float64), 0.0, 1.0)
+        np.rint(chunk * 255.0, out=chunk)
+        out[a:a + _CHUNK] = chunk
+    return out.reshape(np.shape(values))
+
+
+def block_sources(tl: Timeline) -> list[tuple[str, str, np.ndarray]]:
+    """(name, dtype, source array) of every block of ``tl`` in file order; :func:`quantise` turns one
+    into its Block. ``fan_activity`` is computed from the fans."""
+    out = [("vibration", "u8", tl.vibration), ("temperature_c", "f32", tl.temperature_c), ("fans", "u8", tl.fans),
+           ("fan_activity", "u8", tl.fans)]
+    for name, values in tl.features.items():
+        out.append((f"features.{name}", "u8" if name in NORMALISED_FEATURES else "f32", values))
+    return out
+
+
+def quantise(name: str, dtype: str, source: np.ndarray) -> Block:
+    if name == "fan_activity":
+        fans = np.asarray(source)
+        return Block(name, "u8", _u8((fans > 0).reshape(fans.shape[0], -1).mean(axis=1)))
+    if dtype == "u8":
+        return Block(name, "u8", _u8(source))
+    return Block(name, "f32", np.asarray(source, dtype="<f4"))
 
 
 def timeline_blocks(tl: Timeline) -> list[Block]:
     """The blocks of ``tl`` in file order, quantised."""
-    fans = np.asarray(tl.fans)
-    blocks = [
-        Block("vibration", "u8", _u8(tl.vibration)),
-        Block("temperature_c", "f32", np.asarray(tl.temperature_c, dtype="<f4")),
-        Block("fans", "u8", _u8(fans)),
-        Block("fan_activity", "u8", _u8((fans > 0).reshape(tl.n_ticks, -1).mean(axis=1))),
-    ]
-    for name, values in tl.features.items():
-        if name in NORMALISED_FEATURES:
-            blocks.append(Block(f"features.{name}", "u8", _u8(values)))
-        else:
-            blocks.append(Block(f"features.{name}", "f32", np.asarray(values, dtype="<f4")))
-    return blocks
+    return [quantise(name, dtype, src) for name, dtype, src in block_sources(tl)]
 
 
 def select_blocks(blocks: list[Block], names: list[str] | None) -> list[Block]:
@@ -80,14 +99,19 @@ def select_blocks(blocks: list[Block], names: list[str] | None) -> list[Block]:
     return [b for b in blocks if b.name in wanted]
 
 
-def encode(tl: Timeline, *, revision: int, blocks: list[Block] | None = None, header: dict | None = None) -> bytes:
-    """The binary form of ``tl`` (see the module docstring): ``blocks`` (default: every block of
-    ``tl``, see :func:`timeline_blocks`), ``header`` extra keys for the JSON header."""
-    blocks = timeline_blocks(tl) if blocks is None else blocks
+def block_bytes(block: Block) -> bytes:
+    """A block's bytes in the file, padded to a multiple of 4."""
+    raw = np.ascontiguousarray(block.data, dtype=_DTYPES[block.dtype]).tobytes()
+    return raw + bytes(_align(len(raw)) - len(raw))
+
+
+def head_bytes(n_ticks: int, tick_s: float, revision: int, blocks: list[Block], header: dict | None = None) -> bytes:
+    """Magic, version, header length and the JSON header (padded to a multiple of 4) for ``blocks``,
+    which follow it in order, each padded to a multiple of 4."""
     extra = dict(header or {})
-    entries: list[dict] = []
     # The header length changes the offsets and the offsets change the header: iterate until stable.
     header_len = 0
+    head = b""
     for _ in range(8):
         offset = _align(_PREFIX.size + header_len)
         entries = []
@@ -95,19 +119,39 @@ def encode(tl: Timeline, *, revision: int, blocks: list[Block] | None = None, he
             entries.append({"name": b.name, "dtype": b.dtype, "shape": list(b.data.shape), "offset": offset,
                             "scale": U8_SCALE if b.dtype == "u8" else 1.0})
             offset = _align(offset + b.data.nbytes)
-        head = json.dumps({"n_ticks": int(tl.n_ticks), "tick_s": tl.tick_s, "revision": int(revision),
+        head = json.dumps({"n_ticks": int(n_ticks), "tick_s": tick_s, "revision": int(revision),
                            "blocks": entries, **extra}, separators=(",", ":")).encode("utf-8")
         if len(head) == header_len:
             break
         header_len = len(head)
-    total = _align(entries[-1]["offset"] + blocks[-1].data.nbytes) if entries else _align(_PREFIX.size + header_len)
-    out = bytearray(total)
-    _PREFIX.pack_into(out, 0, MAGIC, VERSION, header_len)
-    out[_PREFIX.size:_PREFIX.size + header_len] = head
-    for b, e in zip(blocks, entries):
-        raw = np.ascontiguousarray(b.data, dtype=_DTYPES[b.dtype]).tobytes()
-        out[e["offset"]:e["offset"] + len(raw)] = raw
-    return bytes(out)
+    out = _PREFIX.pack(MAGIC, VERSION, header_len) + head
+    return out + bytes(_align(len(out)) - len(out))
+
+
+def encode(tl: Timeline, *, revision: int, blocks: list[Block] | None = None, header: dict | None = None) -> bytes:
+    """The binary form of ``tl`` (see the module docstring): ``blocks`` (default: every block of
+    ``tl``, see :func:`timeline_blocks`), ``header`` extra keys for the JSON header."""
+    blocks = timeline_blocks(tl) if blocks is None else blocks
+    return b"".join([head_bytes(tl.n_ticks, tl.tick_s, revision, blocks, header), *map(block_bytes, blocks)])
+
+
+def deflate_segment(data: bytes, level: int = 1) -> bytes:
+    """Raw DEFLATE of one segment, ended by a full flush (byte-aligned, no history), so segments
+    compressed apart can be joined into one stream by :func:`gzip_join`."""
+    c = zlib.compressobj(level, zlib.DEFLATED, -15)
+    return c.compress(data) + c.flush(zlib.Z_FULL_FLUSH)
+
+
+def gzip_join(plain: Sequence[bytes], deflated: Sequence[bytes]) -> bytes:
+    """One gzip member (RFC 1952) whose content is ``b"".join(plain)``, from each segment's
+    :func:`deflate_segment`: an unchanged block is compressed once, not with every revision."""
+    crc, size = 0, 0
+    for seg in plain:
+        crc = zlib.crc32(seg, crc)
+        size += len(seg)
+    last = zlib.compressobj(1, zlib.DEFLATED, -15).flush(zlib.Z_FINISH)  # an empty final block
+    head = b"\x1f\x8b\x08\x00\x00\x00\x00\x00\x00\xff"  # deflate, no flags, mtime 0, unknown OS
+    return b"".join([head, *deflated, last, struct.pack("<II", crc, size & 0xFFFFFFFF)])
 
 
 def decode(data: bytes) -> tuple[dict, dict[str, np.ndarray]]:

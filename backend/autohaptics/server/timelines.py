@@ -17,7 +17,6 @@ four values, ``overrides`` the user's dotted overrides.
 from __future__ import annotations
 
 import dataclasses
-import gzip
 import logging
 import threading
 import time
@@ -25,6 +24,8 @@ from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from autohaptics import pipeline
 from autohaptics.errors import ParameterError
@@ -104,9 +105,11 @@ class Timelines:
         self._lock = threading.Lock()
         self._files: OrderedDict[Path, tuple[tuple, Any]] = OrderedDict()
         self._loading: dict[Path, threading.Lock] = {}
+        self._warming: set[Path] = set()
         self._composed: OrderedDict[str, tuple[tuple, Composed]] = OrderedDict()
         self._json: OrderedDict[str, tuple[Composed, bytes]] = OrderedDict()
-        self._blocks: OrderedDict[tuple, list[binary.Block]] = OrderedDict()
+        self._encoded: OrderedDict[tuple[str, str], dict[str, _Encoded]] = OrderedDict()
+        self._tracks: OrderedDict[str, dict[str, tuple]] = OrderedDict()  # per project: (generated, keys, composed)
         self._bins: OrderedDict[tuple, bytes] = OrderedDict()
         self._waveform_locks: dict[str, threading.Lock] = {}
         self._size = cache_size
@@ -163,6 +166,28 @@ class Timelines:
     def analysis(self, pid: str) -> pipeline.Analysis | None:
         return self._cached(self.store.analysis_path(pid), pipeline.Analysis.load)
 
+    def _warm_analysis(self, pid: str) -> None:
+        """Load the feature cache in the background when it is not in memory yet: a project whose
+        timeline is being looked at is about to be re-derived (a threshold drag)."""
+        path = self.store.analysis_path(pid)
+        key = _file_key(path)
+        with self._lock:
+            hit = self._files.get(path)
+            if key is None or (hit is not None and hit[0] == key) or path in self._warming:
+                return
+            self._warming.add(path)
+
+        def load() -> None:
+            try:
+                self.analysis(pid)
+            except Exception as exc:  # the re-derive will report it
+                log.info("project %s: feature cache not loaded ahead (%s)", pid, exc)
+            finally:
+                with self._lock:
+                    self._warming.discard(path)
+
+        threading.Thread(target=load, name=f"warm-analysis {pid}", daemon=True).start()
+
     def require_generated(self, pid: str) -> Timeline:
         tl = self.generated(pid)
         if tl is None:
@@ -205,18 +230,32 @@ class Timelines:
 
     # ------------------------------------------------------------------- compose
     def compose(self, pid: str) -> Composed:
-        """The composed timeline at the project's current revision."""
+        """The composed timeline at the project's current revision (and the project's feature
+        cache starts loading in the background, for the re-derive that is likely to follow)."""
         revision, ops, project = self.store.snapshot(pid)
         generated = self.require_generated(pid)
+        self._warm_analysis(pid)
         key = (revision, id(generated), project["name"])
         with self._lock:
             hit = self._composed.get(pid)
             if hit is not None and hit[0] == key:
                 return hit[1]
-        tl, markers = edit_ops.apply_ops(generated, ops, imports=lambda ref: self._import(pid, ref))
+        keys = edit_ops.track_keys(ops)
+        with self._lock:
+            previous = self._tracks.get(pid, {})
+        reuse = {}
+        for track in edit_ops.TRACKS:  # a track whose generated values and edits are unchanged is kept
+            hit = previous.get(track)
+            if hit is not None and hit[1] == keys[track] and _same_values(hit[0], getattr(generated, track)):
+                reuse[track] = hit[2]
+        tl, markers = edit_ops.apply_ops(generated, ops, imports=lambda ref: self._import(pid, ref), reuse=reuse)
         tl.source["name"] = project["name"]
         composed = Composed(revision=revision, timeline=tl, markers=markers, ops=ops)
         with self._lock:
+            self._tracks[pid] = {t: (getattr(generated, t), keys[t], getattr(tl, t)) for t in edit_ops.TRACKS}
+            self._tracks.move_to_end(pid)
+            while len(self._tracks) > self._size:
+                self._tracks.popitem(last=False)
             self._composed[pid] = (key, composed)
             self._composed.move_to_end(pid)
             while len(self._composed) > self._size:
@@ -359,7 +398,8 @@ class Timelines:
         """The binary timeline and its ETag, kept per (project, revision, layer, blocks, gzip).
 
         ``blocks``: the block names to send (None: all; see :func:`binary.select_blocks`). The
-        composed layer's header carries the markers."""
+        composed layer's header carries the markers. A block whose values did not change since
+        the previous revision is not quantised or compressed again."""
         composed = self.compose(pid)
         names = None if blocks is None else tuple(sorted(set(blocks)))
         tag = f"{pid}-{composed.revision}-{layer}-{','.join(names) if names else 'all'}"
@@ -369,39 +409,52 @@ class Timelines:
             if hit is not None:
                 self._bins.move_to_end(key)
                 return hit, tag
-        plain_key = key[:-1] + (False,)
-        with self._lock:
-            data = self._bins.get(plain_key)
-        if data is None:
-            tl = composed.timeline if layer == "composed" else self.require_generated(pid)
-            chosen = binary.select_blocks(self._quantised(key[:4], tl), None if names is None else list(names))
-            header = {"markers": composed.markers} if layer == "composed" else {}
-            data = binary.encode(tl, revision=composed.revision, blocks=chosen, header=header)
-            self._keep_bin(plain_key, data)
+        tl = composed.timeline if layer == "composed" else self.require_generated(pid)
+        encoded = self._encoded_blocks(pid, layer, tl)
+        chosen_names = {b.name for b in binary.select_blocks([e.block for e in encoded],
+                                                             None if names is None else list(names))}
+        chosen = [e for e in encoded if e.block.name in chosen_names]
+        header = {"markers": composed.markers} if layer == "composed" else {}
+        head = binary.head_bytes(tl.n_ticks, tl.tick_s, composed.revision, [e.block for e in chosen], header)
+        plain = [head, *(e.plain for e in chosen)]
         if gzipped:
-            data = gzip.compress(data, compresslevel=GZIP_LEVEL, mtime=0)
-            self._keep_bin(key, data)
-        return data, tag
-
-    def _quantised(self, key: tuple, tl: Timeline) -> list[binary.Block]:
-        with self._lock:
-            hit = self._blocks.get(key)
-            if hit is not None:
-                self._blocks.move_to_end(key)
-                return hit
-        blocks = binary.timeline_blocks(tl)
-        with self._lock:
-            self._blocks[key] = blocks
-            while len(self._blocks) > self._size:
-                self._blocks.popitem(last=False)
-        return blocks
-
-    def _keep_bin(self, key: tuple, data: bytes) -> None:
+            for e in chosen:
+                if e.deflated is None:
+                    e.deflated = binary.deflate_segment(e.plain, GZIP_LEVEL)
+            data = binary.gzip_join(plain, [binary.deflate_segment(head, GZIP_LEVEL), *(e.deflated for e in chosen)])
+        else:
+            data = b"".join(plain)
         with self._lock:
             self._bins[key] = data
             self._bins.move_to_end(key)
             while len(self._bins) > 4 * self._size:
                 self._bins.popitem(last=False)
+        return data, tag
+
+    def _encoded_blocks(self, pid: str, layer: str, tl: Timeline) -> list[_Encoded]:
+        """Every block of ``tl`` quantised and laid out, reusing the previous revision's blocks whose
+        source values are the same (an edit of one lane leaves the fans' 11 MB as they were)."""
+        with self._lock:
+            previous = self._encoded.get((pid, layer), {})
+        same: dict[tuple[int, int], bool] = {}
+        out: dict[str, _Encoded] = {}
+        for name, dtype, src in binary.block_sources(tl):
+            e = previous.get(name)
+            if e is not None:
+                pair = (id(e.source), id(src))
+                if pair not in same:
+                    same[pair] = _same_values(e.source, src)
+                if same[pair]:
+                    out[name] = e if e.source is src else dataclasses.replace(e, source=src)
+                    continue
+            block = binary.quantise(name, dtype, src)
+            out[name] = _Encoded(block=block, source=src, plain=binary.block_bytes(block))
+        with self._lock:
+            self._encoded[(pid, layer)] = out
+            self._encoded.move_to_end((pid, layer))
+            while len(self._encoded) > 2 * self._size:
+                self._encoded.popitem(last=False)
+        return list(out.values())
 
     # ------------------------------------------------------------------ waveform
     def waveform(self, pid: str, points: int) -> dict:
@@ -412,6 +465,20 @@ class Timelines:
         with lock:
             return cached_peaks(self.store.media_path(project), self.store.waveform_path(pid, points),
                                 points=points)
+
+
+@dataclass
+class _Encoded:
+    """One block of a served binary timeline: quantised, its bytes, its DEFLATE segment (lazily)."""
+
+    block: binary.Block
+    source: Any  # the array it was quantised from (compared with the next revision's)
+    plain: bytes
+    deflated: bytes | None = None
+
+
+def _same_values(a, b) -> bool:
+    return a is b or (a.shape == b.shape and a.dtype == b.dtype and bool(np.array_equal(a, b)))
 
 
 def _file_key(path: Path) -> tuple | None:

@@ -25,7 +25,6 @@ import { MarkersLane } from "../lanes/markers.js";
 import { TemperatureLane } from "../lanes/temperature.js";
 import { VibrationDetailLane } from "../lanes/vibration-detail.js";
 import { WaveformLane } from "../lanes/waveform.js";
-import { foldMarkers } from "../markers.js";
 import { ChairPanel } from "../panels/chair-panel.js";
 import { exportMenu } from "../panels/export-menu.js";
 import { JobProgress } from "../panels/job-progress.js";
@@ -33,7 +32,7 @@ import { regenerateDialog } from "../panels/regenerate.js";
 import { ThresholdsPanel } from "../panels/thresholds.js";
 import { EditToolbar } from "../panels/toolbar.js";
 import { Player } from "../player.js";
-import { ACTUATOR_IDS, AUDIO_FEATURES, TimelineData } from "../timeline-data.js";
+import { ACTUATOR_IDS, AUDIO_FEATURES, FIRST_BLOCKS, TimelineData } from "../timeline-data.js";
 
 const VIEW_SAVE_DELAY_MS = 600;
 const ZOOM_STEP = 1.5;
@@ -70,10 +69,14 @@ export function startEditorLoads(api, projectId, early = null) {
     return {
       project: settle(api.readJson(early.project, `GET ${base}`)),
       edits: settle(api.readJson(early.edits, `GET ${base}/edits`)),
-      bin: settle(api.readBuffer(early.bin, `GET ${api.timelineBinPath(projectId)}`)),
+      bin: settle(api.readBuffer(early.bin, `GET ${api.timelineBinPath(projectId, "composed", FIRST_BLOCKS)}`)),
     };
   }
-  return { project: settle(api.project(projectId)), edits: settle(api.edits(projectId)), bin: settle(api.timelineBin(projectId, "composed")) };
+  return {
+    project: settle(api.project(projectId)),
+    edits: settle(api.edits(projectId)),
+    bin: settle(api.timelineBin(projectId, "composed", FIRST_BLOCKS)),
+  };
 }
 
 export class EditorPage {
@@ -432,10 +435,16 @@ export class EditorPage {
     this.video.src = this.api.mediaUrl(this.projectId);
   }
 
+  /**
+   * Load the composed timeline and draw it. The first load of the editor leaves the fan grid out
+   * (FIRST_BLOCKS) so the lanes are drawn sooner, and fetches it right after; later loads (after
+   * an edit) take every block. The editor is "ready" once the fan grid is in too.
+   */
   async reloadTimeline() {
     const seq = (this._loadSeq = (this._loadSeq || 0) + 1);
     const first = this._firstLoads && this._firstLoads.bin;
     if (this._firstLoads) this._firstLoads.bin = null;
+    const firstOpen = this.data === null;
     let buf;
     try {
       if (first) {
@@ -443,7 +452,7 @@ export class EditorPage {
         if ("error" in got) throw got.error;
         buf = got.value;
       } else {
-        buf = await this.api.timelineBin(this.projectId, "composed");
+        buf = await this.api.timelineBin(this.projectId, "composed", firstOpen ? FIRST_BLOCKS : null);
       }
     } catch (err) {
       this._attachMedia();
@@ -471,9 +480,39 @@ export class EditorPage {
     this._updateToolbar();
     // Runs after the lanes' redraw in the same frame: this revision is now on screen.
     this.loop.request("drawn", () => {
-      this.drawnRevision = data.revision;
+      if (data.hasFans) this.drawnRevision = data.revision;
       this._attachMedia();
       if (Number.isNaN(this.timing.firstRender)) this.timing.firstRender = performance.now() - this.timing.start;
+      if (data.hasFans) this.host.dataset.ready = "true";
+    });
+    if (!data.hasFans) await this._loadFans(seq);
+  }
+
+  /**
+   * The fan grid after a load without it; a timeline that moved on meanwhile is loaded whole.
+   * @param {number} seq the load it completes
+   */
+  async _loadFans(seq) {
+    let buf;
+    try {
+      buf = await this.api.timelineBin(this.projectId, "composed", "fans");
+    } catch (err) {
+      if (!this.disposed && seq === this._loadSeq) this._showNotice(`Could not load the fan grid: ${errorText(err)}`);
+      return;
+    }
+    if (this.disposed || seq !== this._loadSeq || !this.data) return;
+    let data;
+    try {
+      data = this.data.withFans(buf);
+    } catch (err) {
+      await this.reloadTimeline(); // another revision meanwhile: take every block of the current one
+      return;
+    }
+    this.data = data;
+    this.lastTick = -1;
+    this._onTime(this.player.currentTime, this.player.playing);
+    this.loop.request("fans-in", () => {
+      this.drawnRevision = data.revision;
       this.host.dataset.ready = "true";
     });
   }
@@ -539,7 +578,7 @@ export class EditorPage {
 
   _refreshMarkers() {
     if (!this.session) return;
-    this.markers = foldMarkers(this.session.ops, this.session.cursor, this.timeline.durationS);
+    this.markers = this.session.markers.map((m) => ({ ...m }));
     if (this.selectedMarker && !this.markers.some((m) => m.id === this.selectedMarker)) this.selectedMarker = null;
     this.markersLane.settle();
     this.timeline.invalidate("markers");
@@ -721,7 +760,13 @@ export class EditorPage {
   copy() {
     const sel = this.timeline.selection;
     if (!sel || !this.data) return;
-    const c = this.clipboard.copy(this.data, sel);
+    let c;
+    try {
+      c = this.clipboard.copy(this.data, sel);
+    } catch (err) {
+      toast(errorText(err), "warn");
+      return;
+    }
     toast(`Copied ${c.length} ticks of ${sel.lanes.join(", ")}.`);
     this._updateToolbar();
   }
