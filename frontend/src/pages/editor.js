@@ -875,10 +875,14 @@ export class EditorPage {
     const thresholds = { ...this.thresholds };
     /** @type {import("../api.js").Job|null} */
     let job = null;
+    let derived = false;
     const ok = await this.session.run(async () => {
       const res = await this.api.putParams(this.projectId, { thresholds });
       if (res.job) job = res.job;
-      else if (typeof res.revision === "number") this.session?.setRevision(res.revision);
+      if (res.derived && typeof res.revision === "number") {
+        derived = true;
+        this.session?.setRevision(res.revision);
+      }
     });
     if (!ok) {
       this.thresholds = { ...this.thresholds, [name]: before };
@@ -886,8 +890,15 @@ export class EditorPage {
       this.timeline.invalidate();
       return;
     }
+    if (derived) {
+      // Derived from the cache: shown now. A job that came with it refines the ticks the cache could
+      // only estimate, in the background (docs/API.md "Parameters").
+      await this.reloadTimeline();
+      this._updateParamsInfo();
+      if (job) await this._followJob(job);
+      return;
+    }
     if (job) await this._followJob(job);
-    else await this.reloadTimeline();
     this._updateParamsInfo();
   }
 
