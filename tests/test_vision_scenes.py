@@ -243,11 +243,5 @@ def test_sintel_encodes_agree_on_which_ticks_blow(sintel, clip_timelines):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason=(
-    "measured 0.865: the two encodes blow on the same ticks (47 and 48 of 522) but the cell patterns "
-    "differ: 180 cells flip on the motion test (>= 0.5 of the tick's strongest cell) and 148 on the "
-    "nearness test (>= 0.5); VP8 at 640x272 and H.264 at 480x204 give different 160x68 flows (per-tick "
-    "mean motion agrees, correlation 0.998; per cell the relative motion differs by 0.06 and the nearness by 0.03 "
-    "on average). Smoothing the cell grids or lower bars only reach 0.87-0.89 by turning more cells on"))
 def test_sintel_encodes_agree_on_fan_cells(sintel):
     assert sintel["fan_iou"] >= 0.9

@@ -1,8 +1,10 @@
 """The video pass: which frames are analysed, at what size, and which stages run on them.
 
-Per 100 ms tick k the pass takes the first decoded frame inside the tick (``analysis="tick"``)
+Per 100 ms tick k the pass takes the decoded frame nearest the tick's centre (``analysis="tick"``)
 and the frame that follows it (for optical flow over one frame interval), or every decoded frame
-(``analysis="every"``, the reference). It computes, per tick:
+(``analysis="every"``, the reference: colour, motion and depth are averaged over the tick's
+frames; saliency stays on the centre frame, because averaging salient positions across a tick
+would put weight where no object ever was). It computes, per tick:
 
 - ``mean_rgb``   mean colour of the frame (thermal), float32 [shape=(n, 3)], 0..255
 - ``cut``        a hard cut happens at tick k (against the previous tick's frame, or inside the flow pair)
@@ -31,7 +33,7 @@ from autohaptics import airflow, cuts, depth, fusion, media, saliency, thermal
 from autohaptics.errors import ParameterError
 from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel
-from autohaptics.timebase import tick_of_time
+from autohaptics.timebase import TICK_S, tick_of_time
 
 ANALYSIS_MODES = ("tick", "every")
 # Cut signatures are always taken from an RGB proxy this wide, so every two frames compare alike
@@ -145,26 +147,28 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
 
     prev_sig = None  # signature of the previous analysed frame (cut detection)
     prev_sal_gray = None  # luma of the previous saliency proxy (the saliency motion cue)
-    pending = None  # (tick, gray, rgb, time) waiting for its successor frame (flow pair)
+    pending = None  # (tick, gray, rgb, sig, time) waiting for its successor frame (flow pair)
     acc = _Accumulator(out)
-    last_tick = -1
     last_time = 0.0
-    t_decode = time.perf_counter()
+    stream = media.iter_video(info.path, info=info, prefetch=video.prefetch, decode=video.decode)
+    timer = {"t": time.perf_counter()}
 
-    for frame in media.iter_video(info.path, info=info, prefetch=video.prefetch, decode=video.decode):
-        stages["decode_wait"].seconds += time.perf_counter() - t_decode
+    def timed_frames():
+        for f in stream:
+            stages["decode_wait"].seconds += time.perf_counter() - timer["t"]
+            yield f
+            timer["t"] = time.perf_counter()
+
+    for frame, centre_tick in _centre_frames(timed_frames(), n):
         last_time = frame.time_s
         k = min(int(tick_of_time(frame.time_s)), n - 1)
-        if k < 0:
-            t_decode = time.perf_counter()
-            continue
-        first_in_tick = k != last_tick
-        analyse_this = first_in_tick or every
+        analyse_this = k >= 0 and (centre_tick is not None or every)
         is_successor = pending is not None
         if not (analyse_this or is_successor):
-            t_decode = time.perf_counter()
             continue
-        want_sal = analyse_this and bool(need_saliency[k])
+        if centre_tick is not None:
+            k = centre_tick
+        want_sal = centre_tick is not None and bool(need_saliency[k])
         rgb = sig_rgb = None
         if analyse_this and (need_colour or want_sal or need_flow):
             rgb, gray = stages["proxy"].run(frame.rgb_and_gray, rgb_width, flow_params.proxy_width)
@@ -182,8 +186,7 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
                        cut_params, depth_params, depth_backend, floor, video.skip)
         if analyse_this:
             out.frame_mask[k] = True
-            if first_in_tick and prev_sig is not None and prev_sig.shape == sig.shape \
-                    and cuts.is_cut(prev_sig, sig, params=cut_params):
+            if prev_sig is not None and prev_sig.shape == sig.shape and cuts.is_cut(prev_sig, sig, params=cut_params):
                 out.cut[k] = True
             prev_sig = sig
             if need_colour:
@@ -197,14 +200,18 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
                 acc.add_beta(k, fusion.actuator_weights(smap, params=fusion_params))
             if need_flow:
                 pending = (k, gray, rgb, sig, frame.time_s)
-        last_tick = k
         if frame.index % 16 == 0:
             check_cancel(cancel)
             if progress is not None:
                 progress("video", min(1.0, frame.time_s / duration))
-        t_decode = time.perf_counter()
 
     acc.finish()
+    if pending is not None and pending[0] > 0 and acc.motion_n[pending[0]] == 0:
+        # the clip ended before the last analysed frame's successor: its motion is unknown, so the
+        # tick holds the previous one's (the rule for ticks without a frame of their own)
+        k = pending[0]
+        for name in ("motion", "cell_motion", "nearness", "depth_mask", "static"):
+            getattr(out, name)[k] = getattr(out, name)[k - 1]
     _hold_missing(out)
     out.stats = {
         name: {"seconds": round(st.seconds, 4), "computed": st.computed} for name, st in stages.items()
@@ -216,6 +223,36 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
     out.stats["frames"] = {"ticks_with_frame": int(out.frame_mask.sum()), "ticks": n,
                            "last_time_s": round(last_time, 6)}
     return out
+
+
+def _centre_frames(frames, n: int):
+    """Yield every frame once, in order, as (frame, tick) where ``tick`` is the tick whose CENTRE
+    (0.1 k + 0.05 s) this frame is nearest to among the tick's frames, else (frame, None).
+
+    The vibration of tick k goes with the picture at that instant, so that is the frame analysed
+    for it (saliency; colour and flow too in the tick analysis); the frame is known one frame late
+    (one frame of look-ahead).
+    """
+    held = None  # (frame, tick): the best candidate so far for its tick, not yet yielded
+    done = -1  # last tick whose frame was chosen
+    for f in frames:
+        k = min(int(tick_of_time(f.time_s)), n - 1)
+        if held is not None:
+            hf, hk = held
+            centre = (hk + 0.5) * TICK_S
+            if k == hk and abs(f.time_s - centre) < abs(hf.time_s - centre):
+                yield hf, None
+                held = (f, k)
+                continue
+            yield hf, hk
+            done = hk
+            held = None
+        if k > done and k >= 0:
+            held = (f, k)
+        else:
+            yield f, None
+    if held is not None:
+        yield held
 
 
 def _flow_pair(k, gray0, gray1, rgb0, sig0, sig1, dt, out: VideoAnalysis, acc: "_Accumulator", stages,
