@@ -414,10 +414,10 @@ def sustained_motion(motion: np.ndarray) -> np.ndarray:
 
     A one-tick spike (an object popping in or a flash between a frame and its successor: optical
     flow reads nonsense there, and 100 ms of wind cannot be felt anyway) falls to its neighbours'
-    level; motion that lasts two ticks or more keeps its value.
+    level; motion that lasts two ticks or more keeps its value. Outside the clip counts as still.
     """
     m = np.asarray(motion, dtype=np.float64)
-    if m.size < 2:
+    if m.size == 0:
         return m.copy()
     left = np.concatenate([[0.0], m[:-1]])
     right = np.concatenate([m[1:], [0.0]])
