@@ -173,19 +173,26 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
         if analyse_this and (need_colour or want_sal or need_flow):
             rgb, gray = stages["proxy"].run(frame.rgb_and_gray, rgb_width, flow_params.proxy_width)
             sig_rgb = _resized(rgb, SIGNATURE_WIDTH)
-        elif is_successor:  # colour matters for the in-pair cut check: a tiny RGB from the same read
-            sig_rgb, gray = stages["proxy"].run(frame.rgb_and_gray, SIGNATURE_WIDTH, flow_params.proxy_width)
         else:
             gray = stages["proxy"].run(frame.gray, flow_params.proxy_width)
-        sig = stages["cuts"].run(cuts.frame_signature, sig_rgb if sig_rgb is not None else gray)
+        sig = stages["cuts"].run(cuts.frame_signature, sig_rgb) if sig_rgb is not None else None
         if is_successor:
             pk, pgray, prgb, psig, pt = pending
             pending = None
             dt = max(frame.time_s - pt, 1e-3)
-            _flow_pair(pk, pgray, gray, prgb, psig, sig, dt, out, acc, stages, flow_params, airflow_params,
-                       cut_params, depth_params, depth_backend, floor, video.skip)
+
+            def successor_sig(frame=frame, sig=sig):
+                # colour matters for the in-pair cut check (a green and a grey shot can share their
+                # luma); read only when the pair moves enough to matter
+                return sig if sig is not None else stages["cuts"].run(
+                    cuts.frame_signature, stages["proxy"].run(frame.proxy, SIGNATURE_WIDTH))
+
+            _flow_pair(pk, pgray, gray, prgb, psig, successor_sig, dt, out, acc, stages, flow_params,
+                       airflow_params, cut_params, depth_params, depth_backend, floor, video.skip)
         if analyse_this:
             out.frame_mask[k] = True
+            if sig is None:
+                sig = stages["cuts"].run(cuts.frame_signature, gray)
             if prev_sig is not None and prev_sig.shape == sig.shape and cuts.is_cut(prev_sig, sig, params=cut_params):
                 out.cut[k] = True
             prev_sig = sig
@@ -255,10 +262,13 @@ def _centre_frames(frames, n: int):
         yield held
 
 
-def _flow_pair(k, gray0, gray1, rgb0, sig0, sig1, dt, out: VideoAnalysis, acc: "_Accumulator", stages,
+def _flow_pair(k, gray0, gray1, rgb0, sig0, successor_sig, dt, out: VideoAnalysis, acc: "_Accumulator", stages,
                flow_params, airflow_params, cut_params, depth_params, depth_backend, floor, skip) -> None:
-    """Motion (and depth when the motion is high enough) for tick k from one frame pair."""
-    if sig0.shape == sig1.shape and cuts.is_cut(sig0, sig1, params=cut_params):
+    """Motion (and depth when the motion is high enough) for tick k from one frame pair.
+
+    Cut checks: luma first (cheap, both proxies are there); when the pair moves past the floor,
+    colour too (``successor_sig()`` reads the successor's colour only then)."""
+    if cuts.is_cut(cuts.frame_signature(gray0), cuts.frame_signature(gray1), params=cut_params):
         out.cut[k] = True
         return
     if skip and stages["static"].run(airflow.is_static, gray0, gray1, params=airflow_params):
@@ -268,6 +278,11 @@ def _flow_pair(k, gray0, gray1, rgb0, sig0, sig1, dt, out: VideoAnalysis, acc: "
     flow = stages["flow"].run(airflow.optical_flow, gray0, gray1, params=flow_params)
     mag = airflow.motion_magnitude(flow, dt_s=dt, width_px=gray0.shape[1])
     score = airflow.motion_score(mag)
+    if score > floor:
+        sig1 = successor_sig()
+        if sig0 is not None and sig0.shape == sig1.shape and cuts.is_cut(sig0, sig1, params=cut_params):
+            out.cut[k] = True
+            return
     cells = airflow.cell_motion(mag)
     out.flow_mask[k] = True
     acc.add_motion(k, score, cells)
