@@ -296,13 +296,14 @@ def test_dask_cluster_gives_the_local_timelines(tmp_path, capsys):
         assert f"0 done, {len(clips)} skipped (up to date), 1 failed" in capsys.readouterr().err
 
     for report in (local, remote):
-        assert [r.status for r in report.results] == ["failed", "done", "done", "done"]
-        assert "not a readable media file" in report.results[0].reason
+        assert [r.status for r in report.results] == ["failed", "done", "done", "done"], \
+            [(r.source.name, r.status, r.reason) for r in report.results]
+        assert "not a readable media file" in report.results[0].reason, report.results[0].reason
     assert [r.reason for r in remote.failed] == [r.reason for r in local.failed]
     for a, b in zip(local.done, remote.done):
         assert a.output.name == b.output.name
         _assert_same_timeline(Timeline.load(a.output), Timeline.load(b.output))
-    assert fractions[-1] == 1.0 and fractions == sorted(fractions)
+    assert fractions[-1] == 1.0 and fractions == sorted(fractions), fractions
     # more distinct values than film completions: the workers' progress within films came back
     assert len(set(fractions)) > len(clips) + 2, fractions
     manifest = json.loads((tmp_path / "dask" / MANIFEST_NAME).read_text())

@@ -31,6 +31,8 @@ export class ChairSync {
     /** the picture advances (between a "play" and a "pause" sync event) */
     this.running = player.playing;
     this.pending = 0;
+    /** @type {Promise<void>|null} the report being sent now */
+    this.inflight = null;
     this.generation = 0;
     /** @type {Promise<any>} */
     this.chain = Promise.resolve();
@@ -54,9 +56,15 @@ export class ChairSync {
     this._updateTimer();
   }
 
-  /** Drop the reports still queued (after STOP, nothing from before it may restart the chair). */
+  /**
+   * Drop the reports still queued (after STOP, nothing from before it may restart the chair).
+   * Returns the report already on its way to the server, if any: it may arrive after the STOP
+   * (requests travel on separate connections), so the caller stops again once it has landed.
+   * @returns {Promise<void>|null}
+   */
   halt() {
     this.generation++;
+    return this.inflight;
   }
 
   /** @param {"play"|"pause"|"seek"} state @param {number} timeS */
@@ -98,11 +106,14 @@ export class ChairSync {
         /** @type {import("./api.js").ChairReport} */
         const report = { project_id: this.projectId, state, position_s: Math.round(position * 1000) / 1000 };
         if (heartbeat) report.heartbeat = true;
-        await this.api.chairPlayback(report);
+        const sending = this.api.chairPlayback(report);
+        this.inflight = sending.then(() => {}, () => {});
+        await sending;
       } catch (err) {
         // 409: the chair went away meanwhile; the panel shows that from the status stream.
         if (!(err instanceof ApiError && err.status === 409) && !heartbeat) this.onError(err instanceof Error ? err.message : String(err));
       } finally {
+        this.inflight = null;
         this.pending--;
       }
     });

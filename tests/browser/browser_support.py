@@ -184,6 +184,17 @@ def client_x(pg, time_s: float) -> float:
     return pg.evaluate("(t) => window.autohaptics.clientXOf(t)", time_s)
 
 
+def wait_jobs_settled(pg) -> dict:
+    """Wait until no job is being followed (a threshold re-derive may start a background re-analysis)
+    and the editor drew its saved revision."""
+    pg.wait_for_function(
+        """() => {
+            const s = window.autohaptics.state();
+            return s && !s.jobActive && s.drawnRevision === s.revision && s.saveState === 'saved';
+        }""")
+    return state(pg)
+
+
 def wait_revision_above(pg, revision: int) -> dict:
     """Wait until the editor saved past ``revision`` and drew the composed timeline of the new revision."""
     pg.wait_for_function(

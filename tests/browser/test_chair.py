@@ -214,8 +214,11 @@ def test_stop_button_and_escape_turn_everything_off_at_once(cpage, chair_api, fi
     connect_in_the_panel(pg, chair.device)
     for press in (lambda: pg.click("[data-testid=chair-stop]"), lambda: pg.keyboard.press("Escape")):
         seek_video(pg, 10.0)
+        start = log_index(chair)
         pg.click("[data-testid=play]")
-        chair.wait_for(lambda e: e["ev"] == "frame" and 105 <= e["tick"] < 200, timeout_s=15.0)
+        played = [e for e in chair.read_log()[:start] if e["ev"] == "frame" and 105 <= e["tick"] < 200]
+        chair.wait_for(lambda e: e["ev"] == "frame" and 105 <= e["tick"] < 200, timeout_s=15.0,
+                       count=len(played) + 1)  # a frame of this round's playing
         before = log_index(chair)
         pg.locator("[data-testid=timeline]").focus()
         press()
@@ -226,12 +229,53 @@ def test_stop_button_and_escape_turn_everything_off_at_once(cpage, chair_api, fi
         pg.wait_for_function("() => document.querySelector('[data-testid=video]').paused")
         settled = log_index(chair)
         time.sleep(1.3)  # longer than a heartbeat: the heartbeat does not restart a stopped chair
-        assert frames_since(chair, settled) == []
+        late = frames_since(chair, settled)
+        assert not late, [(e["tick"], e["seq"], e["t_ms"]) for e in late]
         # At most the frame that was on the wire when the button was pressed comes before the STOP.
         between = [e for e in chair.read_log()[before:] if e["ev"] in ("frame", "stop")]
         assert [e["ev"] for e in between].index("stop") <= 1
     st = chair_api.get("/api/chair/status").json()
     assert st["playback"]["state"] in ("stopped", "paused") and not st["playing"]
+
+
+def test_stop_wins_over_a_play_report_that_arrives_after_it(cpage, chair_api, film, chair):
+    """A play report already on its way when STOP is pressed may reach the server after the STOP
+    (separate connections) and restart the chair; the editor stops again once it has landed, and
+    does not count on the pause report that follows (held here until the end)."""
+    pg, pid = cpage, film["id"]
+    open_editor(pg, pid)
+    pg.wait_for_function("() => document.querySelector('[data-testid=video]').readyState >= 2")
+    connect_in_the_panel(pg, chair.device)
+    seek_video(pg, 10.0)
+    held = []
+
+    def hold(route):
+        held.append(route)  # every report held on the wire
+
+    pg.route("**/api/chair/playback", hold)
+    pg.click("[data-testid=play]")
+    pg.wait_for_function("() => !document.querySelector('[data-testid=video]').paused")
+    deadline = time.monotonic() + 10
+    while not held and time.monotonic() < deadline:
+        pg.wait_for_timeout(20)
+    assert held and '"play"' in (held[0].request.post_data or ""), "the play report never went out"
+    stops = len([e for e in chair.read_log() if e["ev"] == "stop"])
+    pg.click("[data-testid=chair-stop]")
+    chair.wait_for(lambda e: e["ev"] == "stop", count=stops + 1)
+    pg.wait_for_function("() => document.querySelector('[data-testid=video]').paused")
+    late = log_index(chair)
+    held.pop(0).continue_()  # the late play report: the server starts playing ...
+    chair.wait_for(lambda e: e["ev"] == "frame", count=len(chair.frames()) + 1, timeout_s=10.0)
+    chair.wait_for(lambda e: e["ev"] == "stop", count=stops + 2, timeout_s=10.0)  # ... and STOP again
+    assert len(frames_since(chair, late)) <= 3
+    settled = log_index(chair)
+    time.sleep(1.3)
+    after = frames_since(chair, settled)
+    assert not after, [(e["tick"], e["seq"], e["t_ms"]) for e in after]
+    assert not chair_api.get("/api/chair/status").json()["playing"]
+    pg.unroute("**/api/chair/playback", hold)
+    for route in held:
+        route.continue_()
 
 
 def test_push_the_selection_and_disconnect(cpage, chair_api, film, chair):

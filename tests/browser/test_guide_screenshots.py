@@ -254,7 +254,7 @@ def _union(page, *selectors: str, pad: int = 8) -> dict:
 
 @pytest.mark.browser
 def test_guide_screenshots_of_the_workflow(page, api, tmp_path):
-    from browser_support import lane_rect, media_clip, open_editor, state, values_at, wait_revision_above
+    from browser_support import lane_rect, media_clip, open_editor, state, values_at, wait_jobs_settled, wait_revision_above
 
     clip = media_clip(GUIDE_CLIP)
 
@@ -296,6 +296,7 @@ def test_guide_screenshots_of_the_workflow(page, api, tmp_path):
     page.wait_for_function("() => document.querySelector('[data-testid=threshold-loudness]').value === '0.6'")
     page.mouse.up()
     s1 = wait_revision_above(page, s0["revision"])
+    s1 = wait_jobs_settled(page)  # the derived timeline may be refined by a background re-analysis
     assert s1["thresholds"]["loudness"] == pytest.approx(0.6)
     assert api.get(f"/api/projects/{pid}").json()["params"]["thresholds"]["loudness"] == pytest.approx(0.6)
     _shot(page, "guide_thresholds", clip=_union(page, "[data-testid=lane-feature-sharpness]",

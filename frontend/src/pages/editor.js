@@ -97,6 +97,8 @@ export class EditorPage {
     this.project = null;
     /** @type {EditSession|null} */
     this.session = null;
+    /** Jobs being followed (progress shown); a threshold re-derive may bring a background one. */
+    this.jobsFollowed = 0;
     /** @type {Record<string, number>} */
     this.thresholds = { ...(this.config.default_thresholds || {}) };
     /** @type {Array<{id: string, t_s: number, label: string}>} */
@@ -337,10 +339,17 @@ export class EditorPage {
 
   /** STOP the chair: every output off now, the player paused, queued playback reports dropped. */
   async chairStop() {
-    if (this.chairSync) this.chairSync.halt();
-    const stopping = this.chairPanel ? this.chairPanel.stop() : this.api.chairStop().catch((err) => toast(`STOP failed: ${errorText(err)}`, "error"));
+    const racing = this.chairSync ? this.chairSync.halt() : null;
+    const stop = () => (this.chairPanel ? this.chairPanel.stop() : this.api.chairStop().catch((err) => toast(`STOP failed: ${errorText(err)}`, "error")));
+    const stopping = stop();
     if (this.player && this.player.playing) this.player.pause();
     await stopping;
+    if (racing) {
+      // A play report already on its way may reach the server after the STOP and restart the
+      // chair: once it has landed, STOP again.
+      await racing;
+      await stop();
+    }
   }
 
   /** @param {string[]} features */
@@ -926,6 +935,16 @@ export class EditorPage {
 
   /** @param {import("../api.js").Job} job */
   async _followJob(job) {
+    this.jobsFollowed += 1;
+    try {
+      await this._followJobInner(job);
+    } finally {
+      this.jobsFollowed -= 1;
+    }
+  }
+
+  /** @param {import("../api.js").Job} job */
+  async _followJobInner(job) {
     if (this.jobProgress) this.jobProgress.close();
     const progress = new JobProgress(this.api);
     this.jobProgress = progress;
@@ -1097,6 +1116,7 @@ export class EditorPage {
       timing: { ...this.timing },
       waveformReady: !Number.isNaN(this.timing.waveformLoaded),
       saveState: this.saveEl ? this.saveEl.dataset.state || "" : "",
+      jobActive: this.jobsFollowed > 0,
       chair: this.chairPanel && this.chairPanel.status
         ? { active: this.chairPanel.active, state: this.chairPanel.status.state, reporting: this.chairSync.active }
         : null,
