@@ -119,14 +119,6 @@ def two_hour_film(tmp_path_factory):
     return long_film(tmp_path_factory.mktemp("long") / "film_2h_64x36.mp4")
 
 
-# A known miss of the 400 MiB target (None once met): the test then expects the miss (xfail) and fails
-# as soon as the target is met, so this line gets removed. Every other check fails as usual.
-TWO_HOUR_RSS_MISS = ("peak RSS 447 MiB (balanced) and 449 MiB (fast) at 1cae3ce: imports and compiled kernels 249 MiB "
-                     "(scipy.signal alone ~76, numba ~70), audio pass +52 (per-chunk parts, then concatenated and "
-                     "copied), video pass +70..115, derive +50 (fans track 44 and its temporaries); "
-                     "docs/BENCHMARKS.md, '2-hour film'")
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("preset", ["balanced", "fast"])
 def test_two_hour_film_in_bounded_memory(two_hour_film, preset, tmp_path):
@@ -143,7 +135,4 @@ def test_two_hour_film_in_bounded_memory(two_hour_film, preset, tmp_path):
     assert tl.vibration.any() and tl.fans.any()
     assert math.isclose(tl.source["duration_s"], 7200.0, abs_tol=0.1)
     os.remove(out)
-    if TWO_HOUR_RSS_MISS and r.peak_rss_mb >= 400:
-        pytest.xfail(f"{r.peak_rss_mb:.0f} MiB; known: {TWO_HOUR_RSS_MISS}")
-    assert r.peak_rss_mb < 400, f"peak RSS {r.peak_rss_mb:.0f} MiB"
-    assert not TWO_HOUR_RSS_MISS, "the 400 MiB target is met now: set TWO_HOUR_RSS_MISS = None"
+    assert r.peak_rss_mb < 400, f"peak RSS {r.peak_rss_mb:.0f} MiB (docs/BENCHMARKS.md, '2-hour film')"

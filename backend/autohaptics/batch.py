@@ -29,7 +29,6 @@ import multiprocessing
 import os
 import queue as queue_mod
 import signal
-import threading
 import time
 import uuid
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -41,6 +40,7 @@ from typing import Any, Iterable
 
 from autohaptics.errors import AutohapticsError, ParameterError
 from autohaptics.progress import ProgressFn, null_progress
+from autohaptics.workers import start_worker
 
 MANIFEST_NAME = "batch-manifest.json"
 MANIFEST_FORMAT = "autohaptics.batch-manifest"
@@ -240,13 +240,7 @@ def _init_local_worker(events, cancel, parent_pid: int) -> None:
     global _events, _cancel
     _events, _cancel = events, cancel
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-    def watch() -> None:
-        while os.getppid() == parent_pid:
-            time.sleep(1.0)
-        os._exit(0)
-
-    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+    start_worker(parent_pid)
 
 
 class _Reporter:

@@ -28,6 +28,7 @@ from autohaptics import airflow, cuts, depth, fusion, saliency, thermal
 from autohaptics import audio_features as af
 from autohaptics import intensity as inten
 from autohaptics import media
+from autohaptics.heap import release_free_memory
 from autohaptics.errors import MediaError, ParameterError
 from autohaptics.layout import ACTUATOR_IDS, AUDIO_MODE_ACTUATORS, CENTRE_ACTUATOR, N_ACTUATORS, TEMP_NEUTRAL_C
 from autohaptics.presets import DEFAULT_PRESET, apply_overrides, params_to_dict, preset_overrides
@@ -199,6 +200,7 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
         stats["audio"] = {"skipped": "no audio stream"}
     else:
         audio = _audio_pass(info, params, n, stats, progress, cancel, share=audio_share)
+        release_free_memory()  # the decoder's and the feature chunks' freed heap, before the video pass
 
     video = None
     need_saliency = _saliency_needed(params, audio, n) if (need_vib and info.video is not None) else np.zeros(n, bool)
@@ -217,6 +219,7 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
                            cut_params=params.cuts, depth_params=params.depth, need_saliency=need_saliency,
                            need_flow=need_flow, need_colour=need_colour, progress=video_progress, cancel=cancel)
         stats["video"] = {"seconds": time.perf_counter() - t0, **video.stats}
+        release_free_memory()
     else:
         stats["video"] = {"skipped": "no track needs the picture"}
     if not params.allow_truncated:
@@ -327,7 +330,7 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
         tl.features["motion"] = np.clip(video.motion / peak, 0.0, 1.0) if peak > 0 else np.zeros(n)
         tl.features["motion_fw_per_s"] = video.motion.astype(np.float64)
         if "fans" in params.tracks:
-            tl.fans = _fans(params, video, stats)
+            _fans(params, video, stats, out=tl.fans)
 
     gen_params = params_to_dict(params)
     gen_params["thresholds"] = dict(params.intensity.thresholds)
@@ -424,15 +427,16 @@ def sustained_motion(motion: np.ndarray) -> np.ndarray:
     return np.minimum(m, np.maximum(left, right))
 
 
-def _fans(params: GenerateParams, video: VideoAnalysis, stats: dict) -> np.ndarray:
+def _fans(params: GenerateParams, video: VideoAnalysis, stats: dict, *, out: np.ndarray | None = None) -> np.ndarray:
     """(n, 9, 17) fan levels: ticks whose sustained motion exceeds the (manual or adaptive)
-    threshold, not at a cut, with depth computed: strong motion AND near (airflow.fan_levels)."""
+    threshold, not at a cut, with depth computed: strong motion AND near (airflow.fan_levels).
+    ``out``: an all-zero float32 array of that shape to write into (the timeline's own track)."""
     n = video.motion.size
     valid = ~video.cut
     motion = sustained_motion(np.where(valid, video.motion, 0.0))
     threshold = airflow.motion_threshold(motion[valid], params=params.airflow)
     on = valid & (motion > threshold) & video.depth_mask
-    fans = np.zeros((n,) + video.cell_motion.shape[1:], np.float32)
+    fans = np.zeros((n,) + video.cell_motion.shape[1:], np.float32) if out is None else out
     for k in np.flatnonzero(on):
         fans[k] = airflow.fan_levels(video.cell_motion[k].astype(np.float32), video.nearness[k].astype(np.float32),
                                      params=params.airflow)

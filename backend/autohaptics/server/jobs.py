@@ -34,7 +34,6 @@ import os
 import queue as queue_mod
 import signal
 import threading
-import time
 from collections import deque
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -45,6 +44,7 @@ from typing import Any
 
 from autohaptics.errors import AutohapticsError, CancelledError
 from autohaptics.progress import check_cancel
+from autohaptics.workers import start_worker
 from autohaptics.server.store import GENERATED, INTERRUPTED, Conflict, NotFound, Store, now_iso
 
 log = logging.getLogger("autohaptics.server.jobs")
@@ -85,13 +85,7 @@ def exit_with_parent(parent_pid: int) -> None:
     records the running jobs as interrupted."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
-
-    def watch() -> None:
-        while os.getppid() == parent_pid:
-            time.sleep(1.0)
-        os._exit(0)
-
-    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+    start_worker(parent_pid)
 
 
 def warm_up() -> None:
