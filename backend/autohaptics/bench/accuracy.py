@@ -452,6 +452,7 @@ def plot(res: dict, path: Path) -> Path:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib import ticker
 
     names = [n for n, c in res["configs"].items() if "error" in c]
     x = [res["configs"][n]["x_decode"] for n in names]
@@ -471,12 +472,15 @@ def plot(res: dict, path: Path) -> Path:
             ax.scatter(x[i], y[i], s=60 if on else 40, zorder=2, color="tab:orange" if on else "tab:blue",
                        edgecolor="black" if on else "none")
             # labels of (nearly) coinciding points are stacked instead of printed over each other
-            near = sum(1 for px, py in placed if abs(np.log10(px / x[i])) < 0.15 and abs(py - y[i]) < 0.06 * span)
+            near = sum(1 for px, py in placed if abs(np.log10(px / x[i])) < 0.3 and abs(py - y[i]) < 0.1 * span)
             placed.append((x[i], y[i]))
             ax.annotate(n, (x[i], y[i]), textcoords="offset points", xytext=(5, 5 + 10 * near), fontsize=8)
         ax.axhline(target, color="grey", ls=":", lw=1, label="target")
         ax.axvline(TARGETS["x_decode"], color="grey", ls="--", lw=1, label=f"{TARGETS['x_decode']} x decode")
         ax.set_xscale("log")
+        ax.xaxis.set_major_locator(ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+        ax.xaxis.set_major_formatter(ticker.FuncFormatter(lambda v, _pos: f"{v:g}"))
+        ax.xaxis.set_minor_formatter(ticker.NullFormatter())
         ax.set_xlabel("wall time / bare decode time")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3, which="both")
