@@ -277,7 +277,18 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def test_dask_cluster_gives_the_local_timelines(tmp_path, capsys):
+@pytest.fixture
+def environ_restored():
+    """distributed's LocalCluster writes its worker settings (MALLOC_TRIM_THRESHOLD_, OMP_NUM_THREADS=1,
+    PYTHONHASHSEED, ...) into this process's os.environ, where every later subprocess of the session
+    would inherit them: put the environment back."""
+    saved = dict(os.environ)
+    yield
+    os.environ.clear()
+    os.environ.update(saved)
+
+
+def test_dask_cluster_gives_the_local_timelines(tmp_path, capsys, environ_restored):
     distributed = pytest.importorskip("distributed")
     clips = [shared_clip(c) for c in (*SHORT, "sintel_trailer_480x204_h264_aac.mp4")]
     broken = _corrupt(tmp_path / "broken.mp4")
