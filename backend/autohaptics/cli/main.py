@@ -41,7 +41,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     debug = bool(os.environ.get("AUTOHAPTICS_DEBUG"))
-    bound_heap()  # freed temporaries go back to the OS: a 2-hour film stays under 400 MB
+    bound_heap()  # freed temporaries go back to the OS (docs/BENCHMARKS.md, '2-hour film')
     try:
         rc = args.func(args)
         return int(rc or 0)
