@@ -140,7 +140,7 @@ class Timeline:
         }
         fh.write("{\n")
         for key, value in head.items():
-            fh.write(f"{json.dumps(key)}: {json.dumps(value, default=_json_default)},\n")
+            fh.write(f"{json.dumps(key)}: {json.dumps(value, default=json_default)},\n")
         fh.write('"tracks": {\n"vibration": ')
         _write_rows(fh, self.vibration)
         fh.write(',\n"temperature_c": ')
@@ -152,9 +152,9 @@ class Timeline:
             fh.write(("," if i else "") + f"\n{json.dumps(name)}: ")
             _write_rows(fh, np.asarray(values).reshape(-1, 1), flat=True)
         fh.write("\n},\n")
-        fh.write(f'"stats": {json.dumps(self.stats, default=_json_default)}')
+        fh.write(f'"stats": {json.dumps(self.stats, default=json_default)}')
         for key, value in self.extra.items():
-            fh.write(f",\n{json.dumps(key)}: {json.dumps(value, default=_json_default)}")
+            fh.write(f",\n{json.dumps(key)}: {json.dumps(value, default=json_default)}")
         fh.write("\n}\n")
 
     def save(self, path: str | os.PathLike) -> Path:
@@ -230,11 +230,11 @@ class Timeline:
     def copy(self) -> "Timeline":
         return Timeline(
             n_ticks=self.n_ticks, vibration=self.vibration.copy(), temperature_c=self.temperature_c.copy(),
-            fans=self.fans.copy(), source=json.loads(json.dumps(self.source, default=_json_default)),
-            generator=json.loads(json.dumps(self.generator, default=_json_default)),
+            fans=self.fans.copy(), source=json.loads(json.dumps(self.source, default=json_default)),
+            generator=json.loads(json.dumps(self.generator, default=json_default)),
             features={k: np.array(v, copy=True) for k, v in self.features.items()},
-            stats=json.loads(json.dumps(self.stats, default=_json_default)),
-            extra=json.loads(json.dumps(self.extra, default=_json_default)),
+            stats=json.loads(json.dumps(self.stats, default=json_default)),
+            extra=json.loads(json.dumps(self.extra, default=json_default)),
             layout=json.loads(json.dumps(self.layout)), tick_s=self.tick_s,
         )
 
@@ -313,7 +313,8 @@ def _nested(row: np.ndarray) -> str:
     return "[" + ",".join(_nested(r) for r in row) + "]"
 
 
-def _json_default(obj: Any) -> Any:
+def json_default(obj: Any) -> Any:
+    """``json.dumps(default=...)`` for the numpy scalars and arrays, tuples, sets and paths in metadata."""
     if isinstance(obj, np.generic):
         return obj.item()
     if isinstance(obj, np.ndarray):

@@ -16,7 +16,7 @@ import numpy as np
 
 from autohaptics.export._common import FAN_NAMES, VALUE_DECIMALS, ensure_valid
 from autohaptics.layout import ACTUATOR_IDS, FAN_COLS, FAN_ROWS
-from autohaptics.timeline import Timeline
+from autohaptics.timeline import Timeline, json_default
 
 TIME_COLUMN = "time_s"
 TEMPERATURE_COLUMN = "temperature_c"
@@ -68,13 +68,5 @@ def sidecar_dict(tl: Timeline) -> dict:
 def write_csv_sidecar(tl: Timeline, fh: IO[str]) -> None:
     """Write the sidecar JSON (see :func:`sidecar_dict`) to the text stream ``fh``."""
     tl = ensure_valid(tl)
-    json.dump(sidecar_dict(tl), fh, indent=1, default=_json_default)
+    json.dump(sidecar_dict(tl), fh, indent=1, default=json_default)
     fh.write("\n")
-
-
-def _json_default(obj):
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    raise TypeError(f"{type(obj).__name__} is not JSON serialisable")

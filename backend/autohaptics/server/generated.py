@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.timeline import Timeline
+from autohaptics.timeline import Timeline, json_default
 
 FORMAT = "autohaptics.generated-npz"
 VERSION = 1
@@ -39,7 +39,7 @@ def save_npz(tl: Timeline, path: str | os.PathLike) -> Path:
     meta = {"format": FORMAT, "version": VERSION, "n_ticks": int(tl.n_ticks), "tick_s": tl.tick_s,
             "source": tl.source, "generator": tl.generator, "stats": tl.stats, "layout": tl.layout,
             "extra": tl.extra, "features": list(tl.features)}
-    arrays = {"meta.json": np.frombuffer(json.dumps(meta, default=_json_default).encode("utf-8"), dtype=np.uint8),
+    arrays = {"meta.json": np.frombuffer(json.dumps(meta, default=json_default).encode("utf-8"), dtype=np.uint8),
               "vibration": tl.vibration, "temperature_c": tl.temperature_c, "fans": tl.fans}
     for name, values in tl.features.items():
         arrays[f"feature.{name}"] = np.asarray(values, dtype=np.float32)
@@ -81,11 +81,3 @@ def load_generated(path: Path) -> Timeline:
     if path.suffix == ".json":
         return Timeline.load(path)
     return load_npz(path)
-
-
-def _json_default(obj):
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
