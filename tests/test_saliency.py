@@ -188,3 +188,57 @@ def test_bright_object_on_the_left_drives_the_left_actuators(backend, variant):
     assert right.max() < 0.3, dict(zip(ACTUATOR_IDS, beta.round(3)))
     black = saliency.saliency_map(np.zeros((H, W, 3), np.uint8), params=params)
     np.testing.assert_array_equal(fusion.actuator_weights(black, params=fparams), np.eye(9)[idx["A5"]])
+
+
+# ------------------------------------------------------- the spectral map and the proxy's size
+def striped_disc_frame(width: int = 1280, height: int = 720) -> np.ndarray:
+    """A bright disc right of centre on one-pixel stripes (fine detail that a bilinear
+    decimation folds into coarse false patterns), at ``width`` x ``height``."""
+    frame = np.empty((height, width, 3), np.uint8)
+    frame[:] = np.where((np.arange(width) % 2 == 0)[None, :, None], 110, 40).astype(np.uint8)
+    cv2.circle(frame, (int(0.62 * width), int(0.4 * height)), int(0.1 * height), (250, 250, 240), -1)
+    return frame
+
+
+def _proxy(frame: np.ndarray, width: int) -> np.ndarray:
+    h = round(width * frame.shape[0] / frame.shape[1])
+    return cv2.resize(frame, (width, h), interpolation=cv2.INTER_AREA)
+
+
+def _on_grid(smap: np.ndarray) -> np.ndarray:
+    return cv2.resize(smap, (64, 36), interpolation=cv2.INTER_AREA)
+
+
+def test_spectral_map_is_the_same_from_any_proxy_width():
+    """OpenCV scales its input to 64 x 64 bilinearly, reading one pixel in five of a 320 px proxy:
+    one-pixel stripes then fold into full-contrast false stripes and the map depended on the
+    proxy's width. Area-averaged first, a 320 px proxy and the 128 px proxy made from it give
+    one map (compared on a common grid)."""
+    p320 = striped_disc_frame(320, 180)
+    p128 = _proxy(p320, 128)
+    a, b = _on_grid(saliency.saliency_map(p320)), _on_grid(saliency.saliency_map(p128))
+    assert np.abs(a - b).mean() < 0.03, np.abs(a - b).mean()
+    for m in (a, b):  # both peak on the disc
+        ys, xs = np.unravel_index(np.argmax(m), m.shape)
+        assert abs((xs + 0.5) / 64 - 0.62) < 0.1 and abs((ys + 0.5) / 36 - 0.4) < 0.15, (xs, ys)
+
+
+def test_spectral_map_from_the_full_frame_luma():
+    """With the frame's own 64 x 64 luma the proxy only sets the map's size: the map is the same
+    whatever proxy comes with it; a luma of the wrong size is an error."""
+    frame = striped_disc_frame()
+    luma = cv2.resize(cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY), saliency.SPECTRAL_SIZE, interpolation=cv2.INTER_AREA)
+    assert saliency.working_size(saliency.SaliencyParams()) == saliency.SPECTRAL_SIZE
+    assert saliency.working_size(saliency.SaliencyParams(backend="fine_grained")) is None
+    a = saliency.saliency_map(_proxy(frame, 320), luma=luma)
+    b = saliency.saliency_map(_proxy(frame, 128), luma=luma)
+    assert a.shape == (180, 320) and b.shape == (72, 128)
+    assert np.abs(_on_grid(a) - _on_grid(b)).max() < 0.02
+    # the luma decides, not the proxy: a proxy of faint stripes with the disc's luma finds the disc
+    faint_texture = _proxy(frame, 128)
+    faint_texture[:, :, :] = faint_texture.mean(axis=(0, 1), keepdims=True).astype(np.uint8) + \
+        (np.arange(128) % 3 * 6).astype(np.uint8)[None, :, None]
+    c = saliency.saliency_map(faint_texture, luma=luma)
+    assert np.abs(_on_grid(c) - _on_grid(b)).max() < 0.02
+    with pytest.raises(ParameterError, match="luma"):
+        saliency.saliency_map(_proxy(frame, 128), luma=luma[:32])

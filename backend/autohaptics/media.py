@@ -305,32 +305,52 @@ class Frame:
         """Luma proxy ``width`` px wide (aspect kept), uint8 [shape=(h, w)], display orientation."""
         return self.proxy(width, fmt="gray")
 
-    def rgb_and_gray(self, width: int, gray_width: int) -> tuple[np.ndarray, np.ndarray]:
+    def rgb_and_gray(self, width: int, gray_width: int, *, luma_size: tuple[int, int] | None = None):
         """An RGB proxy ``width`` px wide and a luma proxy ``gray_width`` px wide from ONE read of
         the luma plane (reading a 1080p plane costs more than everything done to the proxy).
 
         The luma proxy is bit-identical to :meth:`gray` (optical flow compares it with the next
         frame's :meth:`gray`); the RGB proxy's luma is resampled from it.
+        luma_size : (w, h) px: also return the luma area-averaged to exactly that size (aspect not
+            kept) from the full-resolution plane in the same read, whatever the proxies' sizes;
+            the third item of the result (uint8 [shape=(h, w)], full range, display orientation).
+        Returns (rgb, gray) or, with ``luma_size``, (rgb, gray, luma).
         """
         gw, gh = self._size(gray_width, None)
         rw, rh = self._size(width, None)
-        ys = self._planes_small(gw, gh, colour=False)
+        grid: list = []
+        ys = self._planes_small(gw, gh, colour=False, grid=luma_size, grid_out=grid)
         chroma = self._planes_small(rw, rh, colour=True, luma=False) if ys is not None else None
         if ys is None or chroma is None:
-            return self.proxy(width), self.gray(gray_width)
+            rgb, gray = self.proxy(width), self.gray(gray_width)
+            if luma_size is None:
+                return rgb, gray
+            return rgb, gray, self.luma_grid(luma_size)
         y_raw = ys[0]
         y_rgb = y_raw if (gw, gh) == (rw, rh) else cv2.resize(
             y_raw, (rw, rh), interpolation=cv2.INTER_AREA if rw < gw else cv2.INTER_LINEAR)
-        return _yuv_to_rgb(y_rgb, chroma[1], chroma[2], self._frame), _luma_full_range(y_raw, self._frame)
+        rgb, gray = _yuv_to_rgb(y_rgb, chroma[1], chroma[2], self._frame), _luma_full_range(y_raw, self._frame)
+        if luma_size is None:
+            return rgb, gray
+        return rgb, gray, _luma_full_range(grid[0], self._frame)
+
+    def luma_grid(self, size: tuple[int, int]) -> np.ndarray:
+        """The luma area-averaged to exactly ``size`` (w, h) px from the full frame (aspect not
+        kept), full range, display orientation: uint8 [shape=(h, w)]."""
+        w, h = max(1, int(size[0])), max(1, int(size[1]))
+        full = self.proxy(self.width, self.height, fmt="gray")
+        return cv2.resize(full, (w, h), interpolation=cv2.INTER_AREA if w <= full.shape[1] else cv2.INTER_LINEAR)
 
     def full(self, *, fmt: str = "rgb24") -> np.ndarray:
         """Full-resolution copy in display orientation (the reference preset)."""
         return self.proxy(self.width, self.height, fmt=fmt)
 
-    def _planes_small(self, width: int, height: int, *, colour: bool, luma: bool = True):
+    def _planes_small(self, width: int, height: int, *, colour: bool, luma: bool = True,
+                      grid: tuple[int, int] | None = None, grid_out: list | None = None):
         """(Y, U, V) area-averaged to (height, width) in display orientation, uint8 (None for a
         plane not asked for); None when the pixel format has no fast path or the proxy is not
-        smaller than the frame."""
+        smaller than the frame. ``grid`` (w, h): the luma is also area-averaged to that size
+        (display orientation, limited range as stored) and appended to ``grid_out``."""
         f = self._frame
         name = f.format.name
         if name not in _PLANAR_YUV8 or width >= self.width or height >= self.height:
@@ -351,6 +371,11 @@ class Frame:
                 arr = cv2.resize(arr, (pw // 2, ph // 2), interpolation=cv2.INTER_AREA)
             if i == 0:
                 small = cv2.resize(arr, (dw, dh), interpolation=cv2.INTER_AREA)
+                if grid is not None and grid_out is not None:
+                    gw_, gh_ = (int(grid[1]), int(grid[0])) if k % 2 else (int(grid[0]), int(grid[1]))
+                    g = cv2.resize(arr, (gw_, gh_), interpolation=cv2.INTER_AREA
+                                   if gw_ <= arr.shape[1] and gh_ <= arr.shape[0] else cv2.INTER_LINEAR)
+                    grid_out.append(np.ascontiguousarray(np.rot90(g, k=k)) if k else g)
             else:  # chroma: average at its own (sub-sampled) scale, then up to the luma size
                 cw = max(1, round(dw * pw / f.width))
                 ch = max(1, round(dh * ph / f.height))

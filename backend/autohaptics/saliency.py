@@ -3,12 +3,22 @@
 Backends (the fusion that uses the map is fixed, the backend is a choice):
 
 - ``"spectral"`` (default): OpenCV contrib's spectral residual (Hou & Zhang 2007), which needs no
-  weights; about 0.3 ms on a 128 px proxy.
+  weights; about 0.3 ms per frame.
 - ``"fine_grained"``: OpenCV contrib's fine-grained saliency (Montabone & Soto 2010); 300+ ms on a
   1080p frame, so only ever run on the proxy.
 - ``"onnx"``: any single-input saliency network exported to ONNX (the thesis used a pyramid
   feature attention network), loaded from a user-supplied file with onnxruntime; input size,
   normalisation and channel order are parameters.
+
+The spectral residual works on a fixed 64 x 64 luma image (decision, measured): OpenCV makes it
+from its input with a bilinear resize, which aliases (from a 320 px proxy it reads one pixel in
+five), and the salient shape downstream turns small differences of the map into a different
+actuator split: on the 1080p BBB clip the per-frame weights of a 128 px and a 320 px proxy
+differed by a mean 0.06 (up to 0.28). The pipeline therefore hands the backend the frame's luma
+area-averaged to 64 x 64 straight from the full-resolution plane, in the same read as the proxies
+(:meth:`autohaptics.media.Frame.rgb_and_gray`); a proxy alone is area-averaged down. The map is
+then the same for every proxy size, and the proxy width only sets the resolution the salient
+shape is cut at.
 
 Optionally a motion cue (frame difference with the previous frame) is blended in. A flat frame
 (black, one colour) has no salient region: its map is all zeros.
@@ -31,7 +41,8 @@ import numpy as np
 from autohaptics.errors import ParameterError
 
 BACKENDS = ("spectral", "fine_grained", "onnx")
-SaliencyBackend = Callable[[np.ndarray], np.ndarray]
+SaliencyBackend = Callable[..., np.ndarray]  # (rgb, luma=None) -> map
+SPECTRAL_SIZE = (64, 64)  # (w, h) px: the image the spectral residual works on (OpenCV's default)
 
 
 @dataclass(frozen=True)
@@ -39,7 +50,8 @@ class SaliencyParams:
     """Saliency backend and its inputs.
 
     backend : "spectral" | "fine_grained" | "onnx".
-    proxy_width : width in px of the RGB proxy the map is computed on (default 128).
+    proxy_width : width in px of the RGB proxy the map is computed on and has (default 192; with
+        the spectral backend the width the salient shape is cut at: see the module docstring).
     motion_weight : 0..1 share of the motion cue (|frame - previous frame|); 0 = not computed.
     blur : Gaussian smoothing of the map, sigma as a fraction of the proxy width (0 = none).
     flat_std : a frame whose luma standard deviation is below this (grey levels 0..255) is flat:
@@ -51,7 +63,7 @@ class SaliencyParams:
     """
 
     backend: str = "spectral"
-    proxy_width: int = 128
+    proxy_width: int = 192
     motion_weight: float = 0.0
     blur: float = 0.02
     flat_std: float = 2.0
@@ -84,27 +96,40 @@ def make_saliency_backend(params: SaliencyParams) -> SaliencyBackend:
     """
     if params.backend == "spectral":
         engine = cv2.saliency.StaticSaliencySpectralResidual_create()
-        raw = lambda rgb: _opencv_map(engine, rgb)  # noqa: E731
+        engine.setImageWidth(SPECTRAL_SIZE[0])
+        engine.setImageHeight(SPECTRAL_SIZE[1])
+        raw = lambda rgb, luma: _opencv_map(engine, rgb, _checked_luma(luma))  # noqa: E731
     elif params.backend == "fine_grained":
         engine = cv2.saliency.StaticSaliencyFineGrained_create()
-        raw = lambda rgb: _opencv_map(engine, rgb)  # noqa: E731
+        raw = lambda rgb, luma: _opencv_map(engine, rgb)  # noqa: E731
     else:
-        raw = OnnxMapModel(params.onnx_model, input_size=params.onnx_input_size, mean=params.onnx_mean,
-                           std=params.onnx_std, channel_order=params.onnx_channel_order, what="saliency")
+        model = OnnxMapModel(params.onnx_model, input_size=params.onnx_input_size, mean=params.onnx_mean,
+                             std=params.onnx_std, channel_order=params.onnx_channel_order, what="saliency")
+        raw = lambda rgb, luma: model(rgb)  # noqa: E731
 
-    def backend(rgb: np.ndarray) -> np.ndarray:
+    def backend(rgb: np.ndarray, luma: np.ndarray | None = None) -> np.ndarray:
         rgb = _check_rgb(rgb)
-        return _normalise(np.asarray(raw(rgb), dtype=np.float32), rgb.shape[:2])
+        return _normalise(np.asarray(raw(rgb, luma), dtype=np.float32), rgb.shape[:2])
 
     return backend
 
 
+def working_size(params: SaliencyParams) -> tuple[int, int] | None:
+    """(w, h) px of the luma the backend works on when that size is fixed (spectral: 64 x 64),
+    else None: pass the frame's luma at that size as ``saliency_map(..., luma=)``."""
+    return SPECTRAL_SIZE if params.backend == "spectral" else None
+
+
 def saliency_map(rgb: np.ndarray, *, params: SaliencyParams = SaliencyParams(),
-                 backend: SaliencyBackend | None = None, prev_gray: np.ndarray | None = None) -> np.ndarray:
+                 backend: SaliencyBackend | None = None, prev_gray: np.ndarray | None = None,
+                 luma: np.ndarray | None = None) -> np.ndarray:
     """Saliency of one frame.
 
-    rgb : uint8 [shape=(h, w, 3)], the proxy.
+    rgb : uint8 [shape=(h, w, 3)], the proxy; the map has its size.
     prev_gray : uint8 [shape=(h, w)], the previous frame's luma, for the motion cue (optional).
+    luma : uint8 [shape=working_size(params)[::-1]], the frame's luma area-averaged to the
+        backend's working size from the full-resolution frame (optional; spectral backend only,
+        :meth:`autohaptics.media.Frame.rgb_and_gray`). Without it the proxy is scaled down.
     Returns float32 [shape=(h, w)] in [0, 1]; all zeros for a flat frame or a flat/NaN network output.
     """
     rgb = _check_rgb(rgb)
@@ -113,7 +138,7 @@ def saliency_map(rgb: np.ndarray, *, params: SaliencyParams = SaliencyParams(),
     if float(gray.std()) < params.flat_std:
         return np.zeros((h, w), np.float32)
     backend = backend or make_saliency_backend(params)
-    smap = _normalise(np.asarray(backend(rgb), dtype=np.float32), (h, w))
+    smap = _normalise(np.asarray(backend(rgb, luma) if luma is not None else backend(rgb), dtype=np.float32), (h, w))
     if params.motion_weight > 0 and prev_gray is not None and prev_gray.shape == gray.shape:
         diff = cv2.absdiff(gray, prev_gray).astype(np.float32)
         smap = (1.0 - params.motion_weight) * smap + params.motion_weight * _normalise(diff, (h, w))
@@ -208,17 +233,34 @@ def _check_rgb(rgb: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(rgb)
 
 
-def _opencv_map(engine, rgb: np.ndarray) -> np.ndarray:
+def _opencv_map(engine, rgb: np.ndarray, luma: np.ndarray | None = None) -> np.ndarray:
     h, w = rgb.shape[:2]
     if min(h, w) < 4:  # too small for a spectrum: no structure to find
         return np.zeros((h, w), np.float32)
-    ok, smap = engine.computeSaliency(cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+    if luma is not None:
+        gray = luma
+    else:
+        gray = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)
+        if isinstance(engine, cv2.saliency.StaticSaliencySpectralResidual):
+            gray = cv2.resize(gray, SPECTRAL_SIZE, interpolation=cv2.INTER_AREA)
+    ok, smap = engine.computeSaliency(gray)
     if not ok or smap is None:
         return np.zeros((h, w), np.float32)
     smap = np.asarray(smap, dtype=np.float32)
     if smap.shape != (h, w):
         smap = cv2.resize(smap, (w, h), interpolation=cv2.INTER_LINEAR)
     return smap
+
+
+def _checked_luma(luma: np.ndarray | None) -> np.ndarray | None:
+    if luma is None:
+        return None
+    luma = np.asarray(luma)
+    if luma.shape != SPECTRAL_SIZE[::-1]:
+        raise ParameterError(f"the spectral backend's luma must have shape {SPECTRAL_SIZE[::-1]}, got {luma.shape}")
+    if luma.dtype != np.uint8:
+        luma = np.clip(np.nan_to_num(luma.astype(np.float64)), 0, 255).astype(np.uint8)
+    return np.ascontiguousarray(luma)
 
 
 def _normalise(smap: np.ndarray, shape: tuple[int, int]) -> np.ndarray:

@@ -141,7 +141,12 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
     sal_backend = saliency.make_saliency_backend(saliency_params) if need_saliency.any() else None
     depth_backend = depth.make_depth_backend(depth_params) if need_flow else None
     floor = float(airflow_params.floor) if video.skip else -1.0
-    rgb_width = max(saliency_params.proxy_width, depth_params.proxy_width if need_flow else 0)
+    sal_luma_size = saliency.working_size(saliency_params)
+    # a backend fed the full frame's luma (spectral) needs only the proxy's size for its map: its
+    # RGB proxy is then not made wider than the luma it is resampled from
+    sal_width = saliency_params.proxy_width if sal_luma_size is None else min(
+        saliency_params.proxy_width, flow_params.proxy_width)
+    rgb_width = max(sal_width, depth_params.proxy_width if need_flow else 0)
     every = video.analysis == "every"
     duration = max(info.duration_s, 1e-9)
 
@@ -169,9 +174,13 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
         if centre_tick is not None:
             k = centre_tick
         want_sal = centre_tick is not None and bool(need_saliency[k])
-        rgb = sig_rgb = None
+        rgb = sig_rgb = luma = None
         if analyse_this and (need_colour or want_sal or need_flow):
-            rgb, gray = stages["proxy"].run(frame.rgb_and_gray, rgb_width, flow_params.proxy_width)
+            if want_sal and sal_luma_size is not None:
+                rgb, gray, luma = stages["proxy"].run(frame.rgb_and_gray, rgb_width, flow_params.proxy_width,
+                                                      luma_size=sal_luma_size)
+            else:
+                rgb, gray = stages["proxy"].run(frame.rgb_and_gray, rgb_width, flow_params.proxy_width)
             sig_rgb = _resized(rgb, SIGNATURE_WIDTH)
         else:
             gray = stages["proxy"].run(frame.gray, flow_params.proxy_width)
@@ -202,7 +211,7 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
                 sal_rgb = _resized(rgb, saliency_params.proxy_width)
                 sal_gray = cv2.cvtColor(sal_rgb, cv2.COLOR_RGB2GRAY) if saliency_params.motion_weight > 0 else None
                 smap = stages["saliency"].run(saliency.saliency_map, sal_rgb, params=saliency_params,
-                                              backend=sal_backend, prev_gray=prev_sal_gray)
+                                              backend=sal_backend, prev_gray=prev_sal_gray, luma=luma)
                 prev_sal_gray = sal_gray
                 acc.add_beta(k, fusion.actuator_weights(smap, params=fusion_params))
             if need_flow:

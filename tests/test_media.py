@@ -1,0 +1,65 @@
+"""Video proxies (autohaptics.media.Frame): the saliency luma read with the proxies equals the
+full frame's area average, in display orientation."""
+
+from __future__ import annotations
+
+import itertools
+
+import cv2
+import numpy as np
+import pytest
+
+from autohaptics import media
+from shared_data import shared_clip
+from stress_inputs import write_streams
+
+
+def _frames(path, n: int = 4):
+    return itertools.islice(media.iter_video(path, prefetch=4), n)
+
+
+def test_luma_grid_read_with_the_proxies_is_the_full_frame_average():
+    """1080p H.264: the 64 x 64 luma made from the 2 x 2-averaged plane in the proxies' read is
+    within two grey levels (a mean 0.6) of the area average of the full-resolution luma."""
+    for f in _frames(shared_clip("bbb_1080p60_2s_h264_aac6ch.mp4"), 6):
+        rgb, gray, luma = f.rgb_and_gray(192, 160, luma_size=(64, 64))
+        assert rgb.shape == (108, 192, 3) and gray.shape == (90, 160) and luma.shape == (64, 64)
+        assert luma.dtype == np.uint8
+        # the proxies themselves are those made without the extra read
+        rgb2, gray2 = f.rgb_and_gray(192, 160)
+        np.testing.assert_array_equal(gray, gray2)
+        np.testing.assert_array_equal(rgb, rgb2)
+        direct = f.luma_grid((64, 64))
+        assert np.abs(luma.astype(int) - direct.astype(int)).max() <= 2
+        full = f.gray(f.width).astype(np.float64)  # the full-resolution luma, full range
+        ref = cv2.resize(full, (64, 64), interpolation=cv2.INTER_AREA)
+        assert np.abs(luma - ref).max() < 2.5 and np.abs(luma - ref).mean() < 0.6
+
+
+@pytest.mark.parametrize("rotation", [0, 90, -90, 180])
+def test_luma_grid_is_in_display_orientation(tmp_path, rotation):
+    """A bright block in the stored frame's top-left corner lands where the viewer sees it."""
+    frames = []
+    for _ in range(3):
+        fr = np.full((72, 128, 3), 30, np.uint8)
+        fr[:24, :32] = 230
+        frames.append(fr)
+    path = write_streams(tmp_path / "r.mp4", frames=frames, fps=10, rotation=rotation)
+    f = next(iter(_frames(path, 1)))
+    rgb, gray, luma = f.rgb_and_gray(32, 48, luma_size=(16, 8))
+    assert luma.shape == (8, 16)
+    expected = cv2.resize(cv2.cvtColor(f.full(), cv2.COLOR_RGB2GRAY), (16, 8), interpolation=cv2.INTER_AREA)
+    assert np.abs(luma.astype(int) - expected.astype(int)).max() <= 3
+    bright = np.argwhere(luma > 128).mean(axis=0) / (8, 16)
+    seen = np.argwhere(cv2.cvtColor(f.full(), cv2.COLOR_RGB2GRAY) > 128).mean(axis=0) / f.full().shape[:2]
+    assert np.abs(bright - seen).max() < 0.15
+
+
+def test_luma_grid_without_the_fast_path(tmp_path):
+    """A proxy as wide as the frame has no fast path: the luma comes from the full frame."""
+    frames = [np.tile(np.arange(64, dtype=np.uint8)[None, :, None] * 4, (36, 1, 3)) for _ in range(3)]
+    path = write_streams(tmp_path / "s.mp4", frames=frames, fps=10)
+    f = next(iter(_frames(path, 1)))
+    _, _, luma = f.rgb_and_gray(64, 64, luma_size=(16, 16))
+    assert luma.shape == (16, 16)
+    assert np.all(np.diff(luma.astype(int), axis=1) > 0)  # the ramp survives, left to right
