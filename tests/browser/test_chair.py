@@ -264,8 +264,9 @@ def test_stop_wins_over_a_play_report_that_arrives_after_it(cpage, chair_api, fi
     chair.wait_for(lambda e: e["ev"] == "stop", count=stops + 1)
     pg.wait_for_function("() => document.querySelector('[data-testid=video]').paused")
     late = log_index(chair)
-    held.pop(0).continue_()  # the late play report: the server starts playing ...
-    chair.wait_for(lambda e: e["ev"] == "frame", count=len(chair.frames()) + 1, timeout_s=10.0)
+    # the late play report: the server starts playing (whether a frame goes out before the editor's
+    # second STOP lands is a matter of timing) ...
+    held.pop(0).continue_()
     chair.wait_for(lambda e: e["ev"] == "stop", count=stops + 2, timeout_s=10.0)  # ... and STOP again
     assert len(frames_since(chair, late)) <= 3
     settled = log_index(chair)
