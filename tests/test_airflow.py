@@ -111,6 +111,35 @@ def test_static_pair_detection():
     assert not airflow.is_static(a, a[:, :100])  # sizes differ: never "static"
 
 
+def test_fade_detection():
+    """A global brightness/contrast change (a fade, a flash) is not motion; a fade during which
+    something moves is; identical frames are not a fade (that is the static check's business);
+    two near-black noise frames are flat: no motion either."""
+    scene = pan_scene(0.6)
+    a = gray(scene, 0.5, 160, 90)
+    darker = cv2.convertScaleAbs(a, alpha=0.55, beta=3)  # a step of a fade to black
+    assert airflow.is_fade(a, darker) and airflow.is_fade(darker, a)
+    assert airflow.is_fade(a, cv2.convertScaleAbs(a, alpha=1.3, beta=25))  # a flash, contrast up
+    moved = cv2.convertScaleAbs(gray(scene, 0.5 + 1 / 24, 160, 90), alpha=0.55, beta=3)
+    assert not airflow.is_fade(a, moved)  # the pan goes on through the fade
+    assert not airflow.is_fade(a, a)
+    rng = np.random.default_rng(5)
+    black0, black1 = (rng.integers(0, 3, (90, 160)).astype(np.uint8) for _ in range(2))
+    assert airflow.is_fade(black0, black1)  # flat: std < 2 grey levels
+    assert airflow.is_fade(black0, cv2.convertScaleAbs(a, alpha=0.08))  # the first step out of black
+    assert not airflow.is_fade(a, darker[:, :100])
+
+
+def test_flow_reads_a_fade_as_motion_which_the_fade_check_prevents():
+    """Why the check exists: DIS on a fade step of a static textured frame reads motion."""
+    scene = synth.Scene(1.0, background=(synth.Segment(0, 1, (120, 110, 100), texture=synth.Texture("noise", 0.03, 0.5, seed=7)),))
+    a = gray(scene, 0.5, 160, 90)
+    b = cv2.convertScaleAbs(a, alpha=0.4, beta=0)
+    mag = airflow.motion_magnitude(airflow.optical_flow(a, b), dt_s=0.1, width_px=160)
+    assert airflow.is_fade(a, b) and not airflow.is_static(a, b)
+    assert airflow.motion_score(mag) > 0.0  # a non-zero reading that is not motion
+
+
 # ---------------------------------------------------------------- grid and threshold
 def test_grid_means_by_hand():
     """A 90 x 170 map made of 10 x 10 blocks with value row * 17 + col gives exactly those values."""
@@ -210,7 +239,8 @@ def test_approaching_object_on_the_right_blows_right_fans():
     (airflow.FlowParams, {"method": "lucas"}), (airflow.FlowParams, {"dis_preset": "slow"}),
     (airflow.FlowParams, {"proxy_width": 4}), (airflow.AirflowParams, {"threshold": -1.0}),
     (airflow.AirflowParams, {"cell_rel": 1.5}), (airflow.AirflowParams, {"floor": -0.1}),
-    (airflow.AirflowParams, {"strong_rel": 1.5}),
+    (airflow.AirflowParams, {"strong_rel": 1.5}), (airflow.AirflowParams, {"flat_std": -1.0}),
+    (airflow.AirflowParams, {"fade_min_step": float("nan")}),
 ])
 def test_params_are_checked(cls, kwargs):
     with pytest.raises(ParameterError):

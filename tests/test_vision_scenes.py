@@ -127,6 +127,22 @@ def test_no_airflow_at_a_hard_cut_between_two_static_shots(generated, tmp_path):
     assert across > 10 * FLOOR
 
 
+def test_a_fade_in_of_a_still_picture_has_no_motion_even_in_the_reference(tmp_path):
+    """A still textured picture fading in from black over 2 s: the reference (no skipping, every
+    frame) reads no motion and blows no fan. Not vacuous: with the fade check switched off the
+    same reference run reads the brightness ramp as motion."""
+    scene = Scene(2.5, background=(Segment(0, 2.0, (2, 2, 2), rgb_end=(200, 190, 170), texture=tex(11, 0.05, 0.5)),
+                                   Segment(2.0, 2.5, (200, 190, 170), texture=tex(11, 0.05, 0.5))))
+    path = synth.write_scene(tmp_path / "fade.mp4", scene, width=320, height=180, fps=24, audio=False)
+    params, _ = pipeline.resolve_params("reference")
+    tl = pipeline.generate(path, params, preset="reference")
+    assert not tl.fans.any()
+    assert float(np.max(tl.features["motion_fw_per_s"])) == 0.0
+    off, _ = pipeline.resolve_params("reference", {"airflow.flat_std": 0, "airflow.fade_min_step": 255})
+    unguarded = pipeline.analyse(path, off).video
+    assert float(unguarded.motion.max()) > FLOOR, unguarded.motion
+
+
 def test_static_shot_computes_no_flow(generated):
     _, tl = generated["static"]
     n = tl.vibration.shape[0]

@@ -22,6 +22,11 @@
 
 A static pair (nothing changed beyond noise) is detected by a cheap frame difference so flow is
 not computed at all, and flow is never computed across a shot cut (see :mod:`autohaptics.cuts`).
+A fade (a global change of brightness and contrast and nothing else) and a pair of flat frames
+(black, noise under a title) have no motion in every preset, the reference included
+(:func:`is_fade`): DIS reads a brightness ramp as motion, and on the BBB opening's fade in from
+black the reference blew the fans through the fade (0.3-0.9 frame widths/s on ticks 2-15, more
+than the clip's action), which also raised its adaptive threshold.
 
 Decisions (measured; synthetic scenes from :mod:`autohaptics.synth` have exact answers):
 
@@ -99,6 +104,9 @@ class AirflowParams:
         small moving object is seen).
     fill_enclosed : a near cell enclosed by "on" cells blows too (the still centre of an object
         expanding toward the camera; see the module docstring).
+    flat_std, fade_min_step : a pair of frames both flatter than ``flat_std`` (luma standard
+        deviation, grey levels), or differing only by a global brightness/contrast change of at
+        least ``fade_min_step`` grey levels (a fade), has no motion (:func:`is_fade`).
     """
 
     threshold: float | None = None
@@ -109,12 +117,18 @@ class AirflowParams:
     static_level: float = 12.0
     static_fraction: float = 0.002
     fill_enclosed: bool = True
+    flat_std: float = 2.0
+    fade_min_step: float = 1.0
 
     def __post_init__(self):
         if self.threshold is not None and not (math.isfinite(self.threshold) and self.threshold >= 0):
             raise ParameterError(f"airflow.threshold must be >= 0 (frame widths/s) or None, got {self.threshold!r}")
         if not (0.0 <= float(self.floor) < 100.0):
             raise ParameterError(f"airflow.floor must lie in 0..100 frame widths/s, got {self.floor!r}")
+        for name in ("flat_std", "fade_min_step"):
+            v = float(getattr(self, name))
+            if not (math.isfinite(v) and 0.0 <= v <= 255.0):
+                raise ParameterError(f"airflow.{name} must lie in 0..255 grey levels, got {getattr(self, name)!r}")
         for name in ("cell_rel", "near_min", "static_fraction", "strong_rel"):
             if not (0.0 <= float(getattr(self, name)) <= 1.0):
                 raise ParameterError(f"airflow.{name} must lie in 0..1, got {getattr(self, name)!r}")
@@ -191,6 +205,34 @@ def is_static(prev_gray: np.ndarray, gray: np.ndarray, *, params: AirflowParams 
         return False
     changed = cv2.absdiff(a, b) > params.static_level
     return float(changed.mean()) < params.static_fraction
+
+
+def is_fade(prev_gray: np.ndarray, gray: np.ndarray, *, params: AirflowParams = AirflowParams()) -> bool:
+    """True when two frames differ only by a global change of brightness and contrast (a fade, a
+    flash, an exposure change), or are both too flat to hold any motion: there is no motion to read.
+
+    Optical flow assumes constant brightness and reads such a change as motion (module docstring:
+    the BBB opening's fade in from black read 0.3-0.9 frame widths/s at 640 px). Frames whose luma
+    standard deviation is below ``flat_std`` are flat; otherwise the higher-contrast frame's
+    brightness and contrast are mapped linearly onto the other's, and the pair is a fade when the
+    mean brightness moved by at least ``fade_min_step`` grey levels and the mapped pair is static
+    (``is_static``). A cut into or out of black is a cut first (:mod:`autohaptics.cuts`, checked
+    before); a dark picture straight after black counts as a fade (no flow to read across it).
+    """
+    a, b = _gray(prev_gray), _gray(gray)
+    if a.shape != b.shape:
+        return False
+    ma, sa = (float(v[0, 0]) for v in cv2.meanStdDev(a))
+    mb, sb = (float(v[0, 0]) for v in cv2.meanStdDev(b))
+    if sa < params.flat_std and sb < params.flat_std:
+        return True
+    if abs(ma - mb) < params.fade_min_step:
+        return False
+    if sa < sb:  # map the higher-contrast frame down: scaling the flatter one up would amplify its noise
+        a, b, ma, sa, mb, sb = b, a, mb, sb, ma, sa
+    alpha = sb / sa
+    mapped = cv2.convertScaleAbs(a, alpha=alpha, beta=mb - alpha * ma)
+    return is_static(mapped, b, params=params)
 
 
 def motion_threshold(motion: np.ndarray, *, params: AirflowParams = AirflowParams()) -> float:

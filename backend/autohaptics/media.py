@@ -415,17 +415,18 @@ def _yuv_to_rgb(y: np.ndarray, u: np.ndarray, v: np.ndarray, frame: av.VideoFram
     return np.clip(rgb + 0.5, 0.0, 255.0).astype(np.uint8)
 
 
-DECODE_MODES = ("full", "fast")
+DECODE_MODES = ("full", "nonref", "fast")
 
 
 def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefetch: int = 0,
                decode: str = "full") -> Iterator[Frame]:
     """Decode the video stream frame by frame (presentation order); nothing is converted here.
 
-    decode : "full" decodes every frame exactly; "fast" asks FFmpeg to skip non-reference frames
-        (in H.264/HEVC typically the B-frames: about half the frames) and the in-loop deblocking
-        filter (invisible on small proxies, not decoded exactly). The frames that come out keep
-        their true timestamps.
+    decode : "full" decodes every frame exactly; "nonref" asks FFmpeg to skip non-reference
+        frames (in H.264/HEVC typically the B-frames: about half the frames; formats without them,
+        such as VP8 or intra-only video, decode every frame), the others exactly; "fast" also
+        skips the in-loop deblocking filter (invisible on small proxies, not decoded exactly).
+        The frames that come out keep their true timestamps.
     prefetch : when > 0, decode in a background thread up to this many frames ahead, so FFmpeg's
         decoder threads keep working while the caller analyses a frame (PyAV releases the GIL
         while decoding). Frames stay valid after the step that yielded them in this mode.
@@ -448,8 +449,9 @@ def _iter_video(info: MediaInfo, decode: str = "full") -> Iterator[Frame]:
     with open_container(info.path) as c:
         stream = _stream_by_index(c, info.video.index)
         stream.thread_type = "AUTO"
-        if decode == "fast":
+        if decode in ("nonref", "fast"):
             stream.codec_context.skip_frame = "NONREF"
+        if decode == "fast":
             stream.codec_context.options = {"skip_loop_filter": "all"}
         last_t = -math.inf
         for frame in _decode_tolerant(c, stream, report, info.path):

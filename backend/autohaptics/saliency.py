@@ -50,7 +50,7 @@ class SaliencyParams:
     """Saliency backend and its inputs.
 
     backend : "spectral" | "fine_grained" | "onnx".
-    proxy_width : width in px of the RGB proxy the map is computed on and has (default 192; with
+    proxy_width : width in px of the RGB proxy the map is computed on and has (default 256; with
         the spectral backend the width the salient shape is cut at: see the module docstring).
     motion_weight : 0..1 share of the motion cue (|frame - previous frame|); 0 = not computed.
     blur : Gaussian smoothing of the map, sigma as a fraction of the proxy width (0 = none).
@@ -63,7 +63,7 @@ class SaliencyParams:
     """
 
     backend: str = "spectral"
-    proxy_width: int = 192
+    proxy_width: int = 256
     motion_weight: float = 0.0
     blur: float = 0.02
     flat_std: float = 2.0

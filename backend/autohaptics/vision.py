@@ -52,15 +52,16 @@ class VideoParams:
     skip : skip what a scene does not need (see the module docstring). False computes everything.
     prefetch : frames decoded ahead in a background thread, overlapping decoding with analysis
         (0 = decode in the calling thread).
-    decode : "full" (every frame, exactly) or "fast" (FFmpeg skips non-reference frames and the
-        deblocking filter: about half the decoding work on H.264; flow pairs then span the next
-        decoded frame, with its true time interval).
+    decode : "full" (every frame, exactly), "nonref" (default: FFmpeg skips non-reference frames,
+        about half the decoding work on H.264; the frames it decodes are exact) or "fast" (also skips
+        the deblocking filter). With skipped frames the analysed frame is the decoded one nearest
+        the tick's centre and a flow pair spans the next decoded frame, with its true interval.
     """
 
     analysis: str = "tick"
     skip: bool = True
     prefetch: int = 8
-    decode: str = "full"
+    decode: str = "nonref"
 
     def __post_init__(self):
         if self.decode not in media.DECODE_MODES:
@@ -280,8 +281,9 @@ def _flow_pair(k, gray0, gray1, rgb0, sig0, successor_sig, dt, out: VideoAnalysi
     if cuts.is_cut(cuts.frame_signature(gray0), cuts.frame_signature(gray1), params=cut_params):
         out.cut[k] = True
         return
-    if skip and stages["static"].run(airflow.is_static, gray0, gray1, params=airflow_params):
-        out.static[k] = True
+    if (skip and stages["static"].run(airflow.is_static, gray0, gray1, params=airflow_params)) or \
+            stages["static"].run(airflow.is_fade, gray0, gray1, params=airflow_params):
+        out.static[k] = True  # nothing moved beyond noise, or only the brightness changed (a fade)
         acc.add_motion(k, 0.0, np.zeros((FAN_ROWS, FAN_COLS), np.float32))
         return
     flow = stages["flow"].run(airflow.optical_flow, gray0, gray1, params=flow_params)
