@@ -104,9 +104,11 @@ class AirflowParams:
         small moving object is seen).
     fill_enclosed : a near cell enclosed by "on" cells blows too (the still centre of an object
         expanding toward the camera; see the module docstring).
-    flat_std, fade_min_step : a pair of frames both flatter than ``flat_std`` (luma standard
-        deviation, grey levels), or differing only by a global brightness/contrast change of at
-        least ``fade_min_step`` grey levels (a fade), has no motion (:func:`is_fade`).
+    flat_std : a frame whose luma standard deviation is below this (grey levels) is flat; a pair
+        of flat frames has no motion (:func:`is_fade`).
+    fade_min_step : a pair whose mean brightness moved by at least this (grey levels) and that
+        differs in nothing else than a global brightness/contrast change is a fade: no motion
+        (:func:`is_fade`).
     """
 
     threshold: float | None = None

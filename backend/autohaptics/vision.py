@@ -45,7 +45,9 @@ SIGNATURE_WIDTH = 48
 class VideoParams:
     """Which frames the video pass analyses. Proxy sizes are the stages' own parameters: the gray
     proxy (static check, flow, in-pair cuts) is ``flow.proxy_width`` wide, the RGB proxy (colour,
-    saliency, depth, cuts between ticks) is ``max(saliency.proxy_width, depth.proxy_width)`` wide.
+    saliency, depth, cuts between ticks) is ``max(saliency.proxy_width, depth.proxy_width)`` wide,
+    except that the spectral saliency (which reads the full frame's luma at 64 x 64) counts with
+    at most ``flow.proxy_width``: its map is made ``saliency.proxy_width`` wide from that proxy.
 
     analysis : "tick" (one frame plus its successor per 100 ms tick) or "every" (every decoded
         frame; the reference preset).
