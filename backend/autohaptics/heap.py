@@ -6,6 +6,15 @@ fragmentation; on a 2-hour film that was 60-90 MB nobody used. :func:`bound_heap
 threshold at 1 MB for the process (large arrays are mapped and unmapped on their own), and
 :func:`release_free_memory` (``malloc_trim``) returns what the decoder and the per-chunk feature
 arrays freed between the pipeline's passes. Elsewhere (musl, macOS, Windows) both are no-ops.
+
+:func:`release_library_pages` drops the process's clean pages of mapped files (the code and
+read-only data of shared libraries) from its page tables; they stay in the page cache and come
+back on the next touch. Right after a package is installed its files are wholly in the page
+cache, so every page fault also maps the cached neighbours ("fault-around"): the same run then
+held 467-501 MiB at its peak instead of 385-387 (libllvmlite.so alone 69 against 36 MiB, for
+LLVM code that runs only while numba loads the compiled loudness kernels). Called between the
+passes, what stays mapped is the code the next pass runs. Only mappings that are private, not
+writable and hold no anonymous (copy-on-write) page are touched: their content is the file's.
 """
 
 from __future__ import annotations
@@ -44,4 +53,59 @@ def release_free_memory() -> bool:
     return bool(fn(0)) if fn is not None else False
 
 
-__all__ = ["MMAP_THRESHOLD_BYTES", "bound_heap", "release_free_memory"]
+_MADV_DONTNEED = 4
+_SMAPS_FIELDS = ("Rss", "Anonymous", "Private_Dirty", "Shared_Dirty", "Locked")
+
+
+def clean_file_mappings(smaps_text: str) -> list[tuple[int, int, int, str]]:
+    """The mappings of a ``/proc/PID/smaps`` text that :func:`release_library_pages` may drop:
+    file-backed, private, not writable, resident, with no anonymous, dirty or locked page.
+    Returns (start, length in bytes, resident kB, path) per mapping."""
+    out = []
+
+    def flush(cur):
+        if cur is None:
+            return
+        start, end, perms, path, f = cur
+        if (path and not path.startswith("[") and perms[1] != "w" and perms[3] == "p"
+                and f.get("Rss", 0) > 0 and not any(f.get(k, 1) for k in _SMAPS_FIELDS[1:])):
+            out.append((start, end - start, f["Rss"], path))
+
+    cur = None
+    for line in smaps_text.splitlines():
+        head = line.split(None, 5)
+        if len(head) >= 5 and "-" in head[0] and ":" in head[3] and not head[0].endswith(":"):
+            flush(cur)
+            lo, hi = head[0].split("-")
+            cur = (int(lo, 16), int(hi, 16), head[1], head[5].strip() if len(head) > 5 else "", {})
+        elif cur is not None and len(head) >= 2 and head[0].endswith(":") and head[0][:-1] in _SMAPS_FIELDS:
+            cur[4][head[0][:-1]] = int(head[1])
+    flush(cur)
+    return out
+
+
+def release_library_pages() -> int:
+    """Drop the clean pages of mapped files from this process (module docstring); the kB it held
+    in them. 0 where there is no /proc/self/smaps or no madvise (not Linux)."""
+    try:
+        with open("/proc/self/smaps") as fh:
+            text = fh.read()
+    except OSError:
+        return 0
+    lib = ctypes.util.find_library("c")
+    try:
+        madvise = ctypes.CDLL(lib, use_errno=True).madvise if lib else None
+    except (OSError, AttributeError):
+        madvise = None
+    if madvise is None:
+        return 0
+    madvise.argtypes, madvise.restype = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int], ctypes.c_int
+    released = 0
+    for start, length, rss_kb, _path in clean_file_mappings(text):
+        if madvise(ctypes.c_void_p(start), ctypes.c_size_t(length), _MADV_DONTNEED) == 0:
+            released += rss_kb
+    return released
+
+
+__all__ = ["MMAP_THRESHOLD_BYTES", "bound_heap", "clean_file_mappings", "release_free_memory",
+           "release_library_pages"]

@@ -28,7 +28,7 @@ from autohaptics import airflow, cuts, depth, fusion, saliency, thermal
 from autohaptics import audio_features as af
 from autohaptics import intensity as inten
 from autohaptics import media
-from autohaptics.heap import release_free_memory
+from autohaptics.heap import release_free_memory, release_library_pages
 from autohaptics.errors import MediaError, ParameterError
 from autohaptics.layout import ACTUATOR_IDS, AUDIO_MODE_ACTUATORS, CENTRE_ACTUATOR, N_ACTUATORS, TEMP_NEUTRAL_C
 from autohaptics.presets import DEFAULT_PRESET, apply_overrides, params_to_dict, preset_overrides
@@ -201,6 +201,7 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
     else:
         audio = _audio_pass(info, params, n, stats, progress, cancel, share=audio_share)
         release_free_memory()  # the decoder's and the feature chunks' freed heap, before the video pass
+        release_library_pages()  # e.g. LLVM's code, which ran only to load the compiled kernels
 
     video = None
     need_saliency = _saliency_needed(params, audio, n) if (need_vib and info.video is not None) else np.zeros(n, bool)
@@ -220,6 +221,7 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
                            need_flow=need_flow, need_colour=need_colour, progress=video_progress, cancel=cancel)
         stats["video"] = {"seconds": time.perf_counter() - t0, **video.stats}
         release_free_memory()
+        release_library_pages()
     else:
         stats["video"] = {"skipped": "no track needs the picture"}
     if not params.allow_truncated:
