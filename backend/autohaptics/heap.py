@@ -92,14 +92,9 @@ def release_library_pages() -> int:
             text = fh.read()
     except OSError:
         return 0
-    lib = ctypes.util.find_library("c")
-    try:
-        madvise = ctypes.CDLL(lib, use_errno=True).madvise if lib else None
-    except (OSError, AttributeError):
-        madvise = None
+    madvise = _libc_fn("madvise", (ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int))
     if madvise is None:
         return 0
-    madvise.argtypes, madvise.restype = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int], ctypes.c_int
     released = 0
     for start, length, rss_kb, _path in clean_file_mappings(text):
         if madvise(ctypes.c_void_p(start), ctypes.c_size_t(length), _MADV_DONTNEED) == 0:
