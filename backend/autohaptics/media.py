@@ -337,9 +337,8 @@ class Frame:
     def luma_grid(self, size: tuple[int, int]) -> np.ndarray:
         """The luma area-averaged to exactly ``size`` (w, h) px from the full frame (aspect not
         kept), full range, display orientation: uint8 [shape=(h, w)]."""
-        w, h = max(1, int(size[0])), max(1, int(size[1]))
         full = self.proxy(self.width, self.height, fmt="gray")
-        return cv2.resize(full, (w, h), interpolation=cv2.INTER_AREA if w <= full.shape[1] else cv2.INTER_LINEAR)
+        return _area_resize(full, (max(1, int(size[0])), max(1, int(size[1]))))
 
     def full(self, *, fmt: str = "rgb24") -> np.ndarray:
         """Full-resolution copy in display orientation (the reference preset)."""
