@@ -76,3 +76,36 @@ def test_area_resize_matches_one_pass_area_averaging(src, size):
     one_pass = cv2.resize(arr, size, interpolation=cv2.INTER_AREA if size[0] <= src[1] and size[1] <= src[0]
                           else cv2.INTER_LINEAR)
     assert np.abs(got.astype(int) - one_pass.astype(int)).max() <= 1
+
+
+def _decoded(path, decode):
+    return [(f.time_s, f.gray(64)) for f in media.iter_video(path, decode=decode)]
+
+
+def test_sparse_decoding_keeps_only_i_and_p_frames_from_40_fps():
+    """The 1080p60 H.264 clip (B-pyramid: I/P, one reference B and two plain B per 4 frames):
+    "nonref" decodes half the frames exactly; "sparse" only the I- and P-frames (a quarter),
+    in order, with the true timestamps of the same frames, approximate (missing B references)
+    but close to the exact ones."""
+    path = shared_clip("bbb_1080p60_2s_h264_aac6ch.mp4")
+    full = dict(_decoded(path, "full"))
+    nonref = _decoded(path, "nonref")
+    sparse = _decoded(path, "sparse")
+    assert len(full) == 120 and len(nonref) == 60 and 28 <= len(sparse) <= 36
+    for t, g in nonref:
+        np.testing.assert_array_equal(g, full[t])  # the frames it decodes are exact
+    times = [t for t, _ in sparse]
+    assert times == sorted(times) and set(times) <= set(full)
+    assert max(np.diff(times)) <= 4 / 60 + 1e-6  # still one frame per 100 ms tick and more
+    errors = [np.abs(g.astype(int) - full[t].astype(int)).mean() for t, g in sparse]
+    assert 0 < max(errors) < 8  # approximate, not garbage
+
+
+def test_sparse_decoding_below_40_fps_skips_only_non_reference_frames():
+    """At 24 fps every B-frame skipped would leave too few frames for the 10 Hz ticks: "sparse"
+    decodes what "fast" does (the non-reference frames skipped)."""
+    path = shared_clip("sintel_trailer_480x204_h264_aac.mp4")
+    assert media.probe(path).video.fps < media.SPARSE_MIN_FPS
+    fast = [t for t, _ in _decoded(path, "fast")]
+    sparse = [t for t, _ in _decoded(path, "sparse")]
+    assert sparse == fast
