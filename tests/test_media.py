@@ -91,7 +91,7 @@ def test_sparse_decoding_keeps_only_i_and_p_frames_from_40_fps():
     full = dict(_decoded(path, "full"))
     nonref = _decoded(path, "nonref")
     sparse = _decoded(path, "sparse")
-    assert len(full) == 120 and len(nonref) == 60 and 28 <= len(sparse) <= 36
+    assert len(full) == 120 and 55 <= len(nonref) <= 65 and 28 <= len(sparse) <= 36
     for t, g in nonref:
         np.testing.assert_array_equal(g, full[t])  # the frames it decodes are exact
     times = [t for t, _ in sparse]
