@@ -212,7 +212,9 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
             if need_colour:
                 acc.add_colour(k, stages["colour"].run(thermal.mean_colour, rgb))
             if want_sal:
-                sal_rgb = _resized(rgb, saliency_params.proxy_width)
+                # no wider than the picture itself: upsampling a 64 px film to a 256 px map adds
+                # nothing but work (16x the pixels on each of a 2-hour film's 72,000 ticks)
+                sal_rgb = _resized(rgb, min(saliency_params.proxy_width, max(1, frame.width)))
                 sal_gray = cv2.cvtColor(sal_rgb, cv2.COLOR_RGB2GRAY) if saliency_params.motion_weight > 0 else None
                 smap = stages["saliency"].run(saliency.saliency_map, sal_rgb, params=saliency_params,
                                               backend=sal_backend, prev_gray=prev_sal_gray, luma=luma)
