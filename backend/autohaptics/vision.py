@@ -57,8 +57,9 @@ class VideoParams:
     decode : "full" (every frame, exactly), "nonref" (default: FFmpeg skips non-reference frames,
         about half the decoding work on H.264; the frames it decodes are exact), "fast" (also skips
         the deblocking filter) or "sparse" (the fast preset: also every B-frame at 40 fps and up,
-        so P-frames that referenced one come out approximate; see :func:`media.iter_video`). With skipped frames the analysed frame is the decoded one nearest
-        the tick's centre and a flow pair spans the next decoded frame, with its true interval.
+        so P-frames that referenced one come out approximate; see :func:`media.iter_video`).
+        With skipped frames the analysed frame is the decoded one nearest the tick's centre and a
+        flow pair spans the next decoded frame, with its true interval.
     """
 
     analysis: str = "tick"
