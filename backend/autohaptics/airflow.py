@@ -257,7 +257,8 @@ def fan_levels(cell_motion_: np.ndarray, nearness: np.ndarray, *, params: Airflo
     peak = float(m.max())
     if not peak > 0:
         return np.zeros((FAN_ROWS, FAN_COLS), np.float32)
-    rel = np.clip(m / peak, 0.0, 1.0).astype(np.float32)  # the output's precision decides "still"
+    with np.errstate(over="ignore"):  # a subnormal peak: the quotient overflows, then clips to 1
+        rel = np.clip(m / peak, 0.0, 1.0).astype(np.float32)  # the output's precision decides "still"
     near_ok = near >= params.near_min
     on = (rel >= params.cell_rel) & (rel > 0) & near_ok  # a still cell is never "strong motion"
     levels = np.where(on, rel, 0.0)
