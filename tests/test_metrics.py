@@ -240,11 +240,12 @@ def test_stage_figures_from_stats():
     stats = {"audio": {"seconds": 1.5}, "video": {
         "seconds": 9.0, "decode_wait": {"seconds": 5.0}, "proxy": {"seconds": 1.0}, "flow": {"seconds": 0.5,
         "computed": 30, "ticks_computed": 30, "ticks_skipped": 10}, "saliency": {"seconds": 0.25, "computed": 4,
-        "ticks_computed": 4, "ticks_skipped": 36}, "static": {"seconds": 0.1, "ticks_static": 7},
+        "ticks_computed": 4, "ticks_skipped": 16, "ticks_held": 20}, "static": {"seconds": 0.1, "ticks_static": 7},
         "cuts": {"seconds": 0.0, "cuts": 2}, "frames": {"ticks": 40}}}
     assert analysis_stage_seconds(stats) == pytest.approx(1.5 + 1.0 + 0.5 + 0.25 + 0.1)
     sk = skip_shares(stats)
-    assert sk["flow"] == {"computed": 30, "skipped": 10, "share_computed": 0.75, "seconds": 0.5, "calls": 30}
+    assert sk["flow"] == {"computed": 30, "skipped": 10, "held": 0, "share_computed": 0.75, "seconds": 0.5, "calls": 30}
+    assert (sk["saliency"]["skipped"], sk["saliency"]["held"]) == (16, 20)  # held: a stride's second ticks
     assert sk["saliency"]["share_computed"] == 0.1 and "depth" not in sk
     assert (sk["static_ticks"], sk["cuts"], sk["ticks"]) == (7, 2, 40)
     st_ = stage_seconds(stats)

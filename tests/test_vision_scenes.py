@@ -14,9 +14,11 @@ import cv2
 import numpy as np
 import pytest
 
-from autohaptics import airflow, pipeline, synth
+from autohaptics import airflow, pipeline, synth, vision
+from autohaptics.errors import ParameterError
 from autohaptics.layout import ACTUATOR_IDS, FAN_COLS
 from autohaptics.synth import Noise, Scene, Segment, Shape, Texture, Tone
+from autohaptics.timebase import tick_of_time
 from autohaptics.timeline import Timeline
 from shared_data import SHARED_CLIPS, shared_clip
 
@@ -261,3 +263,55 @@ def test_sintel_encodes_agree_on_which_ticks_blow(sintel, clip_timelines):
 @pytest.mark.slow
 def test_sintel_encodes_agree_on_fan_cells(sintel):
     assert sintel["fan_iou"] >= 0.9
+
+
+# ---------------------------------------------------------------- stride (the fast preset)
+class _Timed:
+    """A decoded frame as :func:`vision._centre_frames` sees it: its time only."""
+
+    def __init__(self, t: float):
+        self.time_s = t
+
+
+@pytest.mark.parametrize("fps,stride,n", [(60, 2, 20), (24, 2, 25), (30, 3, 10), (60, 1, 7), (5, 2, 8), (15, 4, 9)])
+def test_each_group_of_ticks_gets_the_frame_nearest_its_centre(fps, stride, n):
+    frames = [_Timed(i / fps) for i in range(int(n * 0.1 * fps) + 3)]  # a few past the last tick
+    out = list(vision._centre_frames(iter(frames), n, stride))
+    assert [f for f, _ in out] == frames  # every frame once, in order
+    chosen = {k: f.time_s for f, k in out if k is not None}
+    expected = {}
+    for g in range(0, n, stride):
+        inside = [f.time_s for f in frames if min(tick_of_time(f.time_s), n - 1) // stride * stride == g]
+        if inside:
+            centre = (g + 0.5 * min(stride, n - g)) * 0.1
+            expected[g] = min(inside, key=lambda t: abs(t - centre))
+    assert chosen == expected
+
+
+def test_stride_two_analyses_every_other_tick_and_its_group_shares_the_values(generated, tmp_path):
+    path = synth.write_scene(tmp_path / "boom.mp4", SCENES["left_object_boom"])
+    params, _ = pipeline.resolve_params("balanced", {"video.stride": "2"})
+    analysis = pipeline.analyse(path, params)
+    v = analysis.video
+    n = v.motion.size
+    assert n == 30 and v.frame_mask[0::2].all() and not v.frame_mask[1::2].any()
+    for name in ("mean_rgb", "beta", "saliency_mask", "motion", "cell_motion", "nearness", "static"):
+        arr = getattr(v, name)
+        np.testing.assert_array_equal(arr[1::2], arr[0::2], err_msg=name)
+    flow = analysis.stats["video"]["flow"]
+    assert flow["ticks_held"] == 15 and flow["ticks_computed"] + flow["ticks_skipped"] == 15
+    tl = pipeline.derive(analysis, params)
+    assert tl.generator["params"]["video"]["stride"] == 2
+    # the same answer as every tick read: the bright disc on the left leads the burst
+    _, every = generated["left_object_boom"]
+    vib = tl.vibration[10:20]
+    np.testing.assert_allclose(vib[:, LEFT].max(axis=1), vib.max(axis=1))
+    assert float(np.abs(tl.vibration - every.vibration).mean()) < 0.02
+    np.testing.assert_allclose(tl.temperature_c, every.temperature_c, atol=0.5)
+
+
+@pytest.mark.parametrize("overrides", [{"video.stride": "0"}, {"video.stride": "11"}, {"video.stride": "1.5"},
+                                       {"video.stride": "2", "video.analysis": "every"}])
+def test_stride_out_of_range_or_with_every_frame_analysis_is_refused(overrides):
+    with pytest.raises(ParameterError, match="video.stride"):
+        pipeline.resolve_params("balanced", overrides)

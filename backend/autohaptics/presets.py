@@ -20,13 +20,16 @@ recorded in the timeline's ``generator.params``.
   64 x 64; the width sets where the salient shape is cut: measured against the reference on the
   30 s 1080p BBB clip, vibration MAE 0.023 at 192 px and 0.012 at 256 with every frame decoded,
   0.014 at 256 and 0.012 at 320 with reference frames only), 128 px depth, skipping on.
-- ``fast``: ``video.decode=sparse``: from 40 fps up FFmpeg decodes only the I- and P-frames
+- ``fast``: ``video.stride=2``: the picture is read for every other tick (the frame nearest the
+  centre of each pair of ticks, its values shared by both; the audio stays at 10 Hz), which halves
+  the proxies, flow, saliency and depth; and ``video.decode=sparse``: from 40 fps up FFmpeg decodes only the I- and P-frames
   (every B-frame skipped, reference B-frames too, which leaves the P-frames that used one
   approximate), below 40 fps only the non-reference frames; the deblocking filter is skipped
   either way; 128 px flow at DIS "fast", 128 px saliency, 64 px depth. On the 30 s 1080p60 BBB
   clip that is 495 of 1,800 frames decoded (balanced: 930), which is where fast's time goes:
-  measured against the reference, vibration MAE 0.064 on the 2 s clip with sparse decoding,
-  0.026 with non-reference skipping only (see docs/BENCHMARKS.md).
+  measured against the reference on the 2 s clip, vibration MAE 0.026 with non-reference
+  skipping only, 0.064 with sparse decoding, 0.097 with the stride as well (the Sintel trailer:
+  0.006 -> 0.021, onset F1 0.97 -> 0.94); see docs/BENCHMARKS.md.
 """
 
 from __future__ import annotations
@@ -55,6 +58,7 @@ PRESETS: dict[str, dict[str, Any]] = {
     "balanced": {},
     "fast": {
         "video.decode": "sparse",
+        "video.stride": 2,
         "saliency.proxy_width": 128,
         "depth.proxy_width": 64,
         "flow.proxy_width": 128,
@@ -189,12 +193,20 @@ def _convert(value: Any, typ: type, key: str) -> Any:
         if s in ("0", "false", "no", "off"):
             return False
         raise ParameterError(f"{key!r} expects true/false, got {value!r}")
-    if typ in (int, float):
+    if typ is int:  # "2", 2, "2.0" and 2.0 are 2; 1.5 is refused rather than cut to 1
         try:
-            v = typ(value) if not (typ is int and isinstance(value, str) and "." in value) else int(float(value))
-        except (TypeError, ValueError):
+            f = float(value)
+        except (TypeError, ValueError, OverflowError):
+            raise ParameterError(f"{key!r} expects a whole number, got {value!r}") from None
+        if not (math.isfinite(f) and f.is_integer()):
+            raise ParameterError(f"{key!r} expects a whole number, got {value!r}")
+        return int(value) if isinstance(value, int) else int(f)
+    if typ is float:
+        try:
+            v = float(value)
+        except (TypeError, ValueError, OverflowError):
             raise ParameterError(f"{key!r} expects a number, got {value!r}") from None
-        if isinstance(v, float) and not math.isfinite(v):
+        if not math.isfinite(v):
             raise ParameterError(f"{key!r} must be finite, got {value!r}")
         return v
     if typ is str:

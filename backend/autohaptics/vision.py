@@ -18,7 +18,8 @@ would put weight where no object ever was). It computes, per tick:
 What is skipped (``skip=True``): saliency where the audio intensity is zero (unless the mode
 needs every tick), optical flow on static pairs and across cuts, depth where the motion is below
 the airflow floor. Frames are converted to proxies only when a stage runs on them. A tick without
-a frame of its own (frame rate below 10 fps) holds the previous tick's values.
+a frame of its own (frame rate below 10 fps, or the second tick of a group with ``stride=2``) holds
+the values of the analysed tick before it.
 """
 
 from __future__ import annotations
@@ -60,12 +61,18 @@ class VideoParams:
         so P-frames that referenced one come out approximate; see :func:`media.iter_video`).
         With skipped frames the analysed frame is the decoded one nearest the tick's centre and a
         flow pair spans the next decoded frame, with its true interval.
+    stride : ticks per analysed frame, 1..10 (default 1; the fast preset: 2). With ``stride`` s the
+        ticks are taken in groups of s, the frame nearest the group's centre is analysed (plus its
+        successor for flow) and every tick of the group gets its values: the picture is read at
+        10/s Hz instead of 10 Hz, and each tick's frame is at most s x 50 ms off its own centre.
+        Audio features stay at 10 Hz. Only with ``analysis="tick"``.
     """
 
     analysis: str = "tick"
     skip: bool = True
     prefetch: int = 8
     decode: str = "nonref"
+    stride: int = 1
 
     def __post_init__(self):
         if self.decode not in media.DECODE_MODES:
@@ -74,6 +81,11 @@ class VideoParams:
             raise ParameterError(f"video.prefetch must lie in 0..256 frames, got {self.prefetch!r}")
         if self.analysis not in ANALYSIS_MODES:
             raise ParameterError(f"video.analysis must be one of {ANALYSIS_MODES}, got {self.analysis!r}")
+        if isinstance(self.stride, bool) or not isinstance(self.stride, int) or not (1 <= self.stride <= 10):
+            raise ParameterError(f"video.stride must be a whole number of ticks in 1..10, got {self.stride!r}")
+        if self.stride > 1 and self.analysis != "tick":
+            raise ParameterError(f"video.stride={self.stride} needs video.analysis='tick' "
+                                 f"(the 'every' analysis reads every frame), got {self.analysis!r}")
 
 
 @dataclass
@@ -169,7 +181,8 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
             yield f
             timer["t"] = time.perf_counter()
 
-    for frame, centre_tick in _centre_frames(timed_frames(), n):
+    stride = int(video.stride)
+    for frame, centre_tick in _centre_frames(timed_frames(), n, stride):
         last_time = frame.time_s
         k = min(int(tick_of_time(frame.time_s)), n - 1)
         analyse_this = k >= 0 and (centre_tick is not None or every)
@@ -178,7 +191,7 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
             continue
         if centre_tick is not None:
             k = centre_tick
-        want_sal = centre_tick is not None and bool(need_saliency[k])
+        want_sal = centre_tick is not None and bool(need_saliency[k:k + stride].any())
         rgb = sig_rgb = luma = None
         if analyse_this and (need_colour or want_sal or need_flow):
             if want_sal and sal_luma_size is not None:
@@ -231,16 +244,22 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
     acc.finish()
     if pending is not None and pending[0] > 0 and acc.motion_n[pending[0]] == 0:
         # the clip ended before the last analysed frame's successor: its motion is unknown, so the
-        # tick holds the previous one's (the rule for ticks without a frame of their own)
+        # tick holds the previous analysed one's (the rule for ticks without a frame of their own)
         k = pending[0]
-        for name in ("motion", "cell_motion", "nearness", "depth_mask", "static"):
-            getattr(out, name)[k] = getattr(out, name)[k - 1]
-    _hold_missing(out)
+        before = np.flatnonzero(out.frame_mask[:k])
+        if before.size:
+            for name in ("motion", "cell_motion", "nearness", "depth_mask", "static"):
+                getattr(out, name)[k] = getattr(out, name)[before[-1]]
+    computed = {"saliency": int(out.saliency_mask.sum()), "flow": int(out.flow_mask.sum()),
+                "depth": int(out.depth_mask.sum())}
+    held = _hold_missing(out)
     out.stats = {
         name: {"seconds": round(st.seconds, 4), "computed": st.computed} for name, st in stages.items()
     }
-    for name, mask in (("saliency", out.saliency_mask), ("flow", out.flow_mask), ("depth", out.depth_mask)):
-        out.stats[name].update({"ticks_computed": int(mask.sum()), "ticks_skipped": int(n - mask.sum())})
+    for name, done in computed.items():
+        # held: ticks without a frame of their own (stride, or a frame rate below 10 fps) that
+        # took the values of the analysed tick before them
+        out.stats[name].update({"ticks_computed": done, "ticks_held": held, "ticks_skipped": int(n - done - held)})
     out.stats["static"]["ticks_static"] = int(out.static.sum())
     out.stats["cuts"]["cuts"] = int(out.cut.sum())
     out.stats["frames"] = {"ticks_with_frame": int(out.frame_mask.sum()), "ticks": n,
@@ -248,21 +267,24 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
     return out
 
 
-def _centre_frames(frames, n: int):
+def _centre_frames(frames, n: int, stride: int = 1):
     """Yield every frame once, in order, as (frame, tick) where ``tick`` is the tick whose CENTRE
     (0.1 k + 0.05 s) this frame is nearest to among the tick's frames, else (frame, None).
 
     The vibration of tick k goes with the picture at that instant, so that is the frame analysed
     for it (saliency; colour and flow too in the tick analysis); the frame is known one frame late
-    (one frame of look-ahead).
+    (one frame of look-ahead). With ``stride`` s > 1 the ticks go in groups of s (the last one may
+    be shorter): the frame nearest the group's centre is chosen, and ``tick`` is the group's first.
     """
-    held = None  # (frame, tick): the best candidate so far for its tick, not yet yielded
-    done = -1  # last tick whose frame was chosen
+    held = None  # (frame, tick): the best candidate so far for its tick (group), not yet yielded
+    done = -1  # last tick (group's first tick) whose frame was chosen
     for f in frames:
         k = min(int(tick_of_time(f.time_s)), n - 1)
+        if stride > 1 and k >= 0:
+            k -= k % stride
         if held is not None:
             hf, hk = held
-            centre = (hk + 0.5) * TICK_S
+            centre = (hk + 0.5 * min(stride, n - hk)) * TICK_S
             if k == hk and abs(f.time_s - centre) < abs(hf.time_s - centre):
                 yield hf, None
                 held = (f, k)
@@ -369,11 +391,12 @@ class _Accumulator:
         mean(out.nearness, self.near_n)
 
 
-def _hold_missing(out: VideoAnalysis) -> None:
-    """Ticks without a frame of their own (frame rate < 10 fps) take the previous tick's values."""
+def _hold_missing(out: VideoAnalysis) -> int:
+    """Ticks without a frame of their own (``video.stride`` > 1, a frame rate below 10 fps) take the
+    values of the analysed tick before them. Returns how many ticks were filled."""
     missing = ~out.frame_mask
     if not missing.any() or not out.frame_mask.any():
-        return
+        return 0
     idx = np.where(out.frame_mask, np.arange(out.frame_mask.size), -1)
     src = np.maximum.accumulate(idx)
     fill = missing & (src >= 0)
@@ -381,3 +404,4 @@ def _hold_missing(out: VideoAnalysis) -> None:
     for name in ("mean_rgb", "motion", "cell_motion", "nearness", "depth_mask", "beta", "saliency_mask", "static"):
         arr = getattr(out, name)
         arr[rows] = arr[src[rows]]
+    return int(rows.size)

@@ -328,15 +328,16 @@ def analysis_stage_seconds(stats: dict) -> float:
 
 
 def skip_shares(stats: dict) -> dict:
-    """{stage: {"computed", "skipped", "share_computed"}} from stats["video"], plus static ticks and cuts."""
+    """{stage: {"computed", "skipped", "held", "share_computed"}} from stats["video"], plus static ticks
+    and cuts ("held": ticks without a frame of their own that took the analysed tick's values before them)."""
     video = stats.get("video") or {}
     out = {}
     for name in SKIP_STAGES:
         s = video.get(name) or {}
         if "ticks_computed" in s:
-            done, skipped = int(s["ticks_computed"]), int(s["ticks_skipped"])
-            out[name] = {"computed": done, "skipped": skipped,
-                         "share_computed": done / (done + skipped) if done + skipped else 0.0,
+            done, skipped, held = int(s["ticks_computed"]), int(s["ticks_skipped"]), int(s.get("ticks_held", 0))
+            out[name] = {"computed": done, "skipped": skipped, "held": held,
+                         "share_computed": done / (done + skipped + held) if done + skipped + held else 0.0,
                          "seconds": float(s.get("seconds", 0.0)), "calls": int(s.get("computed", 0))}
     if "static" in video:
         out["static_ticks"] = int(video["static"].get("ticks_static", 0))

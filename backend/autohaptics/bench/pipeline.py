@@ -104,13 +104,13 @@ def run(args) -> int:
           f"peak RSS {max(rss):.0f} MB")
     rows = []
     st = tl.stats
-    rows.append(["audio (decode+features)", st.get("audio", {}).get("seconds", 0.0), "", ""])
+    rows.append(["audio (decode+features)", st.get("audio", {}).get("seconds", 0.0), "", "", ""])
     for name, s in (st.get("video") or {}).items():
         if isinstance(s, dict) and "seconds" in s:
             rows.append([f"video.{name}", s["seconds"], s.get("ticks_computed", s.get("computed", "")),
-                         s.get("ticks_skipped", "")])
-    rows.append(["derive", st.get("derive", {}).get("seconds", 0.0), "", ""])
-    print(table(rows, ["stage", "seconds", "computed", "skipped"]))
+                         s.get("ticks_skipped", ""), s.get("ticks_held", "")])
+    rows.append(["derive", st.get("derive", {}).get("seconds", 0.0), "", "", ""])
+    print(table(rows, ["stage", "seconds", "computed", "skipped", "held"]))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     fig = {"file": str(path), "preset": preset, "decode_s": decode_s, "generate_s": gen_s, "ratio": g / d,
