@@ -272,6 +272,7 @@ def test_bench_accuracy_end_to_end(tmp_path):
                        capture_output=True, text=True, timeout=900)
     assert r.returncode == 0, r.stderr
     assert "skipping audit" in r.stdout and "balanced onset F1" in r.stdout
+    assert "fast speed-up vs balanced (wall time)" in r.stdout
     doc = json.loads((tmp_path / "accuracy.json").read_text())
     clip = doc["clips"][0]
     assert set(clip["configs"]) == {"reference", "balanced", "fast", "balanced-noskip", "dis-medium"}
