@@ -23,8 +23,8 @@ recorded in the timeline's ``generator.params``.
 - ``fast``: ``video.stride=2``: the picture is read for every other tick (the frame nearest the
   centre of each pair of ticks, its values shared by both; the audio stays at 10 Hz), which halves
   the proxies, flow, saliency and depth; and ``video.decode=sparse``: from 40 fps up FFmpeg
-  decodes only the I- and P-frames (every B-frame skipped, reference B-frames too, which leaves the P-frames that used one
-  approximate), below 40 fps only the non-reference frames; the deblocking filter is skipped
+  decodes only the I- and P-frames (every B-frame skipped, reference B-frames too, which leaves
+  the P-frames that used one approximate), below 40 fps only the non-reference frames; the deblocking filter is skipped
   either way; 128 px flow at DIS "fast", 128 px saliency, 64 px depth. On the 30 s 1080p60 BBB
   clip that is 495 of 1,800 frames decoded (balanced: 930), which is where fast's time goes:
   measured against the reference on the 2 s clip, vibration MAE 0.026 with non-reference
