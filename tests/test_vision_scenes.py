@@ -288,26 +288,36 @@ def test_each_group_of_ticks_gets_the_frame_nearest_its_centre(fps, stride, n):
     assert chosen == expected
 
 
-def test_stride_two_analyses_every_other_tick_and_its_group_shares_the_values(generated, tmp_path):
+@pytest.mark.parametrize("stride", [2, 3])
+def test_a_stride_analyses_one_tick_per_group_and_the_group_shares_its_values(generated, tmp_path, stride):
     path = synth.write_scene(tmp_path / "boom.mp4", SCENES["left_object_boom"])
-    params, _ = pipeline.resolve_params("balanced", {"video.stride": "2"})
+    params, _ = pipeline.resolve_params("balanced", {"video.stride": str(stride)})
     analysis = pipeline.analyse(path, params)
     v = analysis.video
     n = v.motion.size
-    assert n == 30 and v.frame_mask[0::2].all() and not v.frame_mask[1::2].any()
-    for name in ("mean_rgb", "beta", "saliency_mask", "motion", "cell_motion", "nearness", "static"):
-        arr = getattr(v, name)
-        np.testing.assert_array_equal(arr[1::2], arr[0::2], err_msg=name)
+    assert n == 30 and v.frame_mask[0::stride].all()
+    for j in range(1, stride):
+        assert not v.frame_mask[j::stride].any()
+        for name in ("mean_rgb", "beta", "saliency_mask", "motion", "cell_motion", "nearness", "static"):
+            arr = getattr(v, name)
+            np.testing.assert_array_equal(arr[j::stride], arr[0::stride], err_msg=name)
     flow = analysis.stats["video"]["flow"]
-    assert flow["ticks_held"] == 15 and flow["ticks_computed"] + flow["ticks_skipped"] == 15
+    held = n - n // stride
+    assert flow["ticks_held"] == held and flow["ticks_computed"] + flow["ticks_skipped"] == n - held
     tl = pipeline.derive(analysis, params)
-    assert tl.generator["params"]["video"]["stride"] == 2
+    assert tl.generator["params"]["video"]["stride"] == stride
     # the same answer as every tick read: the bright disc on the left leads the burst
     _, every = generated["left_object_boom"]
     vib = tl.vibration[10:20]
     np.testing.assert_allclose(vib[:, LEFT].max(axis=1), vib.max(axis=1))
     assert float(np.abs(tl.vibration - every.vibration).mean()) < 0.02
     np.testing.assert_allclose(tl.temperature_c, every.temperature_c, atol=0.5)
+
+
+def test_the_fast_preset_reads_the_picture_for_every_third_tick():
+    params, _ = pipeline.resolve_params("fast", {})
+    assert params.video.stride == 3 and params.video.decode == "sparse"
+    assert pipeline.resolve_params("fast", {"video.stride": "1"})[0].video.stride == 1  # still overridable
 
 
 @pytest.mark.parametrize("overrides", [{"video.stride": "0"}, {"video.stride": "11"}, {"video.stride": "1.5"},

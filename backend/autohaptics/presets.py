@@ -20,16 +20,18 @@ recorded in the timeline's ``generator.params``.
   64 x 64; the width sets where the salient shape is cut: measured against the reference on the
   30 s 1080p BBB clip, vibration MAE 0.023 at 192 px and 0.012 at 256 with every frame decoded,
   0.014 at 256 and 0.012 at 320 with reference frames only), 128 px depth, skipping on.
-- ``fast``: ``video.stride=2``: the picture is read for every other tick (the frame nearest the
-  centre of each pair of ticks, its values shared by both; the audio stays at 10 Hz), which halves
-  the proxies, flow, saliency and depth; and ``video.decode=sparse``: from 40 fps up FFmpeg
-  decodes only the I- and P-frames (every B-frame skipped, reference B-frames too, which leaves
-  the P-frames that used one approximate), below 40 fps only the non-reference frames; the deblocking filter is skipped
-  either way; 128 px flow at DIS "fast", 128 px saliency, 64 px depth. On the 30 s 1080p60 BBB
-  clip that is 495 of 1,800 frames decoded (balanced: 930), which is where fast's time goes:
-  measured against the reference on the 2 s clip, vibration MAE 0.026 with non-reference
-  skipping only, 0.064 with sparse decoding, 0.097 with the stride as well (the Sintel trailer:
-  0.006 -> 0.021, onset F1 0.97 -> 0.94); see docs/BENCHMARKS.md.
+- ``fast``: ``video.stride=3``: the picture is read for every third tick (the frame nearest the
+  centre of each group of three ticks, its values shared by all three; the audio stays at 10 Hz),
+  which cuts the proxies, flow, saliency and depth to a third; and ``video.decode=sparse``: from
+  40 fps up FFmpeg decodes only the I- and P-frames (every B-frame skipped, reference B-frames
+  too, which leaves the P-frames that used one approximate), below 40 fps only the non-reference
+  frames; the deblocking filter is skipped either way; 128 px flow at DIS "fast", 128 px
+  saliency, 64 px depth. On the 30 s 1080p60 BBB clip that is 495 of 1,800 frames decoded
+  (balanced: 930), and decoding them alone takes 1.7 s of fast's 3 s. Measured against the
+  reference on the 2 s clip: vibration MAE 0.026 with non-reference skipping only, 0.064 with
+  sparse decoding, 0.097 with a stride of 2 and 0.093 with 3. On the Sintel trailer: 0.006 in
+  balanced, 0.024 at stride 2, 0.023 at stride 3, with onset F1 0.97, 0.92 and 0.91. A stride of
+  3 instead of 2 took 9-10 % off fast's time on both clips; see docs/BENCHMARKS.md.
 """
 
 from __future__ import annotations
@@ -58,7 +60,7 @@ PRESETS: dict[str, dict[str, Any]] = {
     "balanced": {},
     "fast": {
         "video.decode": "sparse",
-        "video.stride": 2,
+        "video.stride": 3,
         "saliency.proxy_width": 128,
         "depth.proxy_width": 64,
         "flow.proxy_width": 128,

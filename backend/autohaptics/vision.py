@@ -18,8 +18,8 @@ would put weight where no object ever was). It computes, per tick:
 What is skipped (``skip=True``): saliency where the audio intensity is zero (unless the mode
 needs every tick), optical flow on static pairs and across cuts, depth where the motion is below
 the airflow floor. Frames are converted to proxies only when a stage runs on them. A tick without
-a frame of its own (frame rate below 10 fps, or the second tick of a group with ``stride=2``) holds
-the values of the analysed tick before it.
+a frame of its own (a frame rate below 10 fps, or a later tick of a group with ``stride`` > 1)
+holds the values of the analysed tick before it.
 """
 
 from __future__ import annotations
@@ -61,7 +61,7 @@ class VideoParams:
         so P-frames that referenced one come out approximate; see :func:`media.iter_video`).
         With skipped frames the analysed frame is the decoded one nearest the tick's centre and a
         flow pair spans the next decoded frame, with its true interval.
-    stride : ticks per analysed frame, 1..10 (default 1; the fast preset: 2). With ``stride`` s the
+    stride : ticks per analysed frame, 1..10 (default 1; the fast preset: 3). With ``stride`` s the
         ticks are taken in groups of s, the frame nearest the group's centre is analysed (plus its
         successor for flow) and every tick of the group gets its values: the picture is read at
         10/s Hz instead of 10 Hz, and each tick's frame is at most s x 50 ms off its own centre.
