@@ -15,14 +15,15 @@ Backends:
   Known limit (measured, kept): on real footage the expansion cue also fires where nothing
   approaches. The trailing edge of a translating object stretches the flow along one direction,
   which has positive divergence too. And the cue is a rate per frame interval, so at 60 fps DIS's
-  sub-pixel noise reads several per second. On moving frame pairs of the shared clips, the cue's
-  mean over the frame is 0.98-1.00 with 640 px flow (Sintel, BBB 1080p60) and 0.3-0.8 with
-  160 px flow. "Near" is then most of the frame below the sky plus what has detail, in every
-  preset. A looming measure was tried (twice the smaller principal strain rate, smoothed before
-  the reach): it reads a translation as 0 and flow noise as 0.1-0.2 instead of 1.0. But
-  "near" then shrinks to the lowest quarter of the frame, and fan-cell agreement between Sintel's
-  two encodes falls from 0.91 to 0.82 (0.89 with ``near_min`` 0.3). The cue weights would have to
-  be re-tuned against a depth ground truth first.
+  sub-pixel noise reads several per second. Over the moving frame pairs of three shared clips
+  (Sintel, BBB 1080p60, BBB opening), the median of the cue's frame mean is 0.91-1.00 with 640 px
+  flow and 0.32-0.81 with 160 px flow. "Near" is then most of the frame below the sky plus what
+  has detail, in every preset. A looming measure was tried (twice the smaller principal strain
+  rate, smoothed before the reach): it reads a translation as 0, and on the same clips its median
+  frame mean is 0.03-0.34. But then, where nothing approaches, only the lowest rows with detail
+  reach ``near_min`` (0.4 x position + 0.2 x detail), and fan-cell agreement between Sintel's two
+  encodes falls from 0.91 to 0.82 (0.89 with ``near_min`` 0.3). The cue weights would have to be
+  re-tuned against a depth ground truth first.
 
   The expansion cue is on an ABSOLUTE scale (decision): the divergence is a relative growth rate
   (1/s; the flow's px per frame over px, divided by the frame interval), the same at any proxy
