@@ -294,7 +294,8 @@ def write_scene(path: str | os.PathLike, scene: Scene, *, width: int = 320, heig
     an explicit FFmpeg layout name, or None for an unlabelled layout ("6 channels", PCM codecs only).
     fps : frames per second (float or Fraction; 23.976 and 29.97 are fine).
     long : fastest encoder settings, for multi-hour files (memory is constant either way).
-    quality : "high" (near-lossless, for analysis tests) or "low" (small files).
+    quality : "high" (near-lossless, for analysis tests) or "low" (small files, quicker to write:
+        x264 at crf 28, AAC with FFmpeg's fast coder at 32 kbit/s per channel).
 
     Raises ParameterError for impossible combinations (odd sizes with 4:2:0 codecs, Opus at a rate
     other than 8/12/16/24/48 kHz, AAC without a channel layout, no stream at all).
@@ -326,6 +327,12 @@ def write_scene(path: str | os.PathLike, scene: Scene, *, width: int = 320, heig
         with av.open(str(tmp), mode="w", format=fmt) as out:
             vs = _add_video_stream(out, vcodec, width, height, rate, long, quality) if vcodec else None
             as_ = out.add_stream(acodec, rate=sample_rate, layout=layout) if acodec else None
+            if as_ is not None and acodec == "aac" and quality == "low":
+                # FFmpeg's default AAC coder (two-loop search, 128 kbit/s stereo) took half the time
+                # of writing the 2-hour test film; the "fast" coder at 32 kbit/s per channel takes
+                # about a third of that (0.44 instead of 1.22 s per minute of stereo)
+                as_.codec_context.options = {"aac_coder": "fast"}
+                as_.bit_rate = 32_000 * channels
             _encode(out, scene, vs, as_, width, height, rate, sample_rate, channels, layout)
         os.replace(tmp, path)
     except av.error.FFmpegError as exc:
