@@ -41,7 +41,7 @@ REFERENCE = "reference"
 DEFAULT_CONFIGS = ("reference", "balanced", "fast")
 NOSKIP = "balanced-noskip"
 TARGETS = {"x_decode": 1.25, "vibration_mae": 0.02, "onset_f1": 0.97, "temperature_mae_c": 0.3, "fan_iou": 0.9,
-           "fast_analysis_speedup": 2.0}
+           "fast_speedup": 2.0}  # fast >= 2 x faster than balanced: wall time, stage seconds, wall - decode
 SKIP_STAGES = ("saliency", "flow", "depth")
 
 
@@ -435,13 +435,13 @@ def verdicts(res: dict) -> list[str]:
               ("balanced fan IoU", e["fan_iou"], ">=", TARGETS["fan_iou"])]
     if "fast" in c and c["fast"]["wall_s"] > 0:
         checks.append(("fast speed-up vs balanced (wall time)", b["wall_s"] / c["fast"]["wall_s"], ">=",
-                       TARGETS["fast_analysis_speedup"]))
+                       TARGETS["fast_speedup"]))
     if "fast" in c and c["fast"]["analysis_stage_s"] > 0:
         checks.append(("fast analysis speed-up vs balanced (stage seconds)",
-                       b["analysis_stage_s"] / c["fast"]["analysis_stage_s"], ">=", TARGETS["fast_analysis_speedup"]))
+                       b["analysis_stage_s"] / c["fast"]["analysis_stage_s"], ">=", TARGETS["fast_speedup"]))
     if "fast" in c and c["fast"]["analysis_s"] > 0:
         checks.append(("fast analysis speed-up vs balanced (wall - decode)", b["analysis_s"] / c["fast"]["analysis_s"],
-                       ">=", TARGETS["fast_analysis_speedup"]))
+                       ">=", TARGETS["fast_speedup"]))
     out = []
     for label, value, op, target in checks:
         ok = value <= target if op == "<=" else value >= target
