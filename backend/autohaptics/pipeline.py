@@ -429,9 +429,13 @@ def sustained_motion(motion: np.ndarray) -> np.ndarray:
     return np.minimum(m, np.maximum(left, right))
 
 
+_FAN_CHUNK = 2048  # ticks smoothed at a time (bounded memory on a 2-hour film)
+
+
 def _fans(params: GenerateParams, video: VideoAnalysis, stats: dict, *, out: np.ndarray | None = None) -> np.ndarray:
     """(n, 9, 17) fan levels: ticks whose sustained motion exceeds the (manual or adaptive)
-    threshold, not at a cut, with depth computed: strong motion AND near (airflow.fan_levels).
+    threshold, not at a cut, with depth computed: strong motion AND near (airflow.fan_levels), the
+    cell motion smoothed over the shot's neighbouring ticks and cells (airflow.smoothed_cell_motion).
     ``out``: an all-zero float32 array of that shape to write into (the timeline's own track)."""
     n = video.motion.size
     valid = ~video.cut
@@ -439,9 +443,13 @@ def _fans(params: GenerateParams, video: VideoAnalysis, stats: dict, *, out: np.
     threshold = airflow.motion_threshold(motion[valid], params=params.airflow)
     on = valid & (motion > threshold) & video.depth_mask
     fans = np.zeros((n,) + video.cell_motion.shape[1:], np.float32) if out is None else out
-    for k in np.flatnonzero(on):
-        fans[k] = airflow.fan_levels(video.cell_motion[k].astype(np.float32), video.nearness[k].astype(np.float32),
-                                     params=params.airflow)
+    ticks = np.flatnonzero(on)
+    shot = np.where(valid, np.cumsum(video.cut), -1)
+    for start in range(0, ticks.size, _FAN_CHUNK):
+        part = ticks[start:start + _FAN_CHUNK]
+        cells = airflow.smoothed_cell_motion(video.cell_motion, shot, part, params=params.airflow)
+        for k, c in zip(part, cells):
+            fans[k] = airflow.fan_levels(c, video.nearness[k].astype(np.float32), params=params.airflow)
     stats["airflow"] = {"threshold_fw_per_s": float(threshold), "ticks_on": int(on.sum()),
                         "ticks_at_cuts": int(video.cut.sum()),
                         "spikes_ignored": int(((video.motion > threshold) & valid & ~(motion > threshold)).sum())}
