@@ -68,6 +68,10 @@ def test_random_mode_is_seeded(av_analysis):
 def test_lower_thresholds_borrow_saliency_and_ask_for_a_new_analysis(av_analysis):
     params, _ = resolve_params(thresholds={"loudness": 0.05, "sharpness": 0.05, "booming": 0.05, "low_energy": 0.05})
     assert analysis_compatible(av_analysis, params)  # thresholds are derive-time
+    for key, value in (("airflow.cell_rel", 0.3), ("airflow.cell_sigma_ticks", 0.0), ("airflow.threshold", 0.1)):
+        assert analysis_compatible(av_analysis, resolve_params(overrides={key: value})[0]), key  # the fan rule too
+    for key, value in (("airflow.static_level", 30.0), ("airflow.fade_min_step", 5.0), ("airflow.floor", 0.05)):
+        assert not analysis_compatible(av_analysis, resolve_params(overrides={key: value})[0]), key  # the video pass reads these
     tl = derive(av_analysis, params)
     assert tl.stats["fusion"]["ticks_estimated"] > 0
     assert tl.stats["needs_analysis"] is True

@@ -149,16 +149,27 @@ ANALYSIS_FIELDS = ("audio", "lfe_gain_db", "allow_truncated", "tracks", "video",
                    "cuts", "depth")
 
 
+# ... and the fields of derive-time groups that the video pass reads too (its static, fade and
+# depth-skip checks); the rest of ``airflow`` (thresholds, the fan rule) is derive-time
+ANALYSIS_SUBFIELDS = {"airflow": ("floor", "static_level", "static_fraction", "flat_std", "fade_min_step")}
+
+
+def _analysis_part(d: dict) -> dict:
+    key = {k: d.get(k) for k in ANALYSIS_FIELDS}
+    for group, names in ANALYSIS_SUBFIELDS.items():
+        sub = d.get(group) or {}
+        key.update({f"{group}.{name}": sub.get(name) for name in names})
+    return key
+
+
 def analysis_key(params: GenerateParams) -> dict:
     """The part of ``params`` an :class:`Analysis` depends on (compare to reuse a cache)."""
-    d = params_to_dict(params)
-    return {k: d[k] for k in ANALYSIS_FIELDS}
+    return _analysis_part(params_to_dict(params))
 
 
 def analysis_compatible(analysis: "Analysis", params: GenerateParams) -> bool:
     """True when ``analysis`` was computed with the same analysis parameters as ``params``."""
-    stored = {k: analysis.params.get(k) for k in ANALYSIS_FIELDS}
-    return stored == analysis_key(params)
+    return _analysis_part(analysis.params) == analysis_key(params)
 
 
 def file_sha256(path: str | Path, *, chunk: int = 1 << 20) -> str:
