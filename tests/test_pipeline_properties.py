@@ -325,6 +325,24 @@ def test_a_higher_bar_never_turns_a_fan_on(m, near, rel, near_min, more):
 
 
 @SETTINGS
+@given(cm=hnp.arrays(np.float64, st.tuples(st.integers(1, 30), st.just(FAN_ROWS), st.just(FAN_COLS)),
+                     elements=st.one_of(st.just(0.0), st.floats(0.0, 1e6))),
+       cuts=st.lists(st.booleans(), min_size=30, max_size=30),
+       sigma_t=st.floats(0.0, 5.0), sigma_x=st.floats(0.0, 3.0), exp=st.integers(-20, 20))
+def test_smoothed_cell_motion_is_a_weighted_mean(cm, cuts, sigma_t, sigma_x, exp):
+    """Finite, >= 0, never above the largest input, and it scales with the motion's units."""
+    n = cm.shape[0]
+    cut = np.array(cuts[:n])
+    shot = np.where(cut, -1, np.cumsum(cut))
+    params = A.AirflowParams(cell_sigma_ticks=sigma_t, cell_sigma_cells=sigma_x)
+    out = A.smoothed_cell_motion(cm, shot, np.arange(n), params=params)
+    assert out.shape == cm.shape and np.isfinite(out).all() and out.min() >= 0.0
+    assert out.max() <= np.float32(cm.max()) * (1 + 1e-6)
+    scaled = A.smoothed_cell_motion(cm * 2.0 ** exp, shot, np.arange(n), params=params)
+    np.testing.assert_allclose(scaled, out * 2.0 ** exp, rtol=1e-5, atol=1e-30)
+
+
+@SETTINGS
 @given(motion=hnp.arrays(np.float64, st.integers(0, 80), elements=st.one_of(st.just(0.0), st.floats(1e-100, 50.0))),
        floor=st.floats(0.0, 1.0), exp=st.integers(-10, 10))
 def test_adaptive_threshold_respects_the_floor_and_follows_the_units(motion, floor, exp):

@@ -256,7 +256,8 @@ def smoothed_cell_motion(cell_motion_: np.ndarray, shot: np.ndarray, ticks: np.n
     sigma = float(params.cell_sigma_ticks)
     r = int(math.ceil(3.0 * sigma)) if sigma > 0 else 0
     offsets = np.arange(-r, r + 1)
-    gauss = np.exp(-0.5 * (offsets / sigma) ** 2) if r else np.ones(1)
+    with np.errstate(over="ignore"):  # a tiny sigma: the neighbours' weights underflow to 0
+        gauss = np.exp(-0.5 * (offsets / sigma) ** 2) if r else np.ones(1)
     gauss = gauss / gauss.sum()
     out = np.zeros((ticks.size,) + cm.shape[1:], np.float64)
     own = shot[ticks] if ticks.size else np.zeros(0, shot.dtype)
@@ -281,7 +282,8 @@ def _blur_axis(x: np.ndarray, axis: int, sigma: float) -> np.ndarray:
     on which other ticks share the array."""
     r = int(math.ceil(3.0 * sigma))
     offsets = np.arange(-r, r + 1)
-    g = np.exp(-0.5 * (offsets / sigma) ** 2)
+    with np.errstate(over="ignore"):  # a tiny sigma: the neighbours' weights underflow to 0
+        g = np.exp(-0.5 * (offsets / sigma) ** 2)
     g /= g.sum()
     size = x.shape[axis]
     out = np.zeros_like(x)
