@@ -23,18 +23,18 @@
    over the shot's neighbouring ticks (standard deviation 2 ticks) and a light one over
    neighbouring cells (0.5 cells). A tick's flow pair spans one frame interval (17-42 ms of the
    tick's 100 ms at 60-24 fps), and which cells reach half of the strongest one changes from pair
-   to pair. Measured against
-   the reference preset (every frame at 640 px) on the 30 s 1080p60 BBB loop: the reference given
-   only half its frames agreed with itself at a fan-cell IoU of 0.66 with each tick's own cells,
-   0.76 with the smoothed ones; balanced (one 160 px pair per tick) agreed with the reference at
-   0.30 -> 0.44, on the Sintel trailer at 0.50 -> 0.63; Sintel's two encodes with each other
-   0.91 -> 0.94. Fans stay on longer (the reference's mean run of an "on" cell: 2.3 -> 6.4 ticks
-   on BBB, 2.6 -> 5.7 on Sintel) and blow over a wider area (cells on per blowing tick: BBB
-   8 -> 14, Sintel 64 -> 101 of 153). With about as many cells on (old rule at ``cell_rel`` 0.4:
-   11 cells; smoothed at 0.6: 10) balanced's agreement on BBB is 0.35 vs 0.47: the gain is not
-   the wider area. A blur of 1 cell gained a little more on the clips (BBB 0.53) but spread a
-   moving object onto a moving background (tests/test_airflow.py). ``cell_sigma_ticks =
-   cell_sigma_cells = 0`` restores each tick's own cells.
+   to pair. Measured against the reference preset (every frame, 640 px flow) on the shared 2 s
+   1080p60 BBB clip: the reference given only half its frames agreed with itself at a fan-cell IoU
+   of 0.66 with each tick's own cells, 0.76 with the smoothed ones; balanced (one 160 px pair per
+   tick) agreed with the reference at 0.30 -> 0.44 (0.31 -> 0.49 on the 30 s loop made of that
+   clip in ``bench accuracy``), on the Sintel trailer at 0.50 -> 0.63; Sintel's two encodes with
+   each other 0.91 -> 0.94. Fans stay on longer (the reference's mean run of an "on" cell:
+   2.3 -> 6.4 ticks on the BBB clip, 2.6 -> 5.7 on Sintel) and blow over a wider area (cells on per
+   blowing tick: BBB 8 -> 14, Sintel 64 -> 101 of 153). With about as many cells on (old rule at
+   ``cell_rel`` 0.4: 11 cells; smoothed at 0.6: 10) balanced's agreement on BBB is 0.35 vs 0.47:
+   the gain is not the wider area. A blur of 1 cell gained a little more on the clips (BBB 0.53)
+   but spread a moving object onto a moving background (tests/test_airflow.py).
+   ``cell_sigma_ticks = cell_sigma_cells = 0`` restores each tick's own cells.
 
 A static pair (nothing changed beyond noise) is detected by a cheap frame difference so flow is
 not computed at all, and flow is never computed across a shot cut (see :mod:`autohaptics.cuts`).
