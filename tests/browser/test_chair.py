@@ -219,9 +219,11 @@ def test_stop_button_and_escape_turn_everything_off_at_once(cpage, chair_api, fi
         played = [e for e in chair.read_log()[:start] if e["ev"] == "frame" and 105 <= e["tick"] < 200]
         chair.wait_for(lambda e: e["ev"] == "frame" and 105 <= e["tick"] < 200, timeout_s=15.0,
                        count=len(played) + 1)  # a frame of this round's playing
-        before = log_index(chair)
         pg.locator("[data-testid=timeline]").focus()
+        before = log_index(chair)
+        t0 = time.monotonic()
         press()
+        press_s = time.monotonic() - t0  # the click or key going through the browser, slow on a busy machine
         stop = chair.wait_for(lambda e: e["ev"] == "stop" and e["t_ms"] > 0, count=len(
             [e for e in chair.read_log()[:before] if e["ev"] == "stop"]) + 1)
         assert stop["motors"] == [0] * 9 and stop["fans"] == [0] * 153 and stop["temp_target_cc"] == 3300
@@ -231,9 +233,11 @@ def test_stop_button_and_escape_turn_everything_off_at_once(cpage, chair_api, fi
         time.sleep(1.3)  # longer than a heartbeat: the heartbeat does not restart a stopped chair
         late = frames_since(chair, settled)
         assert not late, [(e["tick"], e["seq"], e["t_ms"]) for e in late]
-        # At most the frame that was on the wire when the button was pressed comes before the STOP.
+        # At most the frame that was on the wire when the button was pressed comes before the STOP,
+        # plus one per 100 ms tick the press itself took to go through Playwright and the browser
+        # (on a loaded CI machine that took longer than a tick once: frame, frame, stop)
         between = [e for e in chair.read_log()[before:] if e["ev"] in ("frame", "stop")]
-        assert [e["ev"] for e in between].index("stop") <= 1
+        assert [e["ev"] for e in between].index("stop") <= 1 + int(press_s / 0.1), (between, press_s)
     st = chair_api.get("/api/chair/status").json()
     assert st["playback"]["state"] in ("stopped", "paused") and not st["playing"]
 
