@@ -301,9 +301,18 @@ def test_a_stride_analyses_one_tick_per_group_and_the_group_shares_its_values(ge
         for name in ("mean_rgb", "beta", "saliency_mask", "motion", "cell_motion", "nearness", "static"):
             arr = getattr(v, name)
             np.testing.assert_array_equal(arr[j::stride], arr[0::stride], err_msg=name)
-    flow = analysis.stats["video"]["flow"]
-    held = n - n // stride
-    assert flow["ticks_held"] == held and flow["ticks_computed"] + flow["ticks_skipped"] == n - held
+    stats = analysis.stats["video"]
+    for stage, mask in (("flow", v.flow_mask), ("saliency", v.saliency_mask), ("depth", v.depth_mask)):
+        # a held tick counts as held where its group's analysed tick computed the stage, else skipped
+        analysed = np.flatnonzero(v.frame_mask)
+        computed = mask[analysed]
+        held = sum(int(mask[g]) * (min(stride, n - g) - 1) for g in analysed)
+        assert stats[stage]["ticks_computed"] == computed.sum(), stage
+        assert stats[stage]["ticks_held"] == held, stage
+        assert stats[stage]["ticks_computed"] + stats[stage]["ticks_skipped"] + held == n, stage
+    # not vacuous: saliency is held, and the scene's still stretches skip the flow of ticks that
+    # would all count as held if a held tick did not look at what its analysed tick computed
+    assert stats["saliency"]["ticks_held"] > 0 and stats["flow"]["ticks_held"] < n - n // stride
     tl = pipeline.derive(analysis, params)
     assert tl.generator["params"]["video"]["stride"] == stride
     # the same answer as every tick read: the bright disc on the left leads the burst

@@ -250,15 +250,16 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
         if before.size:
             for name in ("motion", "cell_motion", "nearness", "depth_mask", "static"):
                 getattr(out, name)[k] = getattr(out, name)[before[-1]]
-    computed = {"saliency": int(out.saliency_mask.sum()), "flow": int(out.flow_mask.sum()),
-                "depth": int(out.depth_mask.sum())}
-    held = _hold_missing(out)
+    computed = {"saliency": out.saliency_mask.copy(), "flow": out.flow_mask.copy(), "depth": out.depth_mask.copy()}
+    sources = _hold_missing(out)
     out.stats = {
         name: {"seconds": round(st.seconds, 4), "computed": st.computed} for name, st in stages.items()
     }
-    for name, done in computed.items():
+    for name, mask in computed.items():
         # held: ticks without a frame of their own (stride, or a frame rate below 10 fps) that
-        # took the values of the analysed tick before them
+        # took the values of the analysed tick before them, where that tick computed the stage;
+        # one that copied a tick which skipped the stage counts as skipped
+        done, held = int(mask.sum()), int(mask[sources].sum())
         out.stats[name].update({"ticks_computed": done, "ticks_held": held, "ticks_skipped": int(n - done - held)})
     out.stats["static"]["ticks_static"] = int(out.static.sum())
     out.stats["cuts"]["cuts"] = int(out.cut.sum())
@@ -391,12 +392,13 @@ class _Accumulator:
         mean(out.nearness, self.near_n)
 
 
-def _hold_missing(out: VideoAnalysis) -> int:
+def _hold_missing(out: VideoAnalysis) -> np.ndarray:
     """Ticks without a frame of their own (``video.stride`` > 1, a frame rate below 10 fps) take the
-    values of the analysed tick before them. Returns how many ticks were filled."""
+    values of the analysed tick before them. Returns the analysed tick each filled tick copied,
+    int [shape=(filled,)]."""
     missing = ~out.frame_mask
     if not missing.any() or not out.frame_mask.any():
-        return 0
+        return np.zeros(0, np.int64)
     idx = np.where(out.frame_mask, np.arange(out.frame_mask.size), -1)
     src = np.maximum.accumulate(idx)
     fill = missing & (src >= 0)
@@ -404,4 +406,4 @@ def _hold_missing(out: VideoAnalysis) -> int:
     for name in ("mean_rgb", "motion", "cell_motion", "nearness", "depth_mask", "beta", "saliency_mask", "static"):
         arr = getattr(out, name)
         arr[rows] = arr[src[rows]]
-    return int(rows.size)
+    return src[rows]

@@ -329,7 +329,8 @@ def analysis_stage_seconds(stats: dict) -> float:
 
 def skip_shares(stats: dict) -> dict:
     """{stage: {"computed", "skipped", "held", "share_computed"}} from stats["video"], plus static ticks
-    and cuts ("held": ticks without a frame of their own that took the analysed tick's values before them)."""
+    and cuts ("held": ticks without a frame of their own that took the values of the analysed tick
+    before them, where that tick computed the stage; the others count as skipped)."""
     video = stats.get("video") or {}
     out = {}
     for name in SKIP_STAGES:
