@@ -253,12 +253,7 @@ def smoothed_cell_motion(cell_motion_: np.ndarray, shot: np.ndarray, ticks: np.n
                              f"got {cm.shape} and {shot.shape}")
     if ticks.size and (ticks.min() < 0 or ticks.max() >= n):
         raise ParameterError(f"ticks must lie in 0..{n - 1}")
-    sigma = float(params.cell_sigma_ticks)
-    r = int(math.ceil(3.0 * sigma)) if sigma > 0 else 0
-    offsets = np.arange(-r, r + 1)
-    with np.errstate(over="ignore"):  # a tiny sigma: the neighbours' weights underflow to 0
-        gauss = np.exp(-0.5 * (offsets / sigma) ** 2) if r else np.ones(1)
-    gauss = gauss / gauss.sum()
+    offsets, gauss = _gaussian(float(params.cell_sigma_ticks))
     out = np.zeros((ticks.size,) + cm.shape[1:], np.float64)
     own = shot[ticks] if ticks.size else np.zeros(0, shot.dtype)
     for d, g in zip(offsets, gauss):
@@ -276,15 +271,22 @@ def smoothed_cell_motion(cell_motion_: np.ndarray, shot: np.ndarray, ticks: np.n
     return np.clip(out, 0.0, None).astype(np.float32)
 
 
+def _gaussian(sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets -r..r (r = ceil(3 sigma), 0 for sigma <= 0) and their Gaussian weights, summing to 1."""
+    r = int(math.ceil(3.0 * sigma)) if sigma > 0 else 0
+    offsets = np.arange(-r, r + 1)
+    if not r:
+        return offsets, np.ones(1)
+    with np.errstate(over="ignore"):  # a tiny sigma: the neighbours' weights underflow to 0
+        g = np.exp(-0.5 * (offsets / sigma) ** 2)
+    return offsets, g / g.sum()
+
+
 def _blur_axis(x: np.ndarray, axis: int, sigma: float) -> np.ndarray:
     """Gaussian blur of ``x`` along ``axis`` (standard deviation ``sigma`` samples), the edge value
     repeated beyond the edge. Element-wise sums in a fixed order: a tick's result does not depend
     on which other ticks share the array."""
-    r = int(math.ceil(3.0 * sigma))
-    offsets = np.arange(-r, r + 1)
-    with np.errstate(over="ignore"):  # a tiny sigma: the neighbours' weights underflow to 0
-        g = np.exp(-0.5 * (offsets / sigma) ** 2)
-    g /= g.sum()
+    offsets, g = _gaussian(sigma)
     size = x.shape[axis]
     out = np.zeros_like(x)
     for d, w in zip(offsets, g):
