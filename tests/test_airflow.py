@@ -252,8 +252,8 @@ def test_smoothed_cell_motion_in_time_by_hand():
     out = airflow.smoothed_cell_motion(cm, shot, np.arange(20), params=p)
     assert out.shape == (20, FAN_ROWS, FAN_COLS) and out.dtype == np.float32
     expected = np.zeros(20)
-    expected[2:15] = g  # tick k sees the impulse at offset 8 - k
-    np.testing.assert_allclose(out[:, 4, 12], expected[::-1][np.arange(20)[::-1]], rtol=1e-6, atol=1e-12)
+    expected[2:15] = g  # tick k sees the impulse at offset 8 - k, weight g[8 - k + 6] (g is symmetric)
+    np.testing.assert_allclose(out[:, 4, 12], expected, rtol=1e-6, atol=1e-12)
     assert np.count_nonzero(out) == 13  # no other cell
     # a cut at tick 10 (shot -1) and a new shot after it: nothing crosses
     shot[10], shot[11:] = -1, 1
