@@ -322,9 +322,24 @@ def test_smoothing_recovers_a_steady_pattern_from_noisy_samples():
     assert iou(airflow.AirflowParams(cell_sigma_cells=1.0)) < 0.8
 
 
+@pytest.mark.parametrize("params, picture_width, expected", [
+    (airflow.FlowParams(), 1920, 240), (airflow.FlowParams(), 3840, 480), (airflow.FlowParams(), 1280, 160),
+    (airflow.FlowParams(), 640, 160), (airflow.FlowParams(), 16, 160), (airflow.FlowParams(), 0, 160),
+    (airflow.FlowParams(), 2000, 256),  # 250 px rounds to a multiple of 16
+    (airflow.FlowParams(proxy_fraction=0.0), 3840, 160), (airflow.FlowParams(proxy_width=320), 1920, 320),
+    (airflow.FlowParams(proxy_width=640, proxy_fraction=1 / 3), 1920, 640),
+    (airflow.FlowParams(proxy_width=640, proxy_fraction=1 / 3), 3840, 1280),
+    (airflow.FlowParams(proxy_fraction=1.0), 10000, 7680),
+])
+def test_the_flow_proxy_width_follows_the_picture(params, picture_width, expected):
+    assert params.width_for(picture_width) == expected
+
+
 @pytest.mark.parametrize("cls, kwargs", [
     (airflow.FlowParams, {"method": "lucas"}), (airflow.FlowParams, {"dis_preset": "slow"}),
-    (airflow.FlowParams, {"proxy_width": 4}), (airflow.AirflowParams, {"threshold": -1.0}),
+    (airflow.FlowParams, {"proxy_width": 4}), (airflow.FlowParams, {"proxy_fraction": -0.1}),
+    (airflow.FlowParams, {"proxy_fraction": 1.5}), (airflow.FlowParams, {"proxy_fraction": float("nan")}),
+    (airflow.AirflowParams, {"threshold": -1.0}),
     (airflow.AirflowParams, {"cell_rel": 1.5}), (airflow.AirflowParams, {"floor": -0.1}),
     (airflow.AirflowParams, {"strong_rel": 1.5}), (airflow.AirflowParams, {"flat_std": -1.0}),
     (airflow.AirflowParams, {"fade_min_step": float("nan")}),

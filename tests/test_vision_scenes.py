@@ -115,6 +115,19 @@ def test_object_rushing_at_the_camera_on_the_right_blows_only_right_fans(generat
     assert tl.fans.max() == 1.0
 
 
+@pytest.mark.parametrize("overrides, width", [({}, 160), ({"flow.proxy_fraction": "0.5"}, 320),
+                                              ({"flow.proxy_fraction": "0"}, 160)])
+def test_the_flow_proxy_follows_the_picture_width(tmp_path, overrides, width):
+    # 640 px wide: 1/8 of it is 80 px, so the default keeps its 160 px; half of it is 320 px
+    path = synth.write_scene(tmp_path / "approach.mp4", SCENES["approach_right"], width=640, height=360)
+    params, _ = pipeline.resolve_params("balanced", overrides)
+    tl = pipeline.generate(path, params)
+    assert tl.stats["video"]["flow"]["proxy_width"] == width
+    assert tl.generator["params"]["flow"]["proxy_width"] == 160  # the knob as set; the stats say what ran
+    cols = np.flatnonzero(tl.fans.max(axis=(0, 1)) > 0)
+    assert cols.size and cols.min() >= 9, cols  # the same answer at any proxy: the right half
+
+
 def test_no_airflow_at_a_hard_cut_between_two_static_shots(generated, tmp_path):
     scene, tl = generated["cut_static"]
     assert tl.stats["video"]["cuts"]["cuts"] >= 1 and tl.stats["airflow"]["ticks_at_cuts"] >= 1

@@ -88,13 +88,18 @@ class FlowParams:
     """Optical flow.
 
     method : "dis" (OpenCV DIS, default) | "farneback" (the reference).
-    proxy_width : width of the gray proxy the flow runs on, px (default 160).
+    proxy_width : width of the gray proxy the flow runs on, px (default 160); the least width
+        when ``proxy_fraction`` asks for more (:meth:`width_for`).
     dis_preset : "ultrafast" | "fast" | "medium" (default; see the module docstring).
+    proxy_fraction : the proxy is at least this fraction of the picture's width as shown, in
+        multiples of 16 px, 0..1 (default 1/8: 240 px at 1920, 480 at 3840, ``proxy_width`` up to
+        1280; 0 = always ``proxy_width``). Module docstring, "Decisions".
     """
 
     method: str = "dis"
     proxy_width: int = 160
     dis_preset: str = "medium"
+    proxy_fraction: float = 0.125
 
     def __post_init__(self):
         if self.method not in FLOW_METHODS:
@@ -103,6 +108,14 @@ class FlowParams:
             raise ParameterError(f"flow.dis_preset must be one of {sorted(DIS_PRESETS)}, got {self.dis_preset!r}")
         if not (8 <= int(self.proxy_width) <= 7680):
             raise ParameterError(f"flow.proxy_width must lie in 8..7680 px, got {self.proxy_width!r}")
+        if not (0.0 <= float(self.proxy_fraction) <= 1.0):  # NaN fails too
+            raise ParameterError(f"flow.proxy_fraction must lie in 0..1, got {self.proxy_fraction!r}")
+
+    def width_for(self, picture_width: int) -> int:
+        """The gray proxy's width for a picture ``picture_width`` px wide as shown, px:
+        ``max(proxy_width, proxy_fraction x picture_width rounded to 16 px)``, at most 7680."""
+        scaled = 16 * int(round(float(self.proxy_fraction) * max(int(picture_width), 0) / 16.0))
+        return int(min(max(int(self.proxy_width), scaled), 7680))
 
 
 @dataclass(frozen=True)

@@ -56,6 +56,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "flow.method": "dis",
         "flow.dis_preset": "medium",
         "flow.proxy_width": 640,
+        "flow.proxy_fraction": 1 / 3,
     },
     "balanced": {},
     "fast": {
@@ -64,6 +65,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "saliency.proxy_width": 128,
         "depth.proxy_width": 64,
         "flow.proxy_width": 128,
+        "flow.proxy_fraction": 0.0625,
         "flow.dis_preset": "fast",
     },
 }

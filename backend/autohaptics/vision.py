@@ -25,7 +25,7 @@ holds the values of the analysed tick before it.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -45,10 +45,11 @@ SIGNATURE_WIDTH = 48
 @dataclass(frozen=True)
 class VideoParams:
     """Which frames the video pass analyses. Proxy sizes are the stages' own parameters: the gray
-    proxy (static check, flow, in-pair cuts) is ``flow.proxy_width`` wide, the RGB proxy (colour,
+    proxy (static check, flow, in-pair cuts) is ``flow.width_for(picture width)`` wide (at least
+    ``flow.proxy_width``; recorded as ``stats["flow"]["proxy_width"]``), the RGB proxy (colour,
     saliency, depth, cuts between ticks) is ``max(saliency.proxy_width, depth.proxy_width)`` wide,
     except that the spectral saliency (which reads the full frame's luma at 64 x 64) counts with
-    at most ``flow.proxy_width``: its map is made ``saliency.proxy_width`` wide from that proxy.
+    at most the gray proxy's width: its map is made ``saliency.proxy_width`` wide from that proxy.
 
     analysis : "tick" (one frame plus its successor per 100 ms tick) or "every" (every decoded
         frame; the reference preset).
@@ -153,6 +154,8 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
     need_colour : compute the mean colour (the temperature track is wanted).
     """
     out = VideoAnalysis.empty(n)
+    if info.video is not None:  # the gray proxy's width follows the picture's (FlowParams.width_for)
+        flow_params = replace(flow_params, proxy_width=flow_params.width_for(info.video.display_size[0]))
     stages = {name: _Stage() for name in
               ("decode_wait", "proxy", "cuts", "static", "colour", "saliency", "flow", "depth")}
     sal_backend = saliency.make_saliency_backend(saliency_params) if need_saliency.any() else None
@@ -261,6 +264,7 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
         # one that copied a tick which skipped the stage counts as skipped
         done, held = int(mask.sum()), int(mask[sources].sum())
         out.stats[name].update({"ticks_computed": done, "ticks_held": held, "ticks_skipped": int(n - done - held)})
+    out.stats["flow"]["proxy_width"] = int(flow_params.proxy_width)
     out.stats["static"]["ticks_static"] = int(out.static.sum())
     out.stats["cuts"]["cuts"] = int(out.cut.sum())
     out.stats["frames"] = {"ticks_with_frame": int(out.frame_mask.sum()), "ticks": n,
