@@ -46,6 +46,18 @@ than the clip's action), which also raised its adaptive threshold.
 
 Decisions (measured; synthetic scenes from :mod:`autohaptics.synth` have exact answers):
 
+- The flow proxy grows with the picture (``FlowParams.proxy_fraction``, default 1/8 of the width
+  as shown, at least ``proxy_width``): 160 px up to 1280 px wide pictures, 240 px at 1920, 480 at
+  3840. At 1080p a fan cell of a 160 px proxy is 9 x 10 px, about one DIS patch, and the balanced
+  preset waited about 2 s of its 6-7 s for the decoder on the 30 s 1080p60 BBB loop; decoding
+  costs in proportion to the picture's pixels, the flow to the proxy's, so a proxy in proportion
+  to the picture keeps the flow inside the decoder's time. Measured against the reference in one
+  ``bench accuracy`` run (``out/bench/s19``, 3 alternating runs each): fan IoU 0.49 -> 0.72 at
+  0.98 x the bare decode's wall time (160 px: 1.01 x; CPU 1.02 x against 0.97 x); on a synthetic
+  1920x1080 scene 0.55 -> 0.68 (320 px: 0.80). Below 1920 px the proxy stays at 160 px: on the
+  Sintel trailer (640 px) 240 px gained nothing (0.63 -> 0.62) and cost 66 % more wall time, on
+  the 1280 px BBB opening it gained 0.42 -> 0.50 for 46 % more. The reference's third of the
+  width is its 640 px at 1080p; the fast preset's sixteenth is its 128 px up to 2048 px.
 - DIS preset "medium" by default. On the 160 px proxy the "fast" preset estimates flow at a
   quarter of the proxy's resolution (finest scale 2) and smears it over static surroundings: a
   textured disc translating over a static textured background gave a relative end-point error of

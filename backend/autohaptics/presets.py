@@ -6,7 +6,8 @@ A preset is a set of dotted overrides on :class:`autohaptics.pipeline.GeneratePa
 recorded in the timeline's ``generator.params``.
 
 - ``reference``: the slowest, most faithful configuration: exact ISO 532-1 filter bank, every
-  frame decoded and analysed at the largest sensible proxy (640 px flow, 320 px saliency and depth),
+  frame decoded and analysed at the largest sensible proxy (640 px flow, a third of the picture's
+  width above 1920 px; 320 px saliency and depth),
   dense DIS flow at its "medium" quality, no skipping.
   Farneback was the planned reference flow; measured, it is the less faithful of the two here:
   on the Sintel trailer at 640 px it reads a median 0.23 of DIS's motion (DIS at 160 and 640 px
@@ -15,7 +16,9 @@ recorded in the timeline's ``generator.params``.
   benchmark can run it as an extra configuration.
 - ``balanced`` (default): FFmpeg decodes only the reference frames (on H.264 the B-frames are
   skipped: about half the decoding work; the frames it decodes are exact; VP8 and intra-only
-  video decode every frame), one frame (plus its successor for flow) per 100 ms tick, 160 px flow,
+  video decode every frame), one frame (plus its successor for flow) per 100 ms tick, flow on a
+  proxy an eighth of the picture's width and at least 160 px wide (240 px at 1080p; see
+  ``FlowParams.proxy_fraction``),
   256 px saliency (the spectral residual itself always sees the full frame's luma averaged to
   64 x 64; the width sets where the salient shape is cut: measured against the reference on the
   30 s 1080p BBB clip, vibration MAE 0.023 at 192 px and 0.012 at 256 with every frame decoded,
@@ -25,7 +28,8 @@ recorded in the timeline's ``generator.params``.
   which cuts the proxies, flow, saliency and depth to a third; and ``video.decode=sparse``: from
   40 fps up FFmpeg decodes only the I- and P-frames (every B-frame skipped, reference B-frames
   too, which leaves the P-frames that used one approximate), below 40 fps only the non-reference
-  frames; the deblocking filter is skipped either way; 128 px flow at DIS "fast", 128 px
+  frames; the deblocking filter is skipped either way; 128 px flow (a sixteenth of the picture's
+  width above 2048 px) at DIS "fast", 128 px
   saliency, 64 px depth. On the 30 s 1080p60 BBB clip that is 495 of 1,800 frames decoded
   (balanced: 930), and decoding them alone takes 1.7 s of fast's 3 s. Measured against the
   reference on the 2 s clip: vibration MAE 0.026 with non-reference skipping only, 0.064 with
