@@ -129,3 +129,135 @@ def test_skipping_off_computes_everything_and_changes_little(clips, av_analysis)
     a, b = derive(av_analysis, GenerateParams()), derive(full, params)
     assert np.abs(a.vibration - b.vibration).mean() <= 0.02
     assert np.abs(a.temperature_c - b.temperature_c).mean() <= 0.3
+
+
+# ---- the audio pass beside the video pass (VideoParams.overlap_s)
+
+def _arrays(a: Analysis) -> dict:
+    return {**{"audio_" + k: v for k, v in a.audio.items()}, **{"video_" + k: v for k, v in a.video.arrays().items()}}
+
+
+def _same_analysis(a: Analysis, b: Analysis) -> None:
+    x, y = _arrays(a), _arrays(b)
+    assert x.keys() == y.keys()
+    for k in x:
+        np.testing.assert_array_equal(x[k], y[k], err_msg=k)
+    for stage in ("saliency", "flow", "depth"):
+        for key in ("ticks_computed", "ticks_held", "ticks_skipped"):
+            assert a.stats["video"][stage][key] == b.stats["video"][stage][key], (stage, key)
+
+
+@pytest.fixture(scope="module")
+def one_after_the_other(clips):
+    return analyse(clips["av"], resolve_params("balanced", {"video.overlap_s": "0"})[0])
+
+
+def test_the_audio_pass_beside_the_video_pass_gives_the_same_analysis(clips, av_analysis, one_after_the_other):
+    assert av_analysis.stats["audio"]["beside_video"] is True
+    assert "beside_video" not in one_after_the_other.stats["audio"]
+    sal = one_after_the_other.stats["video"]["saliency"]
+    assert 0 < sal["ticks_computed"] < one_after_the_other.n_ticks  # not vacuous: silent ticks skip saliency
+    _same_analysis(av_analysis, one_after_the_other)
+
+
+@pytest.mark.parametrize("backlog_bytes", [1, 32 << 20])
+def test_a_slow_audio_pass_fills_the_backlog_and_the_result_stays_the_same(clips, one_after_the_other, monkeypatch,
+                                                                           backlog_bytes):
+    import time
+
+    from autohaptics import pipeline, vision
+
+    real_pass, real_wait = pipeline._audio_pass, vision._Need.wait
+    waits = []
+
+    def slow(*args, **kwargs):
+        time.sleep(0.5)  # the video pass reaches its first frames before the audio is known
+        return real_pass(*args, **kwargs)
+
+    def wait(self):
+        waits.append(self.mask is None)  # True: the pass had to wait for the audio
+        return real_wait(self)
+
+    monkeypatch.setattr(pipeline, "_audio_pass", slow)
+    monkeypatch.setattr(vision, "_BACKLOG_BYTES", backlog_bytes)  # 1 byte: wait at the first frame
+    monkeypatch.setattr(vision._Need, "wait", wait)
+    a = analyse(clips["av"], GenerateParams())
+    assert a.stats["audio"]["beside_video"] is True
+    assert waits, "the backlog was never used"
+    if backlog_bytes == 1:
+        assert waits[0] is True
+    _same_analysis(a, one_after_the_other)
+
+
+def test_an_error_in_the_audio_pass_beside_reaches_the_caller_and_no_thread_is_left(clips, monkeypatch):
+    import threading
+
+    from autohaptics import pipeline
+
+    def broken(*args, **kwargs):
+        raise MediaError("audio stream unreadable (test)")
+
+    monkeypatch.setattr(pipeline, "_audio_pass", broken)
+    with pytest.raises(MediaError, match="unreadable"):
+        analyse(clips["av"], GenerateParams())
+    assert not [t for t in threading.enumerate() if t.name == "autohaptics-audio"]
+
+
+def test_an_error_in_the_video_pass_stops_the_audio_pass_beside(clips, monkeypatch):
+    import threading
+    import time
+
+    from autohaptics import pipeline
+
+    stopped = {}
+    real = pipeline._audio_pass
+
+    def watched(info, params, n, stats, progress, cancel, *, share):
+        time.sleep(0.3)  # still running when the video pass fails
+        try:
+            return real(info, params, n, stats, progress, cancel, share=share)
+        finally:
+            stopped["cancel_set"] = cancel.is_set()
+
+    def broken_video(*args, **kwargs):
+        raise RuntimeError("video pass failed (test)")
+
+    monkeypatch.setattr(pipeline, "_audio_pass", watched)
+    monkeypatch.setattr(pipeline, "video_pass", broken_video)
+    with pytest.raises(RuntimeError, match="video pass failed"):
+        analyse(clips["av"], GenerateParams())
+    assert not [t for t in threading.enumerate() if t.name == "autohaptics-audio"]
+    assert stopped["cancel_set"] is True  # told to stop, and it ended before analyse returned
+
+
+def test_cancel_stops_both_passes_and_progress_comes_from_the_calling_thread(clips):
+    import threading
+
+    from autohaptics.progress import CancelledError
+
+    caller = threading.current_thread()
+    calls = []
+    flag = threading.Event()
+
+    def progress(stage, fraction):
+        calls.append((threading.current_thread() is caller, fraction))
+        if fraction > 0.5:
+            flag.set()
+
+    with pytest.raises(CancelledError):
+        analyse(clips["av"], GenerateParams(), progress=progress, cancel=flag)
+    assert calls and all(same for same, _ in calls)
+    assert not [t for t in threading.enumerate() if t.name == "autohaptics-audio"]
+
+    calls.clear()
+    analyse(clips["av"], GenerateParams(), progress=progress)
+    fractions = [f for _, f in calls]
+    assert all(same for same, _ in calls)
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0
+
+
+def test_long_media_run_the_passes_one_after_the_other(clips):
+    a = analyse(clips["av"], resolve_params("balanced", {"video.overlap_s": "1"})[0])  # the clip is longer
+    assert "beside_video" not in a.stats["audio"]
+    with pytest.raises(ParameterError):
+        resolve_params("balanced", {"video.overlap_s": "-1"})
