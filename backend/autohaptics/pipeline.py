@@ -16,7 +16,6 @@ import dataclasses
 import hashlib
 import io
 import json
-import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -206,59 +205,36 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
     need_vib = "vibration" in params.tracks
     audio = None
     audio_share = _AUDIO_SHARE if info.video is not None else 1.0
-    if info.audio is None and params.mode == "audio" and need_vib:
-        raise MediaError(f"{info.path}: no audio stream (mode 'audio' needs one)")
-    if info.video is None and params.mode == "visual" and need_vib:
-        raise MediaError(f"{info.path}: no video stream (mode 'visual' needs one)")
-    # the audio pass runs in a thread beside the video pass when the picture is read anyway
-    # (colour or motion) and the media is short enough (VideoParams.overlap_s)
-    beside = (info.audio is not None and info.video is not None and (need_colour or need_flow)
-              and info.duration_s <= float(params.video.overlap_s))
-    audio_job = None
     if info.audio is None:
+        if params.mode == "audio" and need_vib:
+            raise MediaError(f"{info.path}: no audio stream (mode 'audio' needs one)")
         stats["audio"] = {"skipped": "no audio stream"}
-    elif beside:
-        audio_job = _AudioBeside(info, params, n, stats, cancel)
     else:
         audio = _audio_pass(info, params, n, stats, progress, cancel, share=audio_share)
         release_free_memory()  # the decoder's and the feature chunks' freed heap, before the video pass
         release_library_pages()  # e.g. LLVM's code, which ran only to load the compiled kernels
 
     video = None
-    if audio_job is not None:
-        need_saliency: Any = audio_job.need_saliency(need_vib)
-    else:
-        need_saliency = _saliency_needed(params, audio, n) if (need_vib and info.video is not None) \
-            else np.zeros(n, bool)
-    try:
-        if info.video is None:
-            stats["video"] = {"skipped": "no video stream"}
-        elif need_colour or need_flow or need_saliency.any():
-            t0 = time.perf_counter()
+    need_saliency = _saliency_needed(params, audio, n) if (need_vib and info.video is not None) else np.zeros(n, bool)
+    if info.video is None:
+        if params.mode == "visual" and need_vib:
+            raise MediaError(f"{info.path}: no video stream (mode 'visual' needs one)")
+        stats["video"] = {"skipped": "no video stream"}
+    elif need_colour or need_flow or need_saliency.any():
+        t0 = time.perf_counter()
 
-            def video_progress(stage: str, fraction: float) -> None:
-                if audio_job is not None:  # both passes at once: their shares add up
-                    stage, fraction = ("video", audio_job.fraction * audio_share + fraction * (1.0 - audio_share))
-                else:
-                    fraction = audio_share + (1.0 - audio_share) * fraction
-                progress(stage, fraction)
+        def video_progress(stage: str, fraction: float) -> None:
+            progress(stage, audio_share + (1.0 - audio_share) * fraction)
 
-            video = video_pass(info, n, video=params.video, saliency_params=params.saliency,
-                               fusion_params=params.fusion, flow_params=params.flow, airflow_params=params.airflow,
-                               cut_params=params.cuts, depth_params=params.depth, need_saliency=need_saliency,
-                               need_flow=need_flow, need_colour=need_colour, progress=video_progress, cancel=cancel)
-            stats["video"] = {"seconds": time.perf_counter() - t0, **video.stats}
-        else:
-            stats["video"] = {"skipped": "no track needs the picture"}
-    finally:
-        if audio_job is not None:
-            audio_job.stop_if_unfinished()
-    if audio_job is not None:
-        audio = audio_job.result()
-        stats["audio"]["beside_video"] = True
-    if video is not None or audio_job is not None:
+        video = video_pass(info, n, video=params.video, saliency_params=params.saliency,
+                           fusion_params=params.fusion, flow_params=params.flow, airflow_params=params.airflow,
+                           cut_params=params.cuts, depth_params=params.depth, need_saliency=need_saliency,
+                           need_flow=need_flow, need_colour=need_colour, progress=video_progress, cancel=cancel)
+        stats["video"] = {"seconds": time.perf_counter() - t0, **video.stats}
         release_free_memory()
         release_library_pages()
+    else:
+        stats["video"] = {"skipped": "no track needs the picture"}
     if not params.allow_truncated:
         _check_truncation(info, audio_end=stats["audio"].get("decoded_s") if audio is not None else None,
                           video_end=(video.stats["frames"]["last_time_s"] + 1.0 / max(info.video.fps, 1.0))
@@ -287,87 +263,6 @@ def _check_truncation(info: media.MediaInfo, *, audio_end: float | None, video_e
     declared = getattr(info, name).duration_s
     if declared:
         media.check_truncation(dataclasses.replace(info, duration_s=declared), end, name)
-
-
-class _AudioBeside:
-    """The audio pass in a thread beside the video pass (:func:`analyse`).
-
-    Progress is not reported from the thread (a job's progress callback may write to a database
-    connection of the calling thread): the video pass reports both passes' shares. The thread
-    stops at its next chunk when the caller's ``cancel`` is set or the video pass ended early
-    (an error, a cancel). Its exceptions reach the caller through :meth:`result`.
-    """
-
-    def __init__(self, info: media.MediaInfo, params: GenerateParams, n: int, stats: dict,
-                 cancel: CancelToken | None):
-        self.fraction = 0.0
-        self._params, self._n = params, n
-        self._stop = threading.Event()
-        self._done = threading.Event()
-        self._audio: dict | None = None
-        self._error: BaseException | None = None
-        token = _EitherSet(cancel, self._stop)
-
-        def run() -> None:
-            try:
-                self._audio = _audio_pass(info, params, n, stats, self._progress, token, share=1.0)
-            except BaseException as exc:  # handed to the caller by result()
-                self._error = exc
-            finally:
-                self._done.set()
-
-        self._thread = threading.Thread(target=run, name="autohaptics-audio", daemon=True)
-        self._thread.start()
-
-    def _progress(self, stage: str, fraction: float) -> None:
-        self.fraction = fraction
-
-    def done(self) -> bool:
-        return self._done.is_set()
-
-    def result(self) -> dict:
-        """The audio features (waits for the thread); re-raises its exception."""
-        self._thread.join()
-        if self._error is not None:
-            raise self._error
-        assert self._audio is not None
-        return self._audio
-
-    def need_saliency(self, need_vib: bool) -> "_Deferred":
-        """The video pass's ``need_saliency``, known once the audio pass is done."""
-        params, n = self._params, self._n
-        return _Deferred(self, lambda audio: _saliency_needed(params, audio, n) if need_vib else np.zeros(n, bool))
-
-    def stop_if_unfinished(self) -> None:
-        """Ask the thread to stop (it has nothing left to do for an aborted video pass) and wait."""
-        if not self._done.is_set():
-            self._stop.set()
-        self._thread.join()
-
-
-class _Deferred:
-    """A value computed from a job's result once it is done: ``done()``, ``result()`` (waits)."""
-
-    def __init__(self, job: _AudioBeside, fn):
-        self._job, self._fn, self._value = job, fn, None
-
-    def done(self) -> bool:
-        return self._job.done()
-
-    def result(self):
-        if self._value is None:
-            self._value = self._fn(self._job.result())
-        return self._value
-
-
-class _EitherSet:
-    """A cancel token set when either of two is."""
-
-    def __init__(self, a: CancelToken | None, b: threading.Event):
-        self._a, self._b = a, b
-
-    def is_set(self) -> bool:
-        return self._b.is_set() or (self._a is not None and self._a.is_set())
 
 
 def _saliency_needed(params: GenerateParams, audio: dict | None, n: int) -> np.ndarray:

@@ -67,11 +67,6 @@ class VideoParams:
         successor for flow) and every tick of the group gets its values: the picture is read at
         10/s Hz instead of 10 Hz, and each tick's frame is at most s x 50 ms off its own centre.
         Audio features stay at 10 Hz. Only with ``analysis="tick"``.
-    overlap_s : media up to this long (s, default 1800) run the audio pass in a thread beside the
-        video pass (``pipeline.analyse``; the same results, sooner: the audio pass took 14 % of
-        ``fast``'s time at 1080p and half of it on the Sintel trailer). Longer media run the passes
-        one after the other, so that only one pass's buffers and libraries are resident at a time
-        (the peak memory of a 2-hour film). 0 = never.
     """
 
     analysis: str = "tick"
@@ -79,7 +74,6 @@ class VideoParams:
     prefetch: int = 8
     decode: str = "nonref"
     stride: int = 1
-    overlap_s: float = 1800.0
 
     def __post_init__(self):
         if self.decode not in media.DECODE_MODES:
@@ -90,8 +84,6 @@ class VideoParams:
             raise ParameterError(f"video.analysis must be one of {ANALYSIS_MODES}, got {self.analysis!r}")
         if isinstance(self.stride, bool) or not isinstance(self.stride, int) or not (1 <= self.stride <= 10):
             raise ParameterError(f"video.stride must be a whole number of ticks in 1..10, got {self.stride!r}")
-        if not (0.0 <= float(self.overlap_s) <= 1e9):  # NaN fails too
-            raise ParameterError(f"video.overlap_s must lie in 0..1e9 s, got {self.overlap_s!r}")
         if self.stride > 1 and self.analysis != "tick":
             raise ParameterError(f"video.stride={self.stride} needs video.analysis='tick' "
                                  f"(the 'every' analysis reads every frame), got {self.analysis!r}")
@@ -157,11 +149,7 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
                progress: ProgressFn | None = None, cancel: CancelToken | None = None) -> VideoAnalysis:
     """Decode the video once and run the per-tick stages (module docstring).
 
-    need_saliency : bool [shape=(n,)], ticks whose saliency is needed (already reflects skipping);
-        or an object with ``done()`` and ``result()`` that gives that array later (the audio pass
-        running beside): until it is done, the saliency inputs of the analysed frames wait in a
-        backlog of at most ``_BACKLOG_BYTES`` (then the pass waits for it), and are computed in
-        order once it is known, so the result is the same as with the array given up front.
+    need_saliency : bool [shape=(n,)], ticks whose saliency is needed (already reflects skipping).
     need_flow : compute motion and depth at all (the fans track is wanted).
     need_colour : compute the mean colour (the temperature track is wanted).
     """
@@ -170,8 +158,7 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
         flow_params = replace(flow_params, proxy_width=flow_params.width_for(info.video.display_size[0]))
     stages = {name: _Stage() for name in
               ("decode_wait", "proxy", "cuts", "static", "colour", "saliency", "flow", "depth")}
-    need = _Need(need_saliency)
-    sal_backend = saliency.make_saliency_backend(saliency_params) if need.maybe_any() else None
+    sal_backend = saliency.make_saliency_backend(saliency_params) if need_saliency.any() else None
     depth_backend = depth.make_depth_backend(depth_params) if need_flow else None
     floor = float(airflow_params.floor) if video.skip else -1.0
     sal_luma_size = saliency.working_size(saliency_params)
@@ -185,26 +172,6 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
 
     prev_sig = None  # signature of the previous analysed frame (cut detection)
     prev_sal_gray = None  # luma of the previous saliency proxy (the saliency motion cue)
-    backlog: list = []  # (tick, saliency proxy, luma) of analysed frames while ``need`` is not known
-    backlog_bytes = 0
-
-    def saliency_of(k, sal_rgb, luma):
-        nonlocal prev_sal_gray
-        sal_gray = cv2.cvtColor(sal_rgb, cv2.COLOR_RGB2GRAY) if saliency_params.motion_weight > 0 else None
-        smap = stages["saliency"].run(saliency.saliency_map, sal_rgb, params=saliency_params,
-                                      backend=sal_backend, prev_gray=prev_sal_gray, luma=luma)
-        prev_sal_gray = sal_gray
-        acc.add_beta(k, fusion.actuator_weights(smap, params=fusion_params))
-
-    def flush_backlog():
-        nonlocal backlog_bytes
-        mask = need.wait()
-        for bk, sal_rgb, luma in backlog:
-            if mask[bk:bk + stride].any():
-                saliency_of(bk, sal_rgb, luma)
-        backlog.clear()
-        backlog_bytes = 0
-
     pending = None  # (tick, gray, rgb, sig, time) waiting for its successor frame (flow pair)
     acc = _Accumulator(out)
     last_time = 0.0
@@ -227,13 +194,10 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
             continue
         if centre_tick is not None:
             k = centre_tick
-        if backlog and need.known():
-            flush_backlog()
-        # None: not known yet (the frame's saliency inputs go to the backlog)
-        want_sal = False if centre_tick is None else need.any_in(k, k + stride)
+        want_sal = centre_tick is not None and bool(need_saliency[k:k + stride].any())
         rgb = sig_rgb = luma = None
-        if analyse_this and (need_colour or want_sal is not False or need_flow):
-            if want_sal is not False and sal_luma_size is not None:
+        if analyse_this and (need_colour or want_sal or need_flow):
+            if want_sal and sal_luma_size is not None:
                 rgb, gray, luma = stages["proxy"].run(frame.rgb_and_gray, rgb_width, flow_params.proxy_width,
                                                       luma_size=sal_luma_size)
             else:
@@ -264,17 +228,15 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
             prev_sig = sig
             if need_colour:
                 acc.add_colour(k, stages["colour"].run(thermal.mean_colour, rgb))
-            if want_sal is not False:
+            if want_sal:
                 # no wider than the picture itself: upsampling a 64 px film to a 256 px map adds
                 # nothing but work (16x the pixels on each of a 2-hour film's 72,000 ticks)
                 sal_rgb = _resized(rgb, min(saliency_params.proxy_width, max(1, frame.width)))
-                if want_sal:
-                    saliency_of(k, sal_rgb, luma)
-                else:
-                    backlog.append((k, sal_rgb, luma))
-                    backlog_bytes += sal_rgb.nbytes + (luma.nbytes if luma is not None else 0)
-                    if backlog_bytes > _BACKLOG_BYTES:
-                        flush_backlog()  # waits for ``need``
+                sal_gray = cv2.cvtColor(sal_rgb, cv2.COLOR_RGB2GRAY) if saliency_params.motion_weight > 0 else None
+                smap = stages["saliency"].run(saliency.saliency_map, sal_rgb, params=saliency_params,
+                                              backend=sal_backend, prev_gray=prev_sal_gray, luma=luma)
+                prev_sal_gray = sal_gray
+                acc.add_beta(k, fusion.actuator_weights(smap, params=fusion_params))
             if need_flow:
                 pending = (k, gray, rgb, sig, frame.time_s)
         if frame.index % 16 == 0:
@@ -282,8 +244,6 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
             if progress is not None:
                 progress("video", min(1.0, frame.time_s / duration))
 
-    if backlog:
-        flush_backlog()
     acc.finish()
     if pending is not None and pending[0] > 0 and acc.motion_n[pending[0]] == 0:
         # the clip ended before the last analysed frame's successor: its motion is unknown, so the
@@ -310,39 +270,6 @@ def video_pass(info: media.MediaInfo, n: int, *, video: VideoParams, saliency_pa
     out.stats["frames"] = {"ticks_with_frame": int(out.frame_mask.sum()), "ticks": n,
                            "last_time_s": round(last_time, 6)}
     return out
-
-
-# the saliency inputs kept while ``need_saliency`` is not known yet: about 290 analysed frames of a
-# 16:9 film (a 256 x 144 RGB proxy and a 64 x 64 luma each), 29 s of film
-_BACKLOG_BYTES = 32 << 20
-
-
-class _Need:
-    """``need_saliency`` given as an array, or as a deferred one (``done()``, ``result()``)."""
-
-    def __init__(self, need):
-        if isinstance(need, np.ndarray) or not hasattr(need, "result"):
-            self._deferred, self.mask = None, np.asarray(need, dtype=bool)
-        else:
-            self._deferred, self.mask = need, None
-
-    def known(self) -> bool:
-        if self.mask is None and self._deferred.done():
-            self.mask = np.asarray(self._deferred.result(), dtype=bool)
-        return self.mask is not None
-
-    def wait(self) -> np.ndarray:
-        if self.mask is None:
-            self.mask = np.asarray(self._deferred.result(), dtype=bool)
-        return self.mask
-
-    def maybe_any(self) -> bool:
-        """Some tick may need saliency (True while not known)."""
-        return not self.known() or bool(self.mask.any())
-
-    def any_in(self, a: int, b: int) -> bool | None:
-        """Does a tick in a..b-1 need saliency? None while not known."""
-        return bool(self.mask[a:b].any()) if self.known() else None
 
 
 def _centre_frames(frames, n: int, stride: int = 1):
