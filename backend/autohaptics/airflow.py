@@ -27,8 +27,8 @@
    1080p60 BBB clip: the reference given only half its frames agreed with itself at a fan-cell IoU
    of 0.66 with each tick's own cells, 0.76 with the smoothed ones; balanced (one 160 px pair per
    tick) agreed with the reference at 0.30 -> 0.44 (0.31 -> 0.49 on the 30 s loop made of that
-   clip in ``bench accuracy``), on the Sintel trailer at 0.50 -> 0.63; Sintel's two encodes with
-   each other 0.91 -> 0.94. Fans stay on longer (the reference's mean run of an "on" cell:
+   clip in ``bench accuracy``; 0.72 with the proxy of "Decisions" below), on the Sintel trailer
+   at 0.50 -> 0.63; Sintel's two encodes with each other 0.91 -> 0.94. Fans stay on longer (the reference's mean run of an "on" cell:
    2.3 -> 6.4 ticks on the BBB clip, 2.6 -> 5.7 on Sintel) and blow over a wider area (cells on per
    blowing tick: BBB 8 -> 14, Sintel 64 -> 101 of 153). With about as many cells on (old rule at
    ``cell_rel`` 0.4: 11 cells; smoothed at 0.6: 10) balanced's agreement on BBB is 0.35 vs 0.47:
@@ -54,7 +54,7 @@ Decisions (measured; synthetic scenes from :mod:`autohaptics.synth` have exact a
   to the picture keeps the flow inside the decoder's time. Measured against the reference in one
   ``bench accuracy`` run (``out/bench/s19``, 3 alternating runs each): fan IoU 0.49 -> 0.72 at
   0.98 x the bare decode's wall time (160 px: 1.01 x; CPU 1.02 x against 0.97 x); on a synthetic
-  1920x1080 scene 0.55 -> 0.68 (320 px: 0.80). Below 1920 px the proxy stays at 160 px: on the
+  1920x1080 scene 0.55 -> 0.68 (320 px: 0.80). Up to 1280 px the proxy stays at 160 px: on the
   Sintel trailer (640 px) 240 px gained nothing (0.63 -> 0.62) and cost 66 % more wall time, on
   the 1280 px BBB opening it gained 0.42 -> 0.50 for 46 % more. The reference's third of the
   width is its 640 px at 1080p; the fast preset's sixteenth is its 128 px up to 2048 px.
