@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from autohaptics.chair import VirtualChair
+from autohaptics.server.chair import DRIFT_SEEK_S
 from autohaptics.server.store import Store
 from autohaptics.server.timelines import Timelines
 from browser_support import ServerError, media_clip, open_editor, start_server, stop_server, upload, wait_until
@@ -108,6 +109,12 @@ def seek_video(pg, t: float) -> None:
                          " return !v.seeking && Math.abs(v.currentTime - t) < 0.5; }", arg=t)
 
 
+def clocks(pg) -> tuple[float, float]:
+    """(the page's clock, the video's position), s, read together."""
+    wall, pos = pg.evaluate("() => [performance.now() / 1000, document.querySelector('[data-testid=video]').currentTime]")
+    return float(wall), float(pos)
+
+
 def log_index(chair) -> int:
     return len(chair.read_log())
 
@@ -158,12 +165,19 @@ def test_the_editor_plays_on_the_virtual_chair(cpage, chair_api, chair_server, f
     seek_video(pg, 2.0)
     start = log_index(chair)
     pg.click("[data-testid=play]")
+    a0 = clocks(pg)
     chair.wait_for(lambda e: e["ev"] == "frame" and e["tick"] >= 48, timeout_s=15.0)  # 2.8 s of film played
 
     # A seek while playing: the ticks jump to the new position.
+    a1 = clocks(pg)
     seek_video(pg, 30.0)
+    b0 = clocks(pg)
     chair.wait_for(lambda e: e["ev"] == "frame" and e["tick"] >= 318, timeout_s=15.0)
     assert pg.evaluate("() => window.autohaptics.state().playing")
+    b1 = clocks(pg)
+    # how far the video itself fell behind the page's clock while playing (a starved browser
+    # stalls its video; the server then moves the chair back to where the video is: a drift seek)
+    lag = max(0.0, (a1[0] - a0[0]) - (a1[1] - a0[1])) + max(0.0, (b1[0] - b0[0]) - (b1[1] - b0[1]))
 
     # Pause: STOP on the chair and no frames afterwards.
     pg.click("[data-testid=play]")
@@ -176,21 +190,27 @@ def test_the_editor_plays_on_the_virtual_chair(cpage, chair_api, chair_server, f
     entries = chair.read_log()[start:]
     status = chair_api.get("/api/chair/status").json()
     skipped = status["playback"]["ticks_skipped"]
-    assert status["playback"]["drift_seeks"] == 0, status["playback"]
+    seeks = status["playback"]["drift_seeks"]
+    if lag <= DRIFT_SEEK_S:  # the video kept time: the chair follows it without a single re-seek
+        assert seeks == 0, (status["playback"], lag)
+    else:  # at most one re-seek per drift limit the video fell behind, and one for where it ended
+        assert seeks <= lag / DRIFT_SEEK_S + 1, (status["playback"], lag)
     ticks = runs(entries)
     before = [r for r in ticks if r[0] < 300]
     after = [r for r in ticks if r[0] >= 300]
     # Before the seek: one run from the play position (2.0 s) without duplicates or gaps (a gap only
-    # where the server skipped ticks after a stall, which it counts).
+    # where the server skipped ticks after a stall, which it counts; a new run where it re-seeks).
     assert before and 20 <= before[0][0] <= 21, ticks
     assert sum(len(r) for r in before) + skipped >= before[-1][-1] - before[0][0] + 1, ticks
     flat = [t for r in before for t in r]
-    assert all(b > a for a, b in zip(flat, flat[1:])), ticks
-    assert len(before) <= 1 + skipped, ticks
+    if not seeks:
+        assert all(b > a for a, b in zip(flat, flat[1:])), ticks
+    assert len(before) <= 1 + skipped + seeks, ticks
     # After the seek: from 30.0 s on, in order.
     assert after and 300 <= after[0][0] <= 301, ticks
     flat = [t for r in after for t in r]
-    assert all(b > a for a, b in zip(flat, flat[1:])), ticks
+    if not seeks:
+        assert all(b > a for a, b in zip(flat, flat[1:])), ticks
 
     # Every frame holds the composed timeline after comfort and the device's clamps.
     tl = composed(chair_server[1], pid)
