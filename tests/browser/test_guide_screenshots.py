@@ -178,6 +178,17 @@ def test_guide_parameter_table_lists_every_parameter_with_its_default_and_meanin
         "`.venv/bin/python tests/browser/test_guide_screenshots.py --write-params`")
 
 
+def test_guide_presets_table_names_every_knob_each_preset_sets():
+    from autohaptics.presets import PRESETS
+
+    text = GUIDE.read_text(encoding="utf-8")
+    for name, overrides in PRESETS.items():
+        rows = [line for line in text.splitlines() if line.startswith(f"| `{name}`")]
+        assert len(rows) == 1, f"{GUIDE.name} needs one row for the preset {name!r} in its presets table"
+        missing = [key for key in overrides if f"`{key}=" not in rows[0]]
+        assert not missing, f"{GUIDE.name}'s row for {name!r} does not name {missing}"
+
+
 def test_guide_defaults_are_accepted_back_by_set():
     """Every default as printed in the table, passed back through ``--set``, gives the default."""
     from autohaptics.pipeline import GenerateParams
