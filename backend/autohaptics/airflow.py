@@ -32,8 +32,9 @@
    reference's mean run of an "on" cell: 2.3 -> 6.4 ticks on the BBB clip, 2.6 -> 5.7 on Sintel)
    and blow over a wider area (cells on per blowing tick: BBB 8 -> 14, Sintel 64 -> 101 of 153).
    With about as many cells on (old rule at ``cell_rel`` 0.4: 11 cells; smoothed at 0.6: 10)
-   balanced's agreement on BBB is 0.35 vs 0.47: the gain is not the wider area. A blur of 1 cell gained a little more on the clips (BBB 0.53)
-   but spread a moving object onto a moving background (tests/test_airflow.py).
+   balanced's agreement on BBB is 0.35 vs 0.47: the gain is not the wider area. A blur of 1 cell
+   gained a little more on the clips (BBB 0.53) but spread a moving object onto a moving
+   background (tests/test_airflow.py).
    ``cell_sigma_ticks = cell_sigma_cells = 0`` restores each tick's own cells.
 
 A static pair (nothing changed beyond noise) is detected by a cheap frame difference so flow is
