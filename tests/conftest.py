@@ -23,3 +23,18 @@ def media_dir() -> Path:
 @pytest.fixture(scope="session")
 def psycho_dir() -> Path:
     return need(PSYCHO, "ISO 532-1 / DIN 45692 reference data")
+
+
+@pytest.fixture(scope="session")
+def sim_binary(tmp_path_factory) -> Path:
+    """The virtual chair: the firmware core built natively for this host, once per test session."""
+    from autohaptics.chair import build_simulator
+    return build_simulator(build_dir=tmp_path_factory.mktemp("chair-sim"))
+
+
+@pytest.fixture
+def chair(sim_binary, tmp_path):
+    """A virtual chair on a pseudo-terminal (``chair.device``), its frames logged to ``chair.jsonl``."""
+    from autohaptics.chair import VirtualChair
+    with VirtualChair(link_path=tmp_path / "chair", log_path=tmp_path / "chair.jsonl", binary=sim_binary) as vc:
+        yield vc

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from autohaptics.chair import VirtualChair, build_simulator
+from autohaptics.chair import VirtualChair
 from autohaptics.chair.simulate import read_log
 from autohaptics.cli import chair as chair_cli
 from autohaptics.errors import DeviceError
@@ -26,17 +26,6 @@ def run_cli(*argv: str) -> int:
     chair_cli.register(parser.add_subparsers(dest="command"))
     args = parser.parse_args(list(argv))
     return args.func(args)
-
-
-@pytest.fixture(scope="module")
-def sim_binary(tmp_path_factory):
-    return build_simulator(build_dir=tmp_path_factory.mktemp("chair-sim"))
-
-
-@pytest.fixture
-def chair(sim_binary, tmp_path):
-    with VirtualChair(link_path=tmp_path / "chair", log_path=tmp_path / "chair.jsonl", binary=sim_binary) as vc:
-        yield vc
 
 
 def test_push_stop_and_status(chair, tmp_path, capsys):

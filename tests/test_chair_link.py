@@ -13,21 +13,10 @@ import numpy as np
 import pytest
 import serial
 
-from autohaptics.chair import ChairLink, ChairPlayer, VirtualChair, build_simulator, list_ports
+from autohaptics.chair import ChairLink, ChairPlayer, VirtualChair, list_ports
 from autohaptics.chair.protocol import Frame, HelloRequest, Parser, Status, StatusRequest, encode
 from autohaptics.errors import DeviceError, ParameterError
 from autohaptics.timeline import Timeline
-
-
-@pytest.fixture(scope="module")
-def sim_binary(tmp_path_factory):
-    return build_simulator(build_dir=tmp_path_factory.mktemp("chair-sim"))
-
-
-@pytest.fixture
-def chair(sim_binary, tmp_path):
-    with VirtualChair(link_path=tmp_path / "chair", log_path=tmp_path / "chair.jsonl", binary=sim_binary) as vc:
-        yield vc
 
 
 @pytest.fixture

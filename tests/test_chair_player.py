@@ -10,22 +10,11 @@ import threading
 import numpy as np
 import pytest
 
-from autohaptics.chair import ChairLink, ChairPlayer, Comfort, VirtualChair, build_simulator, push
+from autohaptics.chair import ChairLink, ChairPlayer, Comfort, VirtualChair, push
 from autohaptics.errors import CancelledError, DeviceError, ParameterError
 from autohaptics.timeline import Timeline
 
 ARMRESTS = (2, 6)  # A3, A7
-
-
-@pytest.fixture(scope="module")
-def sim_binary(tmp_path_factory):
-    return build_simulator(build_dir=tmp_path_factory.mktemp("chair-sim"))
-
-
-@pytest.fixture
-def chair(sim_binary, tmp_path):
-    with VirtualChair(link_path=tmp_path / "chair", log_path=tmp_path / "chair.jsonl", binary=sim_binary) as vc:
-        yield vc
 
 
 @pytest.fixture

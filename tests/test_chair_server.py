@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from autohaptics.chair import VirtualChair, build_simulator
+from autohaptics.chair import VirtualChair
 from autohaptics.server.app import create_app
 from autohaptics.server.settings import Settings
 from autohaptics.synth import Scene, Segment, Tone, write_scene
@@ -81,11 +81,6 @@ def check_segment(ticks: list[int], start: int, skipped: int) -> None:
 
 # ----------------------------------------------------------------------------- fixtures
 @pytest.fixture(scope="module")
-def sim_binary(tmp_path_factory):
-    return build_simulator(build_dir=tmp_path_factory.mktemp("chair-sim"))
-
-
-@pytest.fixture(scope="module")
 def film(tmp_path_factory) -> Path:
     path = tmp_path_factory.mktemp("chair-film") / "film.mp4"
     scene = Scene(duration_s=DURATION_S, background=(Segment(0.0, DURATION_S, (150, 60, 40)),),
@@ -114,12 +109,6 @@ def project(client, film) -> dict:
     r = client.post(f"/api/projects/{pid}/import", files={"file": ("known.json", doc, "application/json")})
     assert r.status_code == 200, r.text
     return client.get(f"/api/projects/{pid}").json()
-
-
-@pytest.fixture
-def chair(sim_binary, tmp_path):
-    with VirtualChair(link_path=tmp_path / "chair", log_path=tmp_path / "chair.jsonl", binary=sim_binary) as vc:
-        yield vc
 
 
 @pytest.fixture
