@@ -34,7 +34,10 @@
    With about as many cells on (old rule at ``cell_rel`` 0.4: 11 cells; smoothed at 0.6: 10)
    balanced's agreement on BBB is 0.35 vs 0.47: the gain is not the wider area. A blur of 1 cell
    gained a little more on the clips (BBB 0.53) but spread a moving object onto a moving
-   background (tests/test_airflow.py).
+   background (tests/test_airflow.py). A longer smoothing (3 ticks) agreed a little better with
+   the reference on the shared clips (BBB 1080p 0.73 -> 0.77, Sintel 0.65 -> 0.67, BBB opening
+   0.42 -> 0.44) but smears an object crossing the grid along its path (at a quarter of a cell
+   per tick, IoU with the truth 0.80 at 2 ticks, 0.73 at 3; tests/test_airflow.py).
    ``cell_sigma_ticks = cell_sigma_cells = 0`` restores each tick's own cells.
 
 A static pair (nothing changed beyond noise) is detected by a cheap frame difference so flow is
