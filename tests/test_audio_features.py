@@ -10,8 +10,8 @@ import threading
 import numpy as np
 import pytest
 
-from autohaptics import audio_features as af
-from autohaptics import loudness as L
+from autohaptics.intensity import features as af
+from autohaptics.intensity import loudness as L
 from autohaptics.errors import CancelledError, ParameterError
 from autohaptics.timebase import FRAME_S, frame_times_s
 

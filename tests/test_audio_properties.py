@@ -9,10 +9,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from autohaptics import audio_features as af
-from autohaptics import booming as B
-from autohaptics import loudness as L
-from autohaptics import sharpness as S
+from autohaptics.intensity import features as af
+from autohaptics.intensity import booming as B
+from autohaptics.intensity import loudness as L
+from autohaptics.intensity import sharpness as S
 from autohaptics.errors import ParameterError
 
 FS = 48_000

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from autohaptics import booming as B
-from autohaptics import loudness as L
+from autohaptics.intensity import booming as B
+from autohaptics.intensity import loudness as L
 from autohaptics.errors import ParameterError
 
 FS = 48_000

@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 import scipy.io.wavfile
 
-from autohaptics import audio_features as af
-from autohaptics import loudness as L
-from autohaptics import sharpness as S
+from autohaptics.intensity import features as af
+from autohaptics.intensity import loudness as L
+from autohaptics.intensity import sharpness as S
 
 CAL = 0.6334
 

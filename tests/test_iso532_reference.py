@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 import scipy.io.wavfile
 
-from autohaptics import loudness as L
+from autohaptics.intensity import loudness as L
 
 CAL = 2.0 * np.sqrt(2.0)
 TV_SIGNALS = list(range(6, 26))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from autohaptics import low_energy as LE
+from autohaptics.intensity import low_energy as LE
 from autohaptics.errors import ParameterError
 
 FS = 48_000

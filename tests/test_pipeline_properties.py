@@ -27,7 +27,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from autohaptics import airflow as A
-from autohaptics import audio_features as af
+from autohaptics.intensity import features as af
 from autohaptics import fusion as F
 from autohaptics import intensity as I
 from autohaptics import thermal as T

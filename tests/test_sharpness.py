@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import scipy.signal as ss
 
-from autohaptics import loudness as L
-from autohaptics import sharpness as S
+from autohaptics.intensity import loudness as L
+from autohaptics.intensity import sharpness as S
 from autohaptics.errors import ParameterError
 
 FS = 48_000

@@ -25,7 +25,7 @@ import numpy as np
 
 from autohaptics import __version__
 from autohaptics import airflow, cuts, depth, fusion, saliency, thermal
-from autohaptics import audio_features as af
+from autohaptics.intensity import features as af
 from autohaptics import intensity as inten
 from autohaptics import media
 from autohaptics.heap import release_free_memory, release_library_pages

@@ -212,7 +212,7 @@ def _worker_decode(argv: list[str]) -> None:
 def _worker_generate(argv: list[str]) -> None:
     import numpy as np
 
-    from autohaptics import audio_features as af
+    from autohaptics.intensity import features as af
     from autohaptics.cli.generate import add_generation_options, params_from_args
     from autohaptics.pipeline import generate
 

@@ -21,7 +21,7 @@ tables, 2 shared cores, AMD EPYC, CPU seconds per second of audio):
 - Result: all four features 0.0055 s/s with the default method; numpy/scipy alone (scipy bank,
   per-sample Python loops over band vectors for the decay and the slopes) is estimated from the
   rows above at ~0.1 s/s.
-So the kernels in ``autohaptics._loudness_kernels`` are compiled with numba, and
+So the kernels in ``autohaptics.intensity.kernels`` are compiled with numba, and
 ``NUMBA_DISABLE_JIT=1`` runs the identical source as the pure reference path (timed on a short
 excerpt in the "reference paths" table).
 """
@@ -41,12 +41,14 @@ import psutil
 import scipy.io.wavfile
 import scipy.signal as ss
 
-from autohaptics import _loudness_kernels as K
-from autohaptics import audio_features as af
-from autohaptics import booming as B
-from autohaptics import loudness as L
-from autohaptics import low_energy as LE
-from autohaptics import sharpness as S
+from autohaptics.intensity import kernels as K
+from autohaptics.intensity import features as af
+from autohaptics.intensity import booming as B
+from autohaptics.intensity import filterbank as FB
+from autohaptics.intensity import loudness as L
+from autohaptics.intensity import zwicker as ZW
+from autohaptics.intensity import low_energy as LE
+from autohaptics.intensity import sharpness as S
 from autohaptics.bench.common import measure, table
 from autohaptics.errors import ParameterError
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE as FS
@@ -240,7 +242,7 @@ def _stage_breakdown(chunks: list[np.ndarray]) -> dict[str, float]:
     """CPU seconds per second of audio of each step of the default pipeline."""
     params = af.AudioFeatureParams()
     lp = params.loudness_params()
-    plan = L._plan(lp.method)
+    plan = FB.plan(lp.method)
     state = L.init_state(params=lp)
     le_state = LE.init_state(params=params.low_energy_params())
     acc = dict.fromkeys(["calibrate", "filter bank", "core loudness", "decay", "slopes", "temporal weighting",
@@ -251,21 +253,21 @@ def _stage_breakdown(chunks: list[np.ndarray]) -> dict[str, float]:
         p = c.astype(np.float64) * params.pa_per_unit
         t1 = time.process_time()
         k0 = -(-state.n_in // 24)
-        ms, bank, smooth, stages = L._filter_bank(p, state, plan)
+        ms, bank, smooth, stages = FB.filter_bank(p, state.n_in, state.bank, state.smooth, state.stages, plan)
         t2 = time.process_time()
-        core = L._core_loudness(ms, diffuse=False)
+        core = ZW.core_loudness(ms, diffuse=False)
         t3 = time.process_time()
-        decayed, decay = L._nonlinear_decay(core, state.decay, plan, started=k0 > 0)
+        decayed, decay = ZW.nonlinear_decay(core, state.decay, plan, started=k0 > 0)
         t4 = time.process_time()
-        rows = L._output_rows(k0, core.shape[1])
-        total, spec = L._slopes(decayed, rows)
+        rows = ZW.output_rows(k0, core.shape[1])
+        total, spec = ZW.slopes(decayed, rows)
         t5 = time.process_time()
-        weighted, weighting = L._temporal_weighting(total, state.weighting, started=k0 > 0)
+        weighted, weighting = ZW.temporal_weighting(total, state.weighting, started=k0 > 0)
         t6 = time.process_time()
         _, le_state = LE.low_energy_update(p, le_state, params=params.low_energy_params())
         t7 = time.process_time()
         k = spec.shape[0] // af.STEPS_PER_FRAME
-        af._frames(weighted[rows >= 0][: k * 10].reshape(k, 10), spec[: k * 10].reshape(k, 10, -1),
+        af.frame_values(weighted[rows >= 0][: k * 10].reshape(k, 10), spec[: k * 10].reshape(k, 10, -1),
                    np.zeros(k), 0, 0, params)
         t8 = time.process_time()
         state = L.LoudnessState(method=state.method, field=state.field, n_in=state.n_in + p.size, bank=bank,
@@ -279,9 +281,9 @@ def _reference_paths(block: np.ndarray) -> dict[str, float]:
     """Compiled kernels vs numpy/scipy or pure-Python references of the same steps."""
     out = {}
     p = block[: 10 * FS].astype(np.float64) * 3.5566
-    sos, gain = L._iso_sos()
+    sos, gain = FB.iso_sos()
     bands = np.arange(28)
-    a = L._smoothing_pole(bands, FS)
+    a = FB.smoothing_pole(bands, FS)
     t0 = time.process_time()
     for b in bands:
         y = ss.sosfilt(sos[b], p) * gain[b]
@@ -292,27 +294,28 @@ def _reference_paths(block: np.ndarray) -> dict[str, float]:
     out["ISO filter bank, scipy sosfilt + lfilter"] = (time.process_time() - t0) / 10.0
     state = L.init_state(params=L.LoudnessParams(method="iso"))
     t0 = time.process_time()
-    L._filter_bank(p, state, L._plan("iso"))
+    FB.filter_bank(p, state.n_in, state.bank, state.smooth, state.stages, FB.plan("iso"))
     out["ISO filter bank, compiled kernel"] = (time.process_time() - t0) / 10.0
     state = L.init_state(params=L.LoudnessParams(method="fast"))
     t0 = time.process_time()
-    L._filter_bank(p, state, L._plan("fast"))
+    FB.filter_bank(p, state.n_in, state.bank, state.smooth, state.stages, FB.plan("fast"))
     out["fast multirate filter bank, compiled kernel"] = (time.process_time() - t0) / 10.0
 
     short = p[: FS // 4]  # 0.25 s: the pure-Python steps are slow
-    ms, *_ = L._filter_bank(short, L.init_state(params=L.LoudnessParams(method="iso")), L._plan("iso"))
-    core = L._core_loudness(ms, diffuse=False)
-    plan = L._plan("iso")
+    st = L.init_state(params=L.LoudnessParams(method="iso"))
+    ms, *_ = FB.filter_bank(short, st.n_in, st.bank, st.smooth, st.stages, FB.plan("iso"))
+    core = ZW.core_loudness(ms, diffuse=False)
+    plan = FB.plan("iso")
     for label, fn in (("compiled", K.nonlinear_decay), ("pure Python", K.nonlinear_decay.py_func)):
         z = np.zeros(core.shape[0])
         t0 = time.process_time()
         fn(core, plan.nl_coef, plan.nl_iterations, 1e-5, z.copy(), z.copy(), z.copy(), np.zeros(1, np.int64),
            np.empty_like(core))
         out[f"decay network (24 sub-steps), {label}"] = (time.process_time() - t0) / 0.25
-    rows = L._output_rows(0, core.shape[1])
+    rows = ZW.output_rows(0, core.shape[1])
     for label, fn in (("compiled", K.slopes), ("pure Python", K.slopes.py_func)):
         t0 = time.process_time()
-        fn(core, L._ZUP, L._RNS, L._USL, rows, np.empty(core.shape[1]), np.empty((int((rows >= 0).sum()), 240)))
+        fn(core, ZW.ZUP, ZW.RNS, ZW.USL, rows, np.empty(core.shape[1]), np.empty((int((rows >= 0).sum()), 240)))
         out[f"slopes, {label}"] = (time.process_time() - t0) / 0.25
     return out
 

@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from autohaptics import audio_features as af
+from autohaptics.intensity import features as af
 from autohaptics import media
 from autohaptics.errors import ParameterError
-from autohaptics.loudness import LOUDNESS_METHODS, STEP_S
+from autohaptics.intensity.loudness import LOUDNESS_METHODS, STEP_S
 from autohaptics.progress import ProgressBar
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE, FRAME_S
 

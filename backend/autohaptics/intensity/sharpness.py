@@ -2,7 +2,7 @@
 
     S = k * sum_z N'(z) g(z) z dz / sum_z N'(z) dz,   k = 0.11 acum,
 
-on the 0.1 Bark grid z = 0.1 .. 24 Bark of :mod:`autohaptics.loudness`, with the DIN weighting
+on the 0.1 Bark grid z = 0.1 .. 24 Bark of :mod:`autohaptics.intensity.loudness`, with the DIN weighting
 g(z) = 1 for z <= 15.8 Bark and 0.15 exp(0.42 (z - 15.8)) + 0.85 above (:func:`din_weighting`).
 
 Decisions (ALGORITHM.md section 2):
@@ -21,9 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from autohaptics import _iso532_tables as T
+from autohaptics.intensity import iso532_tables as T
 from autohaptics.errors import ParameterError
-from autohaptics.loudness import Z_BARK
+from autohaptics.intensity.loudness import Z_BARK, check_specific
 
 
 @dataclass(frozen=True)
@@ -57,21 +57,10 @@ def sharpness(*, specific: np.ndarray, params: SharpnessParams = SharpnessParams
     specific : np.ndarray [shape=(n, 240)] (or [shape=(240,)]), sone/Bark on z = 0.1 .. 24 Bark.
     Returns np.ndarray [shape=(n,)] (or a 0-d array), acum, finite and >= 0.
     """
-    n_spec = _check_specific(specific)
+    n_spec = check_specific(specific)
     area = n_spec.sum(axis=-1)  # sone / 0.1 Bark: the dz factors cancel in the ratio
     moment = (n_spec * _MOMENT).sum(axis=-1)  # row by row: the same result whatever the batch
     out = np.zeros_like(area)
     loud = area * T.BARK_STEP >= max(float(params.min_loudness_sone), np.finfo(float).tiny)
     np.divide(moment, area, out=out, where=loud)
     return out
-
-
-def _check_specific(specific) -> np.ndarray:
-    n_spec = np.asarray(specific, dtype=np.float64)
-    if n_spec.shape[-1:] != (T.N_BARK,) or n_spec.ndim > 2:
-        raise ParameterError(f"specific loudness must have shape (n, {T.N_BARK}) or ({T.N_BARK},), "
-                             f"got {n_spec.shape}")
-    bad = ~np.isfinite(n_spec)
-    if bad.any():
-        raise ParameterError(f"specific loudness holds {int(bad.sum())} non-finite value(s) (shape {n_spec.shape})")
-    return np.maximum(n_spec, 0.0)

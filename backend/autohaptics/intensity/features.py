@@ -2,9 +2,9 @@
 section 2): loudness (sone), sharpness (acum), booming index, low-frequency energy (Pa^2).
 
 Recipe per chunk (float32 mono 48 kHz, digital full scale, as :func:`autohaptics.media.iter_audio`
-yields): calibrate (``pa_per_unit``: sample -> Pa) -> :mod:`autohaptics.loudness` (N(t) and
-N'(z, t) every 2 ms) and :mod:`autohaptics.low_energy` -> ``_frames``: the ten 2 ms values of each
-20 ms frame become one frame value -> :mod:`autohaptics.sharpness`, :mod:`autohaptics.booming`.
+yields): calibrate (``pa_per_unit``: sample -> Pa) -> :mod:`autohaptics.intensity.loudness` (N(t) and
+N'(z, t) every 2 ms) and :mod:`autohaptics.intensity.low_energy` -> ``frame_values``: the ten 2 ms values of each
+20 ms frame become one frame value -> :mod:`autohaptics.intensity.sharpness`, :mod:`autohaptics.intensity.booming`.
 
 How a 20 ms frame value is formed (frame f covers [0.02 f, 0.02 (f + 1)) s, i.e. input samples
 960 f .. 960 f + 959, and holds the 2 ms ISO samples k = 10 f .. 10 f + 9 at t = 0.002 k):
@@ -32,10 +32,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from autohaptics import booming as _booming
-from autohaptics import loudness as _loudness
-from autohaptics import low_energy as _low_energy
-from autohaptics import sharpness as _sharpness
+from autohaptics.intensity import booming as _booming
+from autohaptics.intensity import loudness as _loudness
+from autohaptics.intensity import low_energy as _low_energy
+from autohaptics.intensity import sharpness as _sharpness
 from autohaptics.errors import ParameterError
 from autohaptics.progress import CancelToken, check_cancel
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE, FRAME_S, SAMPLES_PER_FRAME
@@ -55,7 +55,7 @@ class AudioFeatureParams:
         cinema calibration pink noise at -20 dBFS rms = 85 dB SPL).
     field : "free" (default) or "diffuse"; the sound field of ISO 532-1.
     loudness_method : "fast" (default; multirate filter bank) or "iso" (the standard's filters at
-        48 kHz; the reference preset). See :mod:`autohaptics.loudness`.
+        48 kHz; the reference preset). See :mod:`autohaptics.intensity.loudness`.
     booming_variant : "hatano" (default, linear Hatano-type index) or "paper" (thesis eq. 3.3).
     low_energy_cutoff_hz : float, Hz; low-pass corner of the low-frequency energy (default 215).
     sharpness_min_loudness_sone : float, sone; sharpness is 0 below this loudness (default 0.1).
@@ -170,7 +170,7 @@ def process_chunk(x: np.ndarray, state: AudioFeatureState, *,
     pend_spec = np.concatenate([state.pending_spec, lres.specific]) if lres.specific.size else state.pending_spec
     k = n_samples // SAMPLES_PER_FRAME - state.frames_out
     used = k * STEPS_PER_FRAME
-    out = _frames(pend_n[:used].reshape(k, STEPS_PER_FRAME), pend_spec[:used].reshape(k, STEPS_PER_FRAME, _N_BARK),
+    out = frame_values(pend_n[:used].reshape(k, STEPS_PER_FRAME), pend_spec[:used].reshape(k, STEPS_PER_FRAME, _N_BARK),
                   le, state.frames_out, n_samples, params)
     if state.step_ms == 2:
         out.t_iso_s, out.loudness_iso = lres.t_s, lres.loudness
@@ -188,7 +188,7 @@ def finish(state: AudioFeatureState, *, params: AudioFeatureParams = AudioFeatur
     le = _low_energy.low_energy_finish(state.low_energy)
     k = le.shape[0]
     j = state.pending_n.shape[0] if k else 0
-    out = _frames(state.pending_n[None, :j] if k else np.zeros((0, 1)),
+    out = frame_values(state.pending_n[None, :j] if k else np.zeros((0, 1)),
                   state.pending_spec[None, :j] if k else np.zeros((0, 1, state.pending_spec.shape[1])),
                   le, state.frames_out, state.n_samples, params)
     if state.step_ms == 2:
@@ -244,8 +244,8 @@ def _calibrate(x, params: AudioFeatureParams) -> np.ndarray:
     return x.astype(np.float64) * float(params.pa_per_unit)
 
 
-def _frames(n_steps: np.ndarray, spec_steps: np.ndarray, low_energy: np.ndarray, first_frame: int,
-            n_samples: int, params: AudioFeatureParams) -> AudioFeatures:
+def frame_values(n_steps: np.ndarray, spec_steps: np.ndarray, low_energy: np.ndarray, first_frame: int,
+                 n_samples: int, params: AudioFeatureParams) -> AudioFeatures:
     """Frame values from the 2 ms values of k frames.
 
     n_steps : [shape=(k, j)] N(t), sone; spec_steps : [shape=(k, j, 240)] N'(z, t), sone/Bark;

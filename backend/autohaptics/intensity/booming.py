@@ -29,10 +29,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from autohaptics import _iso532_tables as T
+from autohaptics.intensity import iso532_tables as T
 from autohaptics.errors import ParameterError
-from autohaptics.loudness import Z_BARK
-from autohaptics.sharpness import _check_specific
+from autohaptics.intensity.loudness import Z_BARK, check_specific
 
 BOOMING_VARIANTS = ("hatano", "paper")
 
@@ -89,7 +88,7 @@ def booming(*, specific: np.ndarray, params: BoomingParams = BoomingParams()) ->
     Returns np.ndarray [shape=(n,)] (or 0-d), finite and >= 0: sone for "hatano",
     dimensionless for "paper".
     """
-    n_spec = _check_specific(specific)
+    n_spec = check_specific(specific)
     area = n_spec.sum(axis=-1) * T.BARK_STEP  # N, sone
     loud = area >= max(float(params.min_loudness_sone), np.finfo(float).tiny)
     out = np.zeros_like(area)

@@ -22,9 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.signal as ss
 
-from autohaptics import _loudness_kernels as K
+from autohaptics.intensity import kernels as K
 from autohaptics.errors import ParameterError
-from autohaptics.loudness import check_pressure
+from autohaptics.intensity.loudness import check_pressure
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE, SAMPLES_PER_FRAME
 
 

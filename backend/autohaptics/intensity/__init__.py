@@ -1,0 +1,21 @@
+"""Stage 1, audio -> vibration intensity (ALGORITHM.md section 2, thesis 3.1.1).
+
+The four psychoacoustic features per 20 ms frame (:mod:`.features`, computed by :mod:`.loudness`,
+:mod:`.sharpness`, :mod:`.booming` and :mod:`.low_energy`), then the rule that turns them into a
+per-tick intensity in 0..1 (:mod:`.rule`).
+"""
+
+from autohaptics.intensity.features import AudioFeatureParams, AudioFeatures, compute_audio_features
+from autohaptics.intensity.rule import (
+    DEFAULT_THRESHOLDS,
+    FEATURES,
+    NORMALISERS,
+    IntensityParams,
+    frame_intensity,
+    normalise,
+    normalise_features,
+    tick_intensity,
+)
+
+__all__ = ["AudioFeatureParams", "AudioFeatures", "DEFAULT_THRESHOLDS", "FEATURES", "IntensityParams", "NORMALISERS",
+           "compute_audio_features", "frame_intensity", "normalise", "normalise_features", "tick_intensity"]
