@@ -14,6 +14,7 @@ import pytest
 
 from autohaptics.bench.export import synthetic_timeline
 from autohaptics.export import FORMATS, export_timeline
+from autohaptics.export.hjif import MAX_EFFECT_KEYFRAMES, MAX_EFFECT_MS
 from autohaptics.export.mpegv import SEDL_NS
 from autohaptics.importers import import_timeline
 from autohaptics.timeline import Timeline
@@ -41,11 +42,18 @@ def test_two_hour_export_completes_and_parses(tmp_path, two_hours, fmt):
         with zipfile.ZipFile(path) as zf:
             assert len([n for n in zf.namelist() if n.endswith(".ahap")]) == 9
             for name in zf.namelist():
-                if name.endswith((".ahap", ".json")):
+                if name.endswith(".ahap"):
+                    assert any("Event" in item for item in json.loads(zf.read(name))["Pattern"])
+                elif name.endswith(".json"):
                     json.loads(zf.read(name))
     elif fmt == "hjif":
         doc = json.loads(path.read_text(encoding="utf-8"))
         assert [len(p["channels"]) for p in doc["perceptions"]] == [9, 1, 153]
+        ids = [c["id"] for p in doc["perceptions"] for c in p["channels"]]
+        assert len(set(ids)) == len(ids)
+        effects = [e for p in doc["perceptions"] for c in p["channels"] for e in c["bands"][0]["effects"]]
+        assert max(e["keyframes"][-1]["relative_position"] for e in effects) <= MAX_EFFECT_MS
+        assert max(len(e["keyframes"]) for e in effects) <= MAX_EFFECT_KEYFRAMES
     else:
         effects = sum(1 for _, el in ET.iterparse(path) if el.tag == f"{{{SEDL_NS}}}Effect")
         assert effects > 0

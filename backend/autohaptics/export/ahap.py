@@ -12,12 +12,19 @@ belongs to. Mapping (docs/EXPORT.md has the full table):
   event intensity), starting with each event. Control points sit on the 100 ms grid and only where
   the slope changes, so linear interpolation reproduces every tick exactly (4 decimals). A curve
   holds at most ``CURVE_MAX_POINTS`` points; longer ones are chained, sharing the joint point.
+- No two curves give one instant different values: where a chained event ends, its last curve
+  ends on the level the next event starts with (a run's last event ends on its held last tick,
+  and the next run starts at least one tick later).
+- AHAP requires at least one event per pattern: an actuator silent for the whole film gets one
+  continuous event at intensity 0 (it plays nothing).
+- Zip entries carry mode 0644 and the export's local time.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
 import json
+import stat
 import zipfile
 from collections.abc import Iterator
 from typing import IO
@@ -57,7 +64,8 @@ def write_ahap_zip(tl: Timeline, fh: IO[bytes], *, sharpness: float = DEFAULT_SH
     sharpness = float(sharpness)
     if not 0.0 <= sharpness <= 1.0:
         raise ParameterError(f"AHAP sharpness must lie in [0, 1], got {sharpness!r}")
-    created = created or _dt.date.today().isoformat()
+    now = _dt.datetime.now()
+    created = created or now.date().isoformat()
     title = timeline_title(tl.source)
     q = quantise(tl.vibration)  # (n, 9) int
     files = []
@@ -65,7 +73,7 @@ def write_ahap_zip(tl: Timeline, fh: IO[bytes], *, sharpness: float = DEFAULT_SH
         for i, act in enumerate(ACTUATORS):
             counts = {"events": 0, "curves": 0, "control_points": 0}
             name = f"{act.id}.ahap"
-            with zf.open(name, "w") as entry:
+            with zf.open(_zip_entry(name, now), "w") as entry:
                 _write_buffered(entry, pattern_chunks(q[:, i], actuator=act.id, title=title,
                                                       created=created, sharpness=sharpness,
                                                       counts=counts))
@@ -82,8 +90,17 @@ def write_ahap_zip(tl: Timeline, fh: IO[bytes], *, sharpness: float = DEFAULT_SH
             "curve_parameter": "HapticIntensityControl", "curve_max_points": CURVE_MAX_POINTS,
             "files": files,
         }
-        zf.writestr("manifest.json", json.dumps(manifest, indent=1) + "\n")
-        zf.writestr("README.txt", _readme(title, tl.n_ticks, sharpness))
+        zf.writestr(_zip_entry("manifest.json", now), json.dumps(manifest, indent=1) + "\n")
+        zf.writestr(_zip_entry("README.txt", now), _readme(title, tl.n_ticks, sharpness))
+
+
+def _zip_entry(name: str, when: _dt.datetime) -> zipfile.ZipInfo:
+    """A zip member stamped with ``when`` (local time) and mode 0644, so it unpacks readable."""
+    info = zipfile.ZipInfo(name, date_time=when.timetuple()[:6])
+    info.compress_type = zipfile.ZIP_DEFLATED
+    info.create_system = 3  # Unix: unzip tools apply the mode bits below
+    info.external_attr = (stat.S_IFREG | 0o644) << 16
+    return info
 
 
 def pattern_chunks(q: np.ndarray, *, actuator: str, title: str, created: str,
@@ -114,14 +131,12 @@ def pattern_chunks(q: np.ndarray, *, actuator: str, title: str, created: str,
     for start, stop in runs(q != 0):
         for a in range(start, stop, EVENT_MAX_TICKS):
             b = min(stop, a + EVENT_MAX_TICKS)
-            sep = "\n" if first else ",\n"
+            yield ("\n" if first else ",\n") + _event(a, b - a, "1.0", sharp)
             first = False
-            yield (f'{sep}{{"Event": {{"Time": {fmt_ticks_s(a)}, "EventType": "HapticContinuous", '
-                   f'"EventDuration": {fmt_ticks_s(b - a)}, "EventParameters": ['
-                   f'{{"ParameterID": "HapticIntensity", "ParameterValue": 1.0}}, '
-                   f'{{"ParameterID": "HapticSharpness", "ParameterValue": {sharp}}}]}}}}')
             counts["events"] += 1
-            seg = np.concatenate([q[a:b], q[b - 1:b]])  # ticks a..b-1, then held to the event end
+            # ticks a..b-1, then at the event's end the level the chained next event starts with
+            # (tick b), or at a run's end the last tick held
+            seg = np.concatenate([q[a:b], q[b:b + 1] if b < stop else q[b - 1:b]])
             idx = breakpoints(seg)
             for c in range(0, idx.shape[0] - 1, CURVE_MAX_POINTS - 1):
                 pts = idx[c:c + CURVE_MAX_POINTS]
@@ -133,7 +148,18 @@ def pattern_chunks(q: np.ndarray, *, actuator: str, title: str, created: str,
                        f'"Time": {fmt_ticks_s(a + p0)}, "ParameterCurveControlPoints": [{points}]}}}}')
                 counts["curves"] += 1
                 counts["control_points"] += int(pts.shape[0])
+    if first:  # silent throughout: one event that plays nothing keeps the pattern valid
+        yield "\n" + _event(0, min(int(q.shape[0]), EVENT_MAX_TICKS), "0.0", sharp)
+        counts["events"] += 1
     yield "\n]\n}\n"
+
+
+def _event(start: int, ticks: int, intensity: str, sharp: str) -> str:
+    """One ``HapticContinuous`` event from tick ``start`` lasting ``ticks`` ticks (values as JSON text)."""
+    return (f'{{"Event": {{"Time": {fmt_ticks_s(start)}, "EventType": "HapticContinuous", '
+            f'"EventDuration": {fmt_ticks_s(ticks)}, "EventParameters": ['
+            f'{{"ParameterID": "HapticIntensity", "ParameterValue": {intensity}}}, '
+            f'{{"ParameterID": "HapticSharpness", "ParameterValue": {sharp}}}]}}}}')
 
 
 def _num(v: float) -> str:
@@ -164,7 +190,8 @@ def _readme(title: str, n_ticks: int, sharpness: float) -> str:
         "",
         "Each active stretch is HapticContinuous events (at most 30 s each, chained), intensity 1.0,",
         f"sharpness {sharpness:g}. The level per 100 ms tick is on HapticIntensityControl parameter",
-        "curves (linear between control points, at most 16 points per curve). Silence has no events.",
+        "curves (linear between control points, at most 16 points per curve). Silence has no events;",
+        "an actuator silent for the whole film has one continuous event at intensity 0 (plays nothing).",
         "manifest.json lists the files with their actuator, zone and event counts.",
         "",
     ]
