@@ -1,7 +1,7 @@
 """Bad and odd media for the stress suite (tests/test_stress.py), generated on demand.
 
 Every :class:`Case` names one input kind, how to write it into a folder (small files, written
-with :mod:`autohaptics.synth` or directly with PyAV where synth cannot express it: irregular
+with :mod:`autohaptics.testing` or directly with PyAV where synth cannot express it: irregular
 timestamps, rotation metadata, NaN samples, streams of different lengths) and its expected
 outcome: a valid timeline, or a clear error whose one-line message contains ``message``.
 
@@ -55,7 +55,7 @@ class Case:
 # ------------------------------------------------------------------ writers
 def _scene(duration_s: float = CLIP_S, rgb=(200, 40, 30), *, audio=True, moving=True):
     """A textured background with a moving, growing disc and a noise bed plus a 50 Hz boom."""
-    from autohaptics import synth
+    from autohaptics import testing as synth
 
     shapes = (synth.Shape("circle", (250, 250, 240), xy0=(0.25, 0.5), xy1=(0.75, 0.5), size0=(0.2, 0.3),
                           size1=(0.45, 0.7), texture=synth.Texture("checker", 0.25, 0.6)),) if moving else ()
@@ -67,10 +67,10 @@ def _scene(duration_s: float = CLIP_S, rgb=(200, 40, 30), *, audio=True, moving=
 
 def synth_clip(name: str, *, duration_s: float = CLIP_S, rgb=(200, 40, 30), moving: bool = True,
                **kwargs) -> Callable[[Path], Path]:
-    """A builder writing :func:`_scene` with :func:`autohaptics.synth.write_scene` (kwargs go there)."""
+    """A builder writing :func:`_scene` with :func:`autohaptics.testing.write_scene` (kwargs go there)."""
 
     def build(folder: Path) -> Path:
-        from autohaptics import synth
+        from autohaptics import testing as synth
 
         if (folder / name).exists():
             return folder / name
@@ -423,7 +423,7 @@ def case(name: str) -> Case:
 def long_film(path: Path, *, hours: float = 2.0, width: int = 64, height: int = 36, fps: float = 24) -> Path:
     """A long low-resolution film (synth ``long=True``): cuts every 5 minutes, a moving disc and a
     boom every minute, quiet noise throughout."""
-    from autohaptics import synth
+    from autohaptics import testing as synth
 
     d = hours * 3600.0
     seg_s = 300.0

@@ -6,7 +6,9 @@ import cv2
 import numpy as np
 import pytest
 
-from autohaptics import airflow, depth, synth
+from autohaptics import airflow
+from autohaptics import testing as synth
+from autohaptics.airflow import depth
 from autohaptics.errors import ParameterError
 from autohaptics.layout import FAN_COLS, FAN_ROWS
 

@@ -17,7 +17,7 @@ import pytest
 from autohaptics.batch import MANIFEST_NAME, collect_inputs, load_manifest, run_batch
 from autohaptics.cli.main import main
 from autohaptics.errors import ParameterError
-from autohaptics.pipeline import resolve_params
+from autohaptics.params import resolve_params
 from autohaptics.timeline import Timeline
 
 from shared_data import SHARED_CLIPS, shared_clip

@@ -22,7 +22,7 @@ from fastapi.testclient import TestClient
 from autohaptics.chair import VirtualChair
 from autohaptics.server.app import create_app
 from autohaptics.server.settings import Settings
-from autohaptics.synth import Scene, Segment, Tone, write_scene
+from autohaptics.testing import Scene, Segment, Tone, write_scene
 from autohaptics.timeline import Timeline
 
 DURATION_S = 30.0

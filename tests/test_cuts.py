@@ -10,7 +10,8 @@ import cv2
 import numpy as np
 import pytest
 
-from autohaptics import cuts, synth
+from autohaptics import testing as synth
+from autohaptics.airflow import cuts
 from autohaptics.errors import ParameterError
 
 W, H = 128, 72  # the RGB proxy of a 16:9 clip

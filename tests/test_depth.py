@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from autohaptics import depth
+from autohaptics.airflow import depth
 from autohaptics.errors import ParameterError
 from onnx_models import map_model
 

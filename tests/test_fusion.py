@@ -68,7 +68,7 @@ def test_weights_of_a_corner_centroid():
 @pytest.mark.parametrize("actuator, triangle", [("A6", 4), ("A6", 5), ("A6", 11), ("A6", 12), ("A1", 0),
                                                 ("A5", 10), ("A7", 13)])
 def test_centroid_on_a_vertex_gives_that_vertex_one(actuator, triangle):
-    xy = fusion._TRI_XY[triangle][list(fusion._TRI_ACT[triangle]).index(IDX[actuator])]
+    xy = fusion.TRIANGLE_XY[triangle][list(fusion.TRIANGLE_ACTUATORS[triangle]).index(IDX[actuator])]
     with np.errstate(all="raise"):
         w = fusion.triangle_weights(tuple(xy), triangle)
     np.testing.assert_array_equal(w, onehot(actuator))

@@ -71,7 +71,7 @@ def test_area_resize_matches_one_pass_area_averaging(src, size):
     """One axis at a time (fast) gives the one-pass area average within a grey level."""
     rng = np.random.default_rng(3)
     arr = cv2.GaussianBlur(rng.integers(0, 256, src, dtype=np.uint8), (0, 0), 1.5)
-    got = media._area_resize(arr, size)
+    got = media.frames.area_resize(arr, size)
     assert got.shape == (size[1], size[0]) and got.dtype == np.uint8
     one_pass = cv2.resize(arr, size, interpolation=cv2.INTER_AREA if size[0] <= src[1] and size[1] <= src[0]
                           else cv2.INTER_LINEAR)

@@ -3,12 +3,13 @@
 import numpy as np
 import pytest
 
-from autohaptics import synth
+from autohaptics import testing as synth
 from autohaptics.errors import MediaError, ParameterError
 from autohaptics.layout import ACTUATOR_IDS
-from autohaptics.pipeline import (Analysis, GenerateParams, analyse, analysis_compatible, derive, generate,
-                                  resolve_params)
-from autohaptics.presets import apply_overrides
+from autohaptics.params import GenerateParams, resolve_params
+from autohaptics.pipeline import Analysis, analyse, derive, generate
+from autohaptics.pipeline import reusable as analysis_compatible
+from autohaptics.records import apply_overrides
 
 A5 = ACTUATOR_IDS.index("A5")
 

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from autohaptics import intensity as it
-from autohaptics.pipeline import GenerateParams, analyse, derive, generate, resolve_params
+from autohaptics.params import GenerateParams, resolve_params
+from autohaptics.pipeline import analyse, derive, generate
 from autohaptics.timeline import Timeline
 from shared_data import SHARED_CLIPS, shared_clip
 

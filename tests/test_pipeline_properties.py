@@ -30,12 +30,13 @@ from autohaptics import airflow as A
 from autohaptics.intensity import features as af
 from autohaptics import fusion as F
 from autohaptics import intensity as I
-from autohaptics import thermal as T
+from autohaptics import temperature as T
 from autohaptics import timebase as tb
 from autohaptics.layout import ACTUATOR_IDS, FAN_COLS, FAN_ROWS, N_ACTUATORS
-from autohaptics.pipeline import Analysis, GenerateParams, derive, resolve_params
+from autohaptics.params import GenerateParams, resolve_params
+from autohaptics.pipeline import Analysis, derive
 from autohaptics.timeline import NORMALISED_FEATURES, Timeline
-from autohaptics.vision import VideoAnalysis
+from autohaptics.pipeline.video import VideoAnalysis
 
 SETTINGS = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 FEW = settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])

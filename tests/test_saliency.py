@@ -6,7 +6,9 @@ import cv2
 import numpy as np
 import pytest
 
-from autohaptics import saliency, synth
+from autohaptics import testing as synth
+from autohaptics.fusion import saliency
+from autohaptics.fusion.onnx import OnnxMapModel
 from autohaptics.errors import ParameterError
 from onnx_models import flat_input_model, map_model, two_input_model
 
@@ -99,7 +101,7 @@ def test_onnx_input_normalisation_and_channel_order(tmp_path, order, channel, la
     (value / 255 - mean) / std of R (rgb) or B (bgr)."""
     path = map_model(tmp_path / "c0.onnx", kind="channel0", layout=layout)
     mean, std = (0.5, 0.25, 0.125), (0.5, 0.2, 0.1)
-    model = saliency.OnnxMapModel(path, input_size=(40, 30), mean=mean, std=std, channel_order=order)
+    model = OnnxMapModel(path, input_size=(40, 30), mean=mean, std=std, channel_order=order)
     frame = np.zeros((30, 40, 3), np.uint8)
     frame[..., 0], frame[..., 1], frame[..., 2] = 255, 51, 102
     out = model(frame)
@@ -109,18 +111,18 @@ def test_onnx_input_normalisation_and_channel_order(tmp_path, order, channel, la
 
 def test_onnx_fixed_size_model_decides_its_input_size(tmp_path):
     path = map_model(tmp_path / "fixed.onnx", kind="mean", size=(32, 24))
-    model = saliency.OnnxMapModel(path, input_size=(224, 224))
+    model = OnnxMapModel(path, input_size=(224, 224))
     assert model.size == (32, 24) and not model.nhwc
     frame, _ = disc_frame()
     assert model(frame).shape == (H, W)
-    dyn = saliency.OnnxMapModel(map_model(tmp_path / "dyn.onnx", layout="nhwc"), input_size=(50, 40))
+    dyn = OnnxMapModel(map_model(tmp_path / "dyn.onnx", layout="nhwc"), input_size=(50, 40))
     assert dyn.size == (50, 40) and dyn.nhwc
 
 
 @pytest.mark.parametrize("shape", [(1, 1), (1, 30), (30, 1), (16, 16)])
 def test_onnx_output_is_resized_to_any_proxy(tmp_path, shape):
     path = map_model(tmp_path / "m.onnx")
-    model = saliency.OnnxMapModel(path, input_size=(16, 16))
+    model = OnnxMapModel(path, input_size=(16, 16))
     out = model(np.random.default_rng(0).integers(0, 256, shape + (3,), dtype=np.uint8))
     assert out.shape == shape and out.dtype == np.float32 and np.isfinite(out).all()
 
@@ -137,11 +139,11 @@ def test_onnx_errors_are_parameter_errors(tmp_path):
     with pytest.raises(ParameterError, match="not a loadable ONNX model"):
         saliency.make_saliency_backend(saliency.SaliencyParams(backend="onnx", onnx_model=str(garbage)))
     with pytest.raises(ParameterError, match="exactly one input"):
-        saliency.OnnxMapModel(two_input_model(tmp_path / "two.onnx"))
+        OnnxMapModel(two_input_model(tmp_path / "two.onnx"))
     with pytest.raises(ParameterError, match="4-D"):
-        saliency.OnnxMapModel(flat_input_model(tmp_path / "flat.onnx"))
+        OnnxMapModel(flat_input_model(tmp_path / "flat.onnx"))
     with pytest.raises(ParameterError, match="a model file"):
-        saliency.OnnxMapModel(None)
+        OnnxMapModel(None)
 
 
 @pytest.mark.parametrize("kwargs", [{"backend": "cnn"}, {"proxy_width": 4}, {"motion_weight": 2.0}, {"blur": 0.9},

@@ -22,7 +22,7 @@ from autohaptics.server import generated as generated_file
 from autohaptics.server.app import create_app
 from autohaptics.server.binary import decode
 from autohaptics.server.settings import Settings
-from autohaptics.synth import Scene, Segment, Tone, write_scene
+from autohaptics.testing import Scene, Segment, Tone, write_scene
 from autohaptics.timeline import Timeline
 
 DURATION_S = 20.0

@@ -9,9 +9,10 @@ import cv2
 import numpy as np
 import pytest
 
-from autohaptics import media, synth
+from autohaptics import media
+from autohaptics import testing as synth
 from autohaptics.errors import ParameterError
-from autohaptics.synth import Noise, Scene, Segment, Shape, Texture, Tone
+from autohaptics.testing import Noise, Scene, Segment, Shape, Texture, Tone
 
 
 def _scene() -> Scene:

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from autohaptics import thermal
+from autohaptics import temperature as thermal
 from autohaptics.errors import ParameterError
 
 

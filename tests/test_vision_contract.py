@@ -16,7 +16,11 @@ import cv2
 import numpy as np
 import pytest
 
-from autohaptics import airflow, cuts, depth, fusion, saliency, thermal
+from autohaptics import airflow, fusion
+from autohaptics.airflow import cuts
+from autohaptics.airflow import depth
+from autohaptics.fusion import saliency
+from autohaptics import temperature as thermal
 from autohaptics.layout import ACTUATOR_IDS, FAN_COLS, FAN_ROWS
 from onnx_models import map_model
 

@@ -18,7 +18,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from autohaptics import airflow, cuts, fusion, saliency, thermal
+from autohaptics import airflow, fusion
+from autohaptics.airflow import cuts
+from autohaptics.fusion import saliency
+from autohaptics import temperature as thermal
 from autohaptics.layout import ACTUATOR_IDS, N_ACTUATORS
 from onnx_models import map_model
 from test_vision_contract import STAGES, Inputs, check
@@ -96,11 +99,11 @@ def test_empty_saliency_map_puts_everything_on_a5(shape, fill):
 @SETTINGS
 @given(tri=st.integers(0, 13), vertex=st.integers(0, 2), nudge=st.sampled_from([0.0, 1e-15, 1e-9, 1e-6]))
 def test_centroid_on_or_next_to_a_vertex(tri, vertex, nudge):
-    xy = fusion._TRI_XY[tri][vertex] + nudge
+    xy = fusion.TRIANGLE_XY[tri][vertex] + nudge
     with np.errstate(**RAISE):
         w = fusion.triangle_weights(tuple(xy), tri)
     assert np.isfinite(w).all() and w.min() >= 0 and w.sum() == pytest.approx(1.0, abs=1e-12)
-    act = fusion._TRI_ACT[tri][vertex]
+    act = fusion.TRIANGLE_ACTUATORS[tri][vertex]
     if act >= 0 and nudge == 0.0:
         np.testing.assert_array_equal(w, np.eye(N_ACTUATORS)[act])
 
@@ -111,7 +114,7 @@ def test_triangle_weights_anywhere(tri, xy):
     with np.errstate(**RAISE):
         w = fusion.triangle_weights(xy, tri)
     assert np.isfinite(w).all() and w.min() >= 0 and w.sum() == pytest.approx(1.0, abs=1e-12)
-    assert set(np.flatnonzero(w)) <= {a for a in fusion._TRI_ACT[tri] if a >= 0}
+    assert set(np.flatnonzero(w)) <= {a for a in fusion.TRIANGLE_ACTUATORS[tri] if a >= 0}
 
 
 @SETTINGS

@@ -14,10 +14,13 @@ import cv2
 import numpy as np
 import pytest
 
-from autohaptics import airflow, pipeline, synth, vision
+from autohaptics import airflow, pipeline
+from autohaptics import testing as synth
+from autohaptics.params import resolve_params
+from autohaptics.pipeline import video as vision
 from autohaptics.errors import ParameterError
 from autohaptics.layout import ACTUATOR_IDS, FAN_COLS
-from autohaptics.synth import Noise, Scene, Segment, Shape, Texture, Tone
+from autohaptics.testing import Noise, Scene, Segment, Shape, Texture, Tone
 from autohaptics.timebase import tick_of_time
 from autohaptics.timeline import Timeline
 from shared_data import SHARED_CLIPS, shared_clip
@@ -120,7 +123,7 @@ def test_object_rushing_at_the_camera_on_the_right_blows_only_right_fans(generat
 def test_the_flow_proxy_follows_the_picture_width(tmp_path, overrides, width):
     # 640 px wide: 1/8 of it is 80 px, so the default keeps its 160 px; half of it is 320 px
     path = synth.write_scene(tmp_path / "approach.mp4", SCENES["approach_right"], width=640, height=360)
-    params, _ = pipeline.resolve_params("balanced", overrides)
+    params, _ = resolve_params("balanced", overrides)
     tl = pipeline.generate(path, params)
     assert tl.stats["video"]["flow"]["proxy_width"] == width
     assert tl.generator["params"]["flow"]["proxy_width"] == 160  # the knob as set; the stats say what ran
@@ -149,11 +152,11 @@ def test_a_fade_in_of_a_still_picture_has_no_motion_even_in_the_reference(tmp_pa
     scene = Scene(2.5, background=(Segment(0, 2.0, (2, 2, 2), rgb_end=(200, 190, 170), texture=tex(11, 0.05, 0.5)),
                                    Segment(2.0, 2.5, (200, 190, 170), texture=tex(11, 0.05, 0.5))))
     path = synth.write_scene(tmp_path / "fade.mp4", scene, width=320, height=180, fps=24, audio=False)
-    params, _ = pipeline.resolve_params("reference")
+    params, _ = resolve_params("reference")
     tl = pipeline.generate(path, params, preset="reference")
     assert not tl.fans.any()
     assert float(np.max(tl.features["motion_fw_per_s"])) == 0.0
-    off, _ = pipeline.resolve_params("reference", {"airflow.flat_std": 0, "airflow.fade_min_step": 255})
+    off, _ = resolve_params("reference", {"airflow.flat_std": 0, "airflow.fade_min_step": 255})
     unguarded = pipeline.analyse(path, off).video
     assert float(unguarded.motion.max()) > FLOOR, unguarded.motion
 
@@ -280,7 +283,7 @@ def test_sintel_encodes_agree_on_fan_cells(sintel):
 
 # ---------------------------------------------------------------- stride (the fast preset)
 class _Timed:
-    """A decoded frame as :func:`vision._centre_frames` sees it: its time only."""
+    """A decoded frame as :func:`vision.centre_frames` sees it: its time only."""
 
     def __init__(self, t: float):
         self.time_s = t
@@ -289,7 +292,7 @@ class _Timed:
 @pytest.mark.parametrize("fps,stride,n", [(60, 2, 20), (24, 2, 25), (30, 3, 10), (60, 1, 7), (5, 2, 8), (15, 4, 9)])
 def test_each_group_of_ticks_gets_the_frame_nearest_its_centre(fps, stride, n):
     frames = [_Timed(i / fps) for i in range(int(n * 0.1 * fps) + 3)]  # a few past the last tick
-    out = list(vision._centre_frames(iter(frames), n, stride))
+    out = list(vision.centre_frames(iter(frames), n, stride))
     assert [f for f, _ in out] == frames  # every frame once, in order
     chosen = {k: f.time_s for f, k in out if k is not None}
     expected = {}
@@ -304,7 +307,7 @@ def test_each_group_of_ticks_gets_the_frame_nearest_its_centre(fps, stride, n):
 @pytest.mark.parametrize("stride", [2, 3])
 def test_a_stride_analyses_one_tick_per_group_and_the_group_shares_its_values(generated, tmp_path, stride):
     path = synth.write_scene(tmp_path / "boom.mp4", SCENES["left_object_boom"])
-    params, _ = pipeline.resolve_params("balanced", {"video.stride": str(stride)})
+    params, _ = resolve_params("balanced", {"video.stride": str(stride)})
     analysis = pipeline.analyse(path, params)
     v = analysis.video
     n = v.motion.size
@@ -337,13 +340,13 @@ def test_a_stride_analyses_one_tick_per_group_and_the_group_shares_its_values(ge
 
 
 def test_the_fast_preset_reads_the_picture_for_every_third_tick():
-    params, _ = pipeline.resolve_params("fast", {})
+    params, _ = resolve_params("fast", {})
     assert params.video.stride == 3 and params.video.decode == "sparse"
-    assert pipeline.resolve_params("fast", {"video.stride": "1"})[0].video.stride == 1  # still overridable
+    assert resolve_params("fast", {"video.stride": "1"})[0].video.stride == 1  # still overridable
 
 
 @pytest.mark.parametrize("overrides", [{"video.stride": "0"}, {"video.stride": "11"}, {"video.stride": "1.5"},
                                        {"video.stride": "2", "video.analysis": "every"}])
 def test_stride_out_of_range_or_with_every_frame_analysis_is_refused(overrides):
     with pytest.raises(ParameterError, match="video.stride"):
-        pipeline.resolve_params("balanced", overrides)
+        resolve_params("balanced", overrides)

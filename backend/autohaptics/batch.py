@@ -172,7 +172,7 @@ def _safe_stem(src: Path) -> str:
 # ----------------------------------------------------------------- manifest
 def params_digest(params: Any, preset: str) -> str:
     """SHA-256 of the resolved parameters and the preset name (what makes a timeline up to date)."""
-    from autohaptics.presets import params_to_dict
+    from autohaptics.records import params_to_dict
 
     doc = {"params": params_to_dict(params), "preset": preset}
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
@@ -212,7 +212,7 @@ def _recorded_sha(output: Path, entry: dict | None, source: Path, digest: str, p
 
 def _timeline_sha(output: Path, params: Any, preset: str) -> str | None:
     """``source.sha256`` of a timeline file whose ``generator`` matches ``params`` and ``preset``."""
-    from autohaptics.presets import params_to_dict
+    from autohaptics.records import params_to_dict
 
     try:
         with open(output, encoding="utf-8") as fh:
@@ -280,6 +280,7 @@ def process_film(index: int, source: str, params: Any, preset: str, skip_sha: st
     Returns {"status": "skipped", "sha256"} when the file's SHA-256 equals ``skip_sha``, else
     {"status": "done", "timeline", "seconds"}. Raises the pipeline's errors for unusable input.
     """
+    from autohaptics.heap import release_between_passes
     from autohaptics.pipeline import file_sha256, generate
 
     reporter = _Reporter(index, topic)
@@ -292,7 +293,8 @@ def process_film(index: int, source: str, params: Any, preset: str, skip_sha: st
             raise AutohapticsError(f"{source}: cannot read ({exc.strerror or exc})") from None
         if sha == skip_sha:
             return {"status": "skipped", "sha256": sha}
-    tl = generate(source, params, preset=preset, progress=reporter, cancel=_cancel)
+    tl = generate(source, params, preset=preset, progress=reporter, cancel=_cancel,
+                  between_passes=release_between_passes)
     return {"status": "done", "timeline": tl, "seconds": time.perf_counter() - t0}
 
 
@@ -386,8 +388,8 @@ def run_batch(inputs: Iterable[str | os.PathLike], out_dir: str | os.PathLike, p
     """Generate a timeline per film of ``inputs`` into ``out_dir`` (created when missing).
 
     inputs : files, folders and glob patterns (:func:`collect_inputs`).
-    params, preset : :class:`~autohaptics.pipeline.GenerateParams` and the preset name they were
-        resolved from (:func:`~autohaptics.pipeline.resolve_params`); default: the default preset.
+    params, preset : :class:`~autohaptics.params.GenerateParams` and the preset name they were
+        resolved from (:func:`~autohaptics.params.resolve_params`); default: the default preset.
     jobs : local worker processes (>= 1); ignored when ``scheduler`` is given.
     scheduler : address of a Dask distributed scheduler (``tcp://HOST:PORT``): one task per film
         on that cluster instead of local processes.
@@ -396,8 +398,7 @@ def run_batch(inputs: Iterable[str | os.PathLike], out_dir: str | os.PathLike, p
     scheduler address); film failures are in the report, never raised. Ctrl+C cancels the
     running films (KeyboardInterrupt propagates); films finished so far keep their timelines.
     """
-    from autohaptics.pipeline import resolve_params
-    from autohaptics.presets import DEFAULT_PRESET
+    from autohaptics.params import DEFAULT_PRESET, resolve_params
 
     preset = preset or DEFAULT_PRESET
     if params is None:

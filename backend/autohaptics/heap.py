@@ -102,5 +102,12 @@ def release_library_pages() -> int:
     return released
 
 
-__all__ = ["MMAP_THRESHOLD_BYTES", "bound_heap", "clean_file_mappings", "release_free_memory",
-           "release_library_pages"]
+
+
+
+def release_between_passes() -> None:
+    """What a process that runs the pipeline does between its audio and video passes: the decoder's
+    and the feature chunks' freed heap back to the OS, and the library pages only the finished pass
+    touched (e.g. LLVM's code, which ran only to load the compiled kernels) dropped."""
+    release_free_memory()
+    release_library_pages()

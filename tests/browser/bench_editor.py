@@ -5,7 +5,7 @@
 
 What it does, through the real service and Debian's Chromium:
 
-1. Writes a 2-hour low-resolution film with sound (autohaptics.synth, cached in out/bench/), uploads
+1. Writes a 2-hour low-resolution film with sound (autohaptics.testing, cached in out/bench/), uploads
    it to a private ``autohaptics serve`` and lets the real pipeline generate its timeline (the
    project is kept in out/bench/ and reused by later runs). A few edits give every lane content:
    temperature points across the film, fans in scenes, markers.
@@ -52,7 +52,7 @@ VIEWPORT = {"width": 1440, "height": 900}
 
 def write_film(path: Path) -> None:
     """A 2-hour scene: 30 s colour segments, a boom, a blip or a whoosh every 7-10 s."""
-    from autohaptics.synth import Noise, Scene, Segment, Tone, write_scene
+    from autohaptics.testing import Noise, Scene, Segment, Tone, write_scene
 
     colours = [(40, 45, 60), (180, 50, 40), (40, 150, 60), (200, 180, 60), (60, 80, 170)]
     segments = tuple(Segment(t, min(DURATION_S, t + 30.0), colours[i % len(colours)])

@@ -97,7 +97,7 @@ def _md(text: str) -> str:
 def parameter_rows() -> list[tuple[str, str, list[tuple[str, str, str]]]]:
     """[(section title, section summary, [(dotted name, default, meaning)])]: GenerateParams' own
     fields first, then one section per nested params dataclass, in field order."""
-    from autohaptics.pipeline import GenerateParams
+    from autohaptics.params import GenerateParams
 
     top = GenerateParams()
     nested = [f for f in dataclasses.fields(top) if dataclasses.is_dataclass(getattr(top, f.name))]
@@ -162,7 +162,7 @@ def _all_fields(obj: typing.Any, prefix: str = "") -> list[str]:
 
 
 def test_guide_parameter_table_lists_every_parameter_with_its_default_and_meaning():
-    from autohaptics.pipeline import GenerateParams
+    from autohaptics.params import GenerateParams
 
     listed = {name: (default, meaning) for _, _, rows in parameter_rows() for name, default, meaning in rows}
     fields = _all_fields(GenerateParams())
@@ -179,7 +179,7 @@ def test_guide_parameter_table_lists_every_parameter_with_its_default_and_meanin
 
 
 def test_guide_presets_table_names_every_knob_each_preset_sets():
-    from autohaptics.presets import PRESETS
+    from autohaptics.params import PRESETS
 
     text = GUIDE.read_text(encoding="utf-8")
     for name, overrides in PRESETS.items():
@@ -191,8 +191,8 @@ def test_guide_presets_table_names_every_knob_each_preset_sets():
 
 def test_guide_defaults_are_accepted_back_by_set():
     """Every default as printed in the table, passed back through ``--set``, gives the default."""
-    from autohaptics.pipeline import GenerateParams
-    from autohaptics.presets import apply_overrides
+    from autohaptics.params import GenerateParams
+    from autohaptics.records import apply_overrides
 
     table = {name: default for _, _, rows in parameter_rows() for name, default, _ in rows}
     overrides = {name: value for name, value in table.items() if name != "intensity.thresholds"}

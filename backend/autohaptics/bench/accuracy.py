@@ -64,7 +64,7 @@ class Config:
 def parse_config(text: str) -> Config:
     """``NAME:k=v,k=v`` -> Config. ``preset=NAME`` picks the base preset (default balanced); a piece
     without ``=`` continues the previous value (``tracks=vibration,fans``). Validated here."""
-    from autohaptics.pipeline import resolve_params
+    from autohaptics.params import resolve_params
 
     name, sep, rest = text.partition(":")
     name = name.strip()
@@ -502,7 +502,7 @@ def plot(res: dict, path: Path) -> Path:
 # ------------------------------------------------------------------ long clips
 def synth_clip(out_dir: Path, spec: str) -> Path:
     """``WxH@FPS:SECONDS`` -> a synthetic clip (the README sample scene repeated every 10 s)."""
-    from autohaptics import synth
+    from autohaptics import testing as synth
 
     try:
         size, seconds = spec.split(":")

@@ -6,13 +6,14 @@ import sys
 from pathlib import Path
 
 from autohaptics.errors import ParameterError
-from autohaptics.presets import PRESETS, parse_assignments
+from autohaptics.records import parse_assignments
 from autohaptics.progress import ProgressBar
 
 
 def add_generation_options(p) -> None:
     """Options shared by every command that generates (generate, batch, bench)."""
-    from autohaptics.pipeline import MODES
+    from autohaptics.fusion import MODES
+    from autohaptics.params import PRESETS
 
     p.add_argument("--mode", choices=MODES, default=None,
                    help="vibration rendering (the thesis's study conditions); default from the params")
@@ -33,7 +34,7 @@ def add_generation_options(p) -> None:
 
 def params_from_args(args):
     """(GenerateParams, preset name) from parsed generation options."""
-    from autohaptics.pipeline import resolve_params
+    from autohaptics.params import resolve_params
 
     overrides = parse_assignments(args.overrides)
     if args.mode:
@@ -57,6 +58,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    from autohaptics.heap import release_between_passes
     from autohaptics.pipeline import generate
 
     params, preset = params_from_args(args)
@@ -67,7 +69,7 @@ def run(args) -> int:
         raise ParameterError(f"{out.parent}: output folder does not exist")
     bar = ProgressBar(Path(args.video).name) if not args.quiet else None
     try:
-        tl = generate(args.video, params, preset=preset, progress=bar)
+        tl = generate(args.video, params, preset=preset, progress=bar, between_passes=release_between_passes)
     finally:
         if bar:
             bar.close()

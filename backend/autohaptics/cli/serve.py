@@ -67,7 +67,7 @@ def _open_sample(url: str) -> None:
     """Open the editor on the sample project: reuse it when the data folder has it, otherwise write
     the sample clip and upload it through the API once /health answers."""
     try:
-        from autohaptics.synth import sample_clip
+        from autohaptics.testing import sample_clip
     except ImportError as exc:
         print(f"autohaptics: no sample clip generator ({exc}); open {url} and upload a film", file=sys.stderr)
         return

@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -37,6 +38,7 @@ from autohaptics.intensity import loudness as _loudness
 from autohaptics.intensity import low_energy as _low_energy
 from autohaptics.intensity import sharpness as _sharpness
 from autohaptics.errors import ParameterError
+from autohaptics.records import ANALYSIS
 from autohaptics.progress import CancelToken, check_cancel
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE, FRAME_S, SAMPLES_PER_FRAME
 
@@ -64,6 +66,8 @@ class AudioFeatureParams:
     low_energy_order : int; Butterworth order of the low-energy low-pass (default 4).
     frame_loudness : "max" (default) or "mean" of the ten 2 ms N(t) values of a frame.
     """
+
+    STAGE: ClassVar[str] = ANALYSIS
 
     pa_per_unit: float = 3.5566
     field: str = "free"

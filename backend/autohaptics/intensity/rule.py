@@ -13,10 +13,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
 from autohaptics.errors import ParameterError
+from autohaptics.records import DERIVE
 from autohaptics.timebase import frames_to_ticks
 
 FEATURES = ("sharpness", "booming", "low_energy", "loudness")
@@ -38,6 +40,8 @@ class IntensityParams:
         and booming describe a sound's colour, not its level, so without a gate the hiss of a quiet
         scene can drive the chair at full sharpness. 0 reproduces the thesis.
     """
+
+    STAGE: ClassVar[str] = DERIVE
 
     thresholds: dict = field(default_factory=lambda: dict(DEFAULT_THRESHOLDS))
     normaliser: str = "max"

@@ -100,6 +100,7 @@ def run_job(spec: dict, events, cancel) -> dict:
     Raises CancelledError when ``cancel`` is set, MediaError / ParameterError for unusable input.
     """
     from autohaptics import pipeline
+    from autohaptics.heap import release_between_passes
     from autohaptics.server.generated import save_npz
     from autohaptics.server.timelines import derive_timeline, params_from_doc
 
@@ -107,7 +108,7 @@ def run_job(spec: dict, events, cancel) -> dict:
     _send(events, ("started", spec["job_id"], started))
     params, _ = params_from_doc(spec["params"])
     analysis = pipeline.analyse(spec["media_path"], params, progress=_Reporter(events, spec["job_id"]),
-                                cancel=cancel)
+                                cancel=cancel, between_passes=release_between_passes)
     check_cancel(cancel)
     work = Path(spec["work_dir"])
     if not work.is_dir():  # the project was deleted meanwhile
@@ -439,7 +440,7 @@ class JobRunner:
         work = self.store.job_work_dir(live.job_id)
         analysis = pipeline.Analysis.load(work / "analysis.npz")
         p, _ = params_from_doc(current)
-        if not pipeline.analysis_compatible(analysis, p):
+        if not pipeline.reusable(analysis, p):
             return live.params
         save_npz(derive_timeline(analysis, current, name=live.name), work / GENERATED)
         return current

@@ -1,7 +1,7 @@
 """A project's timelines: parameters, the generated timeline, re-deriving, composing with edits.
 
 - :func:`resolve` merges requested parameters into a project's stored ones and validates them
-  through :func:`pipeline.resolve_params` (ParameterError -> 400).
+  through :func:`autohaptics.params.resolve_params` (ParameterError -> 400).
 - :class:`Timelines` loads the generated timeline (``generated.npz``) and the feature cache (kept
   in memory while their files do not change), re-derives from the cache without decoding (the
   derived timeline stays in memory), composes ``apply_ops(generated, ops[:cursor])`` (kept per
@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from autohaptics import pipeline
+from autohaptics.params import GenerateParams, resolve_params
 from autohaptics.errors import ParameterError
 from autohaptics.importers import parse_timeline
 from autohaptics.server import binary
@@ -44,16 +45,16 @@ GZIP_LEVEL = 1  # the fans block is mostly zeros: level 1 already shrinks it ~10
 DEFAULT_PARAMS = {"preset": "balanced", "mode": None, "thresholds": {}, "overrides": {}}
 
 
-def params_from_doc(doc: dict) -> tuple[pipeline.GenerateParams, str]:
+def params_from_doc(doc: dict) -> tuple[GenerateParams, str]:
     """(GenerateParams, preset) for stored parameters."""
     overrides = dict(doc.get("overrides") or {})
     if doc.get("mode"):
         overrides["mode"] = doc["mode"]
-    return pipeline.resolve_params(doc.get("preset") or "balanced", overrides, doc.get("thresholds") or {})
+    return resolve_params(doc.get("preset") or "balanced", overrides, doc.get("thresholds") or {})
 
 
 def resolve(current: dict | None, *, preset: str | None = None, mode: str | None = None,
-            thresholds: dict | None = None, overrides: dict | None = None) -> tuple[dict, pipeline.GenerateParams]:
+            thresholds: dict | None = None, overrides: dict | None = None) -> tuple[dict, GenerateParams]:
     """New stored parameters: each given field replaces the current one whole, the others stay."""
     cur = {**DEFAULT_PARAMS, **(current or {})}
     doc = {
@@ -214,7 +215,7 @@ class Timelines:
         if analysis is None:
             return None
         params, _ = params_from_doc(doc)
-        if not pipeline.analysis_compatible(analysis, params):
+        if not pipeline.reusable(analysis, params):
             return None
         project = self.store.get_project(pid)
         tl = derive_timeline(analysis, doc, name=project["name"])

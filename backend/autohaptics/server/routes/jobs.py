@@ -8,7 +8,8 @@ import json
 from fastapi import APIRouter, Body, Response
 from fastapi.responses import StreamingResponse
 
-from autohaptics import pipeline
+from autohaptics.params import analysis_key
+from autohaptics.records import params_to_dict
 from autohaptics.server.deps import RunnerDep, StoreDep, TimelinesDep
 from autohaptics.server.jobs import TERMINAL
 from autohaptics.server.schemas import JobAccepted, JobOut, ParamsIn, ParamsOut
@@ -62,7 +63,7 @@ def _put_params(project_id: str, body: ParamsIn, response: Response, store, runn
 
 
 def _same_analysis(a: dict, b: dict) -> bool:
-    return pipeline.analysis_key(params_from_doc(a)[0]) == pipeline.analysis_key(params_from_doc(b)[0])
+    return analysis_key(params_to_dict(params_from_doc(a)[0])) == analysis_key(params_to_dict(params_from_doc(b)[0]))
 
 
 @router.get("/api/jobs/{job_id}", response_model=JobOut)

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from autohaptics import __version__, intensity, layout, pipeline
+from autohaptics import __version__, fusion, intensity, layout
 from autohaptics.export import FORMATS
-from autohaptics.presets import DEFAULT_PRESET, PRESETS
+from autohaptics.params import DEFAULT_PRESET, PRESETS
 from autohaptics.server import edits
 from autohaptics.server.deps import SettingsDep
 from autohaptics.server.schemas import ConfigOut, HealthOut
@@ -27,7 +27,7 @@ def config(settings: SettingsDep) -> ConfigOut:
         version=__version__,
         presets=list(PRESETS),
         default_preset=DEFAULT_PRESET,
-        modes=list(pipeline.MODES),
+        modes=list(fusion.MODES),
         default_thresholds=dict(intensity.DEFAULT_THRESHOLDS),
         features=list(intensity.FEATURES),
         normalised_features=sorted(NORMALISED_FEATURES),

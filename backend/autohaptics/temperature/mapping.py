@@ -24,12 +24,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
-import cv2
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.layout import DEVICE_TEMP_MAX_C, DEVICE_TEMP_MIN_C, TEMP_HIGH_C, TEMP_LOW_C, TEMP_NEUTRAL_C
+from autohaptics.records import DERIVE
+from autohaptics.layout import TEMP_HIGH_C, TEMP_LOW_C, TEMP_NEUTRAL_C
+from autohaptics.temperature.device import slew_limit
 
 _RED = np.array([255.0, 0.0, 0.0])
 _GREEN = np.array([0.0, 255.0, 0.0])
@@ -48,6 +50,8 @@ class ThermalParams:
     slew_c_per_s : rate limit of the generated curve, C per second (None = no limit; the device
         applies its own limit too).
     """
+
+    STAGE: ClassVar[str] = DERIVE
 
     temp_low: float = TEMP_LOW_C
     temp_high: float = TEMP_HIGH_C
@@ -71,18 +75,6 @@ class ThermalParams:
             raise ParameterError(f"thermal.slew_c_per_s must be positive (C/s) or None, got {self.slew_c_per_s!r}")
 
 
-def mean_colour(rgb: np.ndarray) -> np.ndarray:
-    """Mean RGB of a frame. rgb uint8 [shape=(h, w, 3)] -> float64 [shape=(3,)], 0..255.
-
-    OpenCV's per-channel mean for uint8 frames (~10 us on a 128 px proxy, 50x numpy's float64
-    reduction: it runs once per tick, 72 000 times for a 2-hour film).
-    """
-    rgb = np.asarray(rgb)
-    if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.size == 0:
-        raise ParameterError(f"expected an RGB frame of shape (h, w, 3), got {rgb.shape}")
-    if rgb.dtype == np.uint8:
-        return np.array(cv2.mean(np.ascontiguousarray(rgb))[:3], dtype=np.float64)
-    return rgb.reshape(-1, 3).mean(axis=0, dtype=np.float64)
 
 
 def warmth_ratio(mean_rgb: np.ndarray) -> np.ndarray:
@@ -112,28 +104,10 @@ def temperature_target(mean_rgb: np.ndarray, *, params: ThermalParams = ThermalP
     return np.clip(t, params.temp_low, params.temp_high)
 
 
-def slew_limit(temps: np.ndarray, *, max_rate_c_per_s: float, tick_s: float = 0.1,
-               start_c: float | None = None) -> np.ndarray:
-    """Limit the change between consecutive ticks to ``max_rate_c_per_s * tick_s``.
-
-    temps float [shape=(n,)], C. start_c : the element's temperature before tick 0 (default temps[0]).
-    """
-    x = np.asarray(temps, dtype=np.float64)
-    if x.size == 0:
-        return x.copy()
-    if not (max_rate_c_per_s > 0 and tick_s > 0):
-        raise ParameterError("slew_limit needs a positive rate and tick")
-    step = float(max_rate_c_per_s) * float(tick_s)
-    out = np.empty_like(x)
-    cur = float(x[0] if start_c is None else start_c)
-    for i, target in enumerate(x.tolist()):
-        cur += min(step, max(-step, target - cur))
-        out[i] = cur
-    return out
-
-
-def clamp_to_device(temps: np.ndarray, *, min_c: float = DEVICE_TEMP_MIN_C, max_c: float = DEVICE_TEMP_MAX_C) -> np.ndarray:
-    """Clamp a target curve to a device's safe range (default 18..40 C)."""
-    if not min_c <= max_c:
-        raise ParameterError(f"device range must have min <= max, got {min_c}, {max_c}")
-    return np.clip(np.nan_to_num(np.asarray(temps, dtype=np.float64), nan=TEMP_NEUTRAL_C), min_c, max_c)
+def temperature_track(mean_rgb: np.ndarray, *, params: ThermalParams = ThermalParams(), tick_s: float = 0.1) -> np.ndarray:
+    """The generated temperature curve, C [shape=(n,)]: the target of each tick's mean colour
+    [shape=(n, 3)], rate-limited when ``params.slew_c_per_s`` is set, within [temp_low, temp_high]."""
+    target = temperature_target(np.asarray(mean_rgb, dtype=np.float64), params=params)
+    if params.slew_c_per_s:
+        target = slew_limit(target, max_rate_c_per_s=params.slew_c_per_s, tick_s=tick_s)
+    return np.clip(target, float(params.temp_low), float(params.temp_high))

@@ -1,41 +1,11 @@
-"""Quality presets and parameter overrides, with one meaning across the CLI, the API and the editor.
+"""Frozen parameter records: which fields the analysis depends on, dotted overrides, and the JSON
+round trip.
 
-A preset is a set of dotted overrides on :class:`autohaptics.pipeline.GenerateParams`
-(``"flow.method": "farneback"``). Every knob a preset sets stays individually overridable
-(``--set flow.method=dis`` on the CLI, ``overrides`` in the API) and the resolved values are
-recorded in the timeline's ``generator.params``.
-
-- ``reference``: the slowest, most faithful configuration: exact ISO 532-1 filter bank, every
-  frame decoded and analysed at the largest sensible proxy (640 px flow, a third of the picture's
-  width above 1920 px; 320 px saliency and depth),
-  dense DIS flow at its "medium" quality, no skipping.
-  Farneback was the planned reference flow; measured, it is the less faithful of the two here:
-  on the Sintel trailer at 640 px it reads a median 0.23 of DIS's motion (DIS at 160 and 640 px
-  agree within 1 %), on smooth synthetic pans it reads close to zero, and it leaves up to 0.6 px
-  of flow on identical frames. It stays available as ``flow.method=farneback`` and the accuracy
-  benchmark can run it as an extra configuration.
-- ``balanced`` (default): FFmpeg decodes only the reference frames (on H.264 the B-frames are
-  skipped: about half the decoding work; the frames it decodes are exact; VP8 and intra-only
-  video decode every frame), one frame (plus its successor for flow) per 100 ms tick, flow on a
-  proxy an eighth of the picture's width and at least 160 px wide (240 px at 1080p; see
-  ``FlowParams.proxy_fraction``),
-  256 px saliency (the spectral residual itself always sees the full frame's luma averaged to
-  64 x 64; the width sets where the salient shape is cut: measured against the reference on the
-  30 s 1080p BBB clip, vibration MAE 0.023 at 192 px and 0.012 at 256 with every frame decoded,
-  0.014 at 256 and 0.012 at 320 with reference frames only), 128 px depth, skipping on.
-- ``fast``: ``video.stride=3``: the picture is read for every third tick (the frame nearest the
-  centre of each group of three ticks, its values shared by all three; the audio stays at 10 Hz),
-  which cuts the proxies, flow, saliency and depth to a third; and ``video.decode=sparse``: from
-  40 fps up FFmpeg decodes only the I- and P-frames (every B-frame skipped, reference B-frames
-  too, which leaves the P-frames that used one approximate), below 40 fps only the non-reference
-  frames; the deblocking filter is skipped either way; 128 px flow (a sixteenth of the picture's
-  width above 2048 px) at DIS "fast", 128 px
-  saliency, 64 px depth. On the 30 s 1080p60 BBB clip that is 495 of 1,800 frames decoded
-  (balanced: 930), and decoding them alone takes 1.7 s of fast's 3 s. Measured against the
-  reference on the 2 s clip: vibration MAE 0.026 with non-reference skipping only, 0.064 with
-  sparse decoding, 0.097 with a stride of 2 and 0.093 with 3. On the Sintel trailer: 0.006 in
-  balanced, 0.024 at stride 2, 0.023 at stride 3, with onset F1 0.97, 0.92 and 0.91. A stride of
-  3 instead of 2 took 9-10 % off fast's time on both clips; see docs/BENCHMARKS.md.
+Tags: a record's ``STAGE`` class attribute says whether changing its fields needs the film analysed
+again (ANALYSIS) or only a re-derive from the cached analysis (DERIVE); a field's
+``metadata=stage(...)`` overrides it. Overrides have one meaning across the CLI, the API and the
+editor: ``"flow.method": "dis"`` replaces that field of a copy; string values (from the command
+line) are converted to the field's type; an unknown name is a ParameterError naming the known ones.
 """
 
 from __future__ import annotations
@@ -49,38 +19,18 @@ from typing import Any
 
 from autohaptics.errors import ParameterError
 
-PRESETS: dict[str, dict[str, Any]] = {
-    "reference": {
-        "audio.loudness_method": "iso",
-        "video.analysis": "every",
-        "video.decode": "full",
-        "video.skip": False,
-        "saliency.proxy_width": 320,
-        "depth.proxy_width": 320,
-        "flow.method": "dis",
-        "flow.dis_preset": "medium",
-        "flow.proxy_width": 640,
-        "flow.proxy_fraction": 1 / 3,
-    },
-    "balanced": {},
-    "fast": {
-        "video.decode": "sparse",
-        "video.stride": 3,
-        "saliency.proxy_width": 128,
-        "depth.proxy_width": 64,
-        "flow.proxy_width": 128,
-        "flow.proxy_fraction": 0.0625,
-        "flow.dis_preset": "fast",
-    },
-}
-DEFAULT_PRESET = "balanced"
+ANALYSIS, DERIVE = "analysis", "derive"
 
 
-def preset_overrides(name: str) -> dict[str, Any]:
-    """The dotted overrides a preset applies (a copy)."""
-    if name not in PRESETS:
-        raise ParameterError(f"unknown preset {name!r}; choose one of {sorted(PRESETS)}")
-    return dict(PRESETS[name])
+def stage(name: str) -> dict:
+    """Field metadata tagging one field ANALYSIS or DERIVE against its record's ``STAGE``."""
+    return {"stage": name}
+
+
+def stage_of(record: Any, name: str) -> str:
+    """ANALYSIS or DERIVE: what a change of ``record``'s field ``name`` needs."""
+    f = {f.name: f for f in dataclasses.fields(record)}[name]
+    return f.metadata.get("stage", getattr(record, "STAGE", DERIVE))
 
 
 def apply_overrides(params: Any, overrides: dict[str, Any]) -> Any:

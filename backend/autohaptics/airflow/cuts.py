@@ -28,11 +28,13 @@ pair is computed across the cut.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import cv2
 import numpy as np
 
 from autohaptics.errors import ParameterError
+from autohaptics.records import ANALYSIS
 
 _BINS = 32  # luma bins of a gray frame
 _RGB_BINS = 16  # bins per channel of an RGB frame
@@ -47,6 +49,8 @@ class CutParams:
     flat_std : thumbnail standard deviation (grey levels) below which a frame is flat (4).
     flat_jump : mean brightness jump (grey levels) that makes a cut next to a flat frame (40).
     """
+
+    STAGE: ClassVar[str] = ANALYSIS
 
     hist_threshold: float = 0.25
     corr_threshold: float = 0.5

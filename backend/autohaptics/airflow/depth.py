@@ -49,19 +49,21 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import ClassVar
 
 import cv2
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.saliency import OnnxMapModel
+from autohaptics.records import ANALYSIS
+from autohaptics.fusion.onnx import OnnxFields
 
 BACKENDS = ("embedded", "onnx")
 DepthBackend = Callable[[np.ndarray], np.ndarray]
 
 
 @dataclass(frozen=True)
-class DepthParams:
+class DepthParams(OnnxFields):
     """Depth backend and the embedded cue weights.
 
     backend : "embedded" | "onnx".
@@ -72,9 +74,11 @@ class DepthParams:
         an approach with 4 s to contact).
     expansion_reach : the expansion cue reaches this far (frame widths) beyond where it is
         measured, so an expanding object's boundary counts as near too (0 = not at all).
-    onnx_model, onnx_input_size (w, h), onnx_mean, onnx_std (0..1 scale), onnx_channel_order.
+    onnx_* : the ONNX model (backend "onnx"; :class:`~autohaptics.fusion.onnx.OnnxFields`).
     output_kind : "depth" (larger = farther) | "disparity" (larger = nearer) for the ONNX output.
     """
+
+    STAGE: ClassVar[str] = ANALYSIS
 
     backend: str = "embedded"
     proxy_width: int = 128
@@ -83,11 +87,7 @@ class DepthParams:
     w_expansion: float = 0.4
     expansion_full: float = 0.5
     expansion_reach: float = 0.05
-    onnx_model: str | None = None
     onnx_input_size: tuple[int, int] = (256, 256)
-    onnx_mean: tuple[float, float, float] = (0.485, 0.456, 0.406)
-    onnx_std: tuple[float, float, float] = (0.229, 0.224, 0.225)
-    onnx_channel_order: str = "rgb"
     output_kind: str = "disparity"
 
     def __post_init__(self):
@@ -99,8 +99,7 @@ class DepthParams:
             raise ParameterError("depth cue weights must be >= 0")
         if self.backend == "embedded" and self.w_position + self.w_detail + self.w_expansion <= 0:
             raise ParameterError("the embedded depth backend needs at least one positive cue weight")
-        if self.backend == "onnx" and not self.onnx_model:
-            raise ParameterError("depth.backend 'onnx' needs depth.onnx_model (path of an .onnx file)")
+        self.check_onnx("depth", self.backend == "onnx")
         if not (0.0 < float(self.expansion_full) < 1e6):
             raise ParameterError(f"depth.expansion_full must be a positive rate (1/s), got {self.expansion_full!r}")
         if not (0.0 <= float(self.expansion_reach) <= 0.5):
@@ -112,8 +111,7 @@ class DepthParams:
 def make_depth_backend(params: DepthParams) -> DepthBackend | None:
     """The ONNX model (loaded once), or None for the embedded cues."""
     if params.backend == "onnx":
-        return OnnxMapModel(params.onnx_model, input_size=params.onnx_input_size, mean=params.onnx_mean,
-                            std=params.onnx_std, channel_order=params.onnx_channel_order, what="depth")
+        return params.onnx_map_model("depth")
     return None
 
 

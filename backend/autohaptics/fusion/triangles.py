@@ -21,19 +21,21 @@ of connected regions smaller than ``min_speck_area`` of the frame.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 from functools import lru_cache
 
 import cv2
 import numpy as np
 
 from autohaptics.errors import ParameterError
+from autohaptics.records import ANALYSIS
 from autohaptics.layout import ACTUATOR_IDS, CENTRE_ACTUATOR, N_ACTUATORS, TRIANGLES, vertex_xy
 
 VARIANTS = ("paper", "mass")
 _N_TRI = len(TRIANGLES)
 # (14, 3) actuator index of each triangle vertex, -1 for a corner; (14, 3, 2) vertex coordinates
-_TRI_ACT = np.array([[ACTUATOR_IDS.index(v) if v.startswith("A") else -1 for v in tri] for tri in TRIANGLES])
-_TRI_XY = np.array([[vertex_xy(v) for v in tri] for tri in TRIANGLES], dtype=np.float64)
+TRIANGLE_ACTUATORS = np.array([[ACTUATOR_IDS.index(v) if v.startswith("A") else -1 for v in tri] for tri in TRIANGLES])
+TRIANGLE_XY = np.array([[vertex_xy(v) for v in tri] for tri in TRIANGLES], dtype=np.float64)
 _VERTEX_EPS = 1e-9
 
 
@@ -46,6 +48,8 @@ class FusionParams:
     k_std : a pixel is salient at mean + k_std * std of the map or above (and >= min_level).
     min_speck_area : connected salient regions smaller than this fraction of the frame are noise.
     """
+
+    STAGE: ClassVar[str] = ANALYSIS
 
     variant: str = "paper"
     min_level: float = 0.3
@@ -103,7 +107,7 @@ def triangle_index_map(h: int, w: int) -> np.ndarray:
     py = (ys + 0.5) / h
     out = np.full((h, w), -1, np.int8)
     for i in range(_N_TRI):
-        (x1, y1), (x2, y2), (x3, y3) = _TRI_XY[i]
+        (x1, y1), (x2, y2), (x3, y3) = TRIANGLE_XY[i]
         det = (y2 - y3) * (x1 - x3) + (x3 - x2) * (y1 - y3)
         l1 = ((y2 - y3) * (px - x3) + (x3 - x2) * (py - y3)) / det
         l2 = ((y3 - y1) * (px - x3) + (x1 - x3) * (py - y3)) / det
@@ -122,8 +126,8 @@ def triangle_weights(centroid: tuple[float, float], triangle: int) -> np.ndarray
     """
     c = np.asarray(centroid, dtype=np.float64)
     w = np.zeros(N_ACTUATORS)
-    acts = _TRI_ACT[triangle]
-    pts = _TRI_XY[triangle]
+    acts = TRIANGLE_ACTUATORS[triangle]
+    pts = TRIANGLE_XY[triangle]
     d = np.hypot(*(pts - c).T)
     real = acts >= 0
     hit = real & (d < _VERTEX_EPS)

@@ -1,0 +1,257 @@
+"""The fan rule: which ticks and which of the 9 x 17 cells blow (ALGORITHM.md section 5, steps 2-5).
+
+A tick blows when its sustained motion exceeds the threshold: manual, or adaptive from the clip's
+own motion (``strong_rel`` x the 95th percentile of the ticks that move). In a blowing tick a cell
+blows where its motion, smoothed over the shot's neighbouring ticks and cells, reaches
+``cell_rel`` of the strongest cell AND it is near; a near cell enclosed by blowing cells blows
+too (an object coming at the camera has a still centre). docs/BENCHMARKS.md ("Fans") has the
+measurements behind each rule.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import cv2
+import numpy as np
+
+from autohaptics.errors import ParameterError
+from autohaptics.records import ANALYSIS, DERIVE, stage
+from autohaptics.layout import FAN_COLS, FAN_ROWS
+
+
+@dataclass(frozen=True)
+class AirflowParams:
+    """Which ticks and which cells blow.
+
+    threshold : motion threshold in frame widths per second; None = adaptive (module docstring).
+    floor : motion below this never counts (frame widths/s, default 0.005); also the depth skip limit.
+    strong_rel : adaptive threshold = strong_rel x the 95th percentile of the moving ticks' motion
+        (default 0.3; module docstring).
+    cell_rel : a cell is "strong motion" at this fraction of the tick's strongest cell or more.
+    near_min : a cell is "near" at this nearness or more (0..1, 1 = nearest).
+    static_level, static_fraction : a frame pair is static when fewer than ``static_fraction`` of
+        the proxy's pixels changed by more than ``static_level`` grey levels (noise tolerant, yet a
+        small moving object is seen).
+    fill_enclosed : a near cell enclosed by "on" cells blows too (the still centre of an object
+        expanding toward the camera; see the module docstring).
+    flat_std : a frame whose luma standard deviation is below this (grey levels) is flat; a pair
+        of flat frames has no motion (:func:`is_fade`).
+    fade_min_step : a pair whose mean brightness moved by at least this (grey levels) and that
+        differs in nothing else than a global brightness/contrast change is a fade: no motion
+        (:func:`is_fade`).
+    cell_sigma_ticks : a blowing tick's cells are judged on their motion averaged over the
+        neighbouring ticks of its shot with Gaussian weights of this standard deviation (ticks;
+        default 2, 0 = the tick alone; :func:`smoothed_cell_motion`).
+    cell_sigma_cells : that motion is also blurred over neighbouring cells with this standard
+        deviation (cells; default 0.5, 0 = the cell alone).
+    """
+
+    STAGE: ClassVar[str] = DERIVE
+
+    threshold: float | None = None
+    floor: float = field(default=0.005, metadata=stage(ANALYSIS))
+    strong_rel: float = 0.3
+    cell_rel: float = 0.5
+    near_min: float = 0.5
+    static_level: float = field(default=12.0, metadata=stage(ANALYSIS))
+    static_fraction: float = field(default=0.002, metadata=stage(ANALYSIS))
+    fill_enclosed: bool = True
+    flat_std: float = field(default=2.0, metadata=stage(ANALYSIS))
+    fade_min_step: float = field(default=1.0, metadata=stage(ANALYSIS))
+    cell_sigma_ticks: float = 2.0
+    cell_sigma_cells: float = 0.5
+
+    def __post_init__(self):
+        if self.threshold is not None and not (math.isfinite(self.threshold) and self.threshold >= 0):
+            raise ParameterError(f"airflow.threshold must be >= 0 (frame widths/s) or None, got {self.threshold!r}")
+        if not (0.0 <= float(self.floor) < 100.0):
+            raise ParameterError(f"airflow.floor must lie in 0..100 frame widths/s, got {self.floor!r}")
+        for name in ("flat_std", "fade_min_step"):
+            v = float(getattr(self, name))
+            if not (math.isfinite(v) and 0.0 <= v <= 255.0):
+                raise ParameterError(f"airflow.{name} must lie in 0..255 grey levels, got {getattr(self, name)!r}")
+        for name, top in (("cell_sigma_ticks", 50.0), ("cell_sigma_cells", float(FAN_COLS))):
+            v = float(getattr(self, name))
+            if not (math.isfinite(v) and 0.0 <= v <= top):
+                raise ParameterError(f"airflow.{name} must lie in 0..{top:g}, got {getattr(self, name)!r}")
+        for name in ("cell_rel", "near_min", "static_fraction", "strong_rel"):
+            if not (0.0 <= float(getattr(self, name)) <= 1.0):
+                raise ParameterError(f"airflow.{name} must lie in 0..1, got {getattr(self, name)!r}")
+
+
+def grid_means(arr: np.ndarray) -> np.ndarray:
+    """Mean of a map over the 9 x 17 fan cells (row 0 = top). [shape=(h, w)] -> float32 [shape=(9, 17)]."""
+    a = np.asarray(arr, dtype=np.float32)
+    if a.ndim != 2 or a.size == 0:
+        raise ParameterError(f"grid_means needs a non-empty 2-D map, got shape {a.shape}")
+    a = np.where(np.isfinite(a), a, 0.0).astype(np.float32)
+    h, w = a.shape
+    if h >= FAN_ROWS and w >= FAN_COLS:
+        return cv2.resize(a, (FAN_COLS, FAN_ROWS), interpolation=cv2.INTER_AREA)
+    rows = np.minimum((np.arange(FAN_ROWS) + 0.5) * h / FAN_ROWS, h - 1).astype(int)
+    cols = np.minimum((np.arange(FAN_COLS) + 0.5) * w / FAN_COLS, w - 1).astype(int)
+    return a[np.ix_(rows, cols)].astype(np.float32)
+
+
+def cell_motion(mag: np.ndarray) -> np.ndarray:
+    """Mean motion per fan cell, frame widths per second, float32 [shape=(9, 17)]."""
+    return grid_means(mag)
+
+
+def smoothed_cell_motion(cell_motion_: np.ndarray, shot: np.ndarray, ticks: np.ndarray, *,
+                         params: AirflowParams = AirflowParams()) -> np.ndarray:
+    """The cell motion the fan rule judges ``ticks`` on, frame widths/s: float32 [shape=(len(ticks), 9, 17)].
+
+    cell_motion_ : [shape=(n, 9, 17)], every tick's cell motion (frame widths/s).
+    shot : int [shape=(n,)], each tick's shot number; a negative number marks a tick without a
+        motion sample of its own (a cut: its flow pair would straddle it), which takes no part.
+    ticks : int [shape=(m,)], the ticks wanted.
+
+    Each tick's cells are the Gaussian-weighted mean (``cell_sigma_ticks``) of the ticks around it,
+    a tick of another shot or beyond the clip counting as still (the fan rule is relative to the
+    tick's strongest cell, so this and leaving those ticks out give the same fans; counting them as
+    still keeps k still ticks in front of a clip from changing its fans), then blurred over
+    neighbouring cells (``cell_sigma_cells``; beyond the grid's edge the edge cell repeats).
+    Why: a tick's flow pair samples one frame interval of its motion, and which cells reach half
+    of the strongest one flickers from tick to tick (module docstring, point 5).
+    """
+    cm = np.asarray(cell_motion_)
+    shot = np.asarray(shot)
+    ticks = np.asarray(ticks, dtype=np.int64)
+    n = cm.shape[0]
+    if cm.ndim != 3 or shot.shape != (n,):
+        raise ParameterError(f"smoothed_cell_motion needs (n, rows, cols) cells and (n,) shots, "
+                             f"got {cm.shape} and {shot.shape}")
+    if ticks.size and (ticks.min() < 0 or ticks.max() >= n):
+        raise ParameterError(f"ticks must lie in 0..{n - 1}")
+    offsets, gauss = _gaussian(float(params.cell_sigma_ticks))
+    out = np.zeros((ticks.size,) + cm.shape[1:], np.float64)
+    own = shot[ticks] if ticks.size else np.zeros(0, shot.dtype)
+    for d, g in zip(offsets, gauss):
+        src = ticks + d
+        ok = (src >= 0) & (src < n)
+        src = np.clip(src, 0, n - 1)
+        ok &= (shot[src] == own) & (shot[src] >= 0)
+        if d == 0:  # the tick itself always counts (a cut tick asked for keeps its own cells)
+            ok = np.ones(ticks.size, bool)
+        if ok.any():
+            out += np.where(ok, g, 0.0)[:, None, None] * np.nan_to_num(cm[src].astype(np.float64))
+    sx = float(params.cell_sigma_cells)
+    if sx > 0 and out.size:
+        out = _blur_axis(_blur_axis(out, 1, sx), 2, sx)
+    return np.clip(out, 0.0, None).astype(np.float32)
+
+
+def _gaussian(sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets -r..r (r = ceil(3 sigma), 0 for sigma <= 0) and their Gaussian weights, summing to 1."""
+    r = int(math.ceil(3.0 * sigma)) if sigma > 0 else 0
+    offsets = np.arange(-r, r + 1)
+    if not r:
+        return offsets, np.ones(1)
+    with np.errstate(over="ignore"):  # a tiny sigma: the neighbours' weights underflow to 0
+        g = np.exp(-0.5 * (offsets / sigma) ** 2)
+    return offsets, g / g.sum()
+
+
+def _blur_axis(x: np.ndarray, axis: int, sigma: float) -> np.ndarray:
+    """Gaussian blur of ``x`` along ``axis`` (standard deviation ``sigma`` samples), the edge value
+    repeated beyond the edge. Element-wise sums in a fixed order: a tick's result does not depend
+    on which other ticks share the array."""
+    offsets, g = _gaussian(sigma)
+    size = x.shape[axis]
+    out = np.zeros_like(x)
+    for d, w in zip(offsets, g):
+        out += w * np.take(x, np.clip(np.arange(size) + d, 0, size - 1), axis=axis)
+    return out
+
+
+def motion_threshold(motion: np.ndarray, *, params: AirflowParams = AirflowParams()) -> float:
+    """The airflow threshold for a clip, frame widths/s: manual, or adaptive (module docstring)."""
+    if params.threshold is not None:
+        return float(max(params.threshold, 0.0))
+    m = np.asarray(motion, dtype=np.float64)
+    m = m[np.isfinite(m) & (m > params.floor)]  # the statistics of the ticks that move
+    if m.size == 0:
+        return float(params.floor)
+    return float(max(params.floor, params.strong_rel * float(np.percentile(m, 95))))
+
+
+def fan_levels(cell_motion_: np.ndarray, nearness: np.ndarray, *, params: AirflowParams = AirflowParams()) -> np.ndarray:
+    """Fan levels of one airflow tick: strong motion AND near. Both [shape=(9, 17)] -> float32 [0, 1]."""
+    m = np.nan_to_num(np.asarray(cell_motion_, dtype=np.float64))
+    near = np.nan_to_num(np.asarray(nearness, dtype=np.float64))
+    if m.shape != (FAN_ROWS, FAN_COLS) or near.shape != (FAN_ROWS, FAN_COLS):
+        raise ParameterError(f"fan_levels needs (9, 17) grids, got {m.shape} and {near.shape}")
+    peak = float(m.max())
+    if not peak > 0:
+        return np.zeros((FAN_ROWS, FAN_COLS), np.float32)
+    with np.errstate(over="ignore"):  # a subnormal peak: the quotient overflows, then clips to 1
+        rel = np.clip(m / peak, 0.0, 1.0).astype(np.float32)  # the output's precision decides "still"
+    near_ok = near >= params.near_min
+    on = (rel >= params.cell_rel) & (rel > 0) & near_ok  # a still cell is never "strong motion"
+    levels = np.where(on, rel, 0.0)
+    if params.fill_enclosed and on.any():
+        holes = _enclosed(on) & near_ok
+        if holes.any():
+            levels[holes] = float(levels[on].mean())
+    return levels.astype(np.float32)
+
+
+def _enclosed(on: np.ndarray) -> np.ndarray:
+    """Cells that are off and cannot reach the grid border through off cells (4-connected)."""
+    off = (~on).astype(np.uint8)
+    n, labels = cv2.connectedComponents(off, connectivity=4)
+    border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+    inside = np.ones(n, bool)
+    inside[border] = False
+    inside[0] = False  # label 0 is the "on" cells
+    return inside[labels]
+
+
+def sustained_motion(motion: np.ndarray) -> np.ndarray:
+    """The motion a tick shares with a neighbour: min(m[k], max(m[k-1], m[k+1])), frame widths/s.
+
+    A one-tick spike (an object popping in or a flash: optical flow reads nonsense there, and 100 ms
+    of wind cannot be felt anyway) falls to its neighbours' level; motion that lasts two ticks or
+    more keeps its value. Outside the clip counts as still.
+    """
+    m = np.asarray(motion, dtype=np.float64)
+    if m.size == 0:
+        return m.copy()
+    left = np.concatenate([[0.0], m[:-1]])
+    right = np.concatenate([m[1:], [0.0]])
+    return np.minimum(m, np.maximum(left, right))
+
+
+_FAN_CHUNK = 2048  # ticks smoothed at a time (bounded memory on a 2-hour film)
+
+
+def fan_track(motion: np.ndarray, cell_motion_: np.ndarray, nearness: np.ndarray, cut: np.ndarray,
+              depth_mask: np.ndarray, *, params: AirflowParams = AirflowParams(),
+              out: np.ndarray | None = None) -> tuple[np.ndarray, dict]:
+    """The fans track and what decided it.
+
+    motion : [shape=(n,)] frame widths/s; cell_motion_, nearness : [shape=(n, 9, 17)];
+    cut, depth_mask : bool [shape=(n,)] (a cut tick never blows; depth must have run).
+    out : an all-zero float32 (n, 9, 17) array to write into (the timeline's own track).
+    Returns (fans float32 [shape=(n, 9, 17)] in 0..1, stats {threshold_fw_per_s, ticks_on, ...}).
+    """
+    n = motion.size
+    valid = ~cut
+    sustained = sustained_motion(np.where(valid, motion, 0.0))
+    threshold = motion_threshold(sustained[valid], params=params)
+    on = valid & (sustained > threshold) & depth_mask
+    fans = np.zeros((n,) + cell_motion_.shape[1:], np.float32) if out is None else out
+    ticks = np.flatnonzero(on)
+    shot = np.where(valid, np.cumsum(cut), -1)
+    for start in range(0, ticks.size, _FAN_CHUNK):
+        part = ticks[start:start + _FAN_CHUNK]
+        cells = smoothed_cell_motion(cell_motion_, shot, part, params=params)
+        for k, c in zip(part, cells):
+            fans[k] = fan_levels(c, nearness[k].astype(np.float32), params=params)
+    stats = {"threshold_fw_per_s": float(threshold), "ticks_on": int(on.sum()), "ticks_at_cuts": int(cut.sum()),
+             "spikes_ignored": int(((motion > threshold) & valid & ~(sustained > threshold)).sum())}
+    return fans, stats

@@ -1,0 +1,148 @@
+"""Optical flow on the gray proxy, and the checks that spare it (ALGORITHM.md section 5, steps 1-2).
+
+Motion is measured in frame widths per second (flow px / proxy width / frame interval), so one
+threshold holds at any proxy size and frame rate. OpenCV DIS at its "medium" preset by default,
+Farneback as a variant. A static pair (nothing changed beyond noise) or a fade (a global change of
+brightness and contrast, or two flat frames) has no motion and no flow is computed: optical flow
+reads a brightness ramp as motion. docs/BENCHMARKS.md ("Fans") has the measurements behind these
+choices.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+from autohaptics.airflow.fans import AirflowParams
+from autohaptics.errors import ParameterError
+from autohaptics.records import ANALYSIS
+from autohaptics.imaging import as_gray
+
+FLOW_METHODS = ("dis", "farneback")
+DIS_PRESETS = {"ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST, "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
+               "medium": cv2.DISOPTICAL_FLOW_PRESET_MEDIUM}
+_MIN_FLOW_SIDE = 16  # px; smaller proxies have no room for a flow patch: motion reads 0
+
+
+@dataclass(frozen=True)
+class FlowParams:
+    """Optical flow.
+
+    method : "dis" (OpenCV DIS, default) | "farneback" (the reference).
+    proxy_width : width of the gray proxy the flow runs on, px (default 160); the least width
+        when ``proxy_fraction`` asks for more (:meth:`width_for`).
+    dis_preset : "ultrafast" | "fast" | "medium" (default; see the module docstring).
+    proxy_fraction : the proxy is at least this fraction of the picture's width as shown, in
+        multiples of 16 px, 0..1 (default 1/8: 240 px at 1920, 480 at 3840, ``proxy_width`` up to
+        1280; 0 = always ``proxy_width``). Module docstring, "Decisions".
+    """
+
+    STAGE: ClassVar[str] = ANALYSIS
+
+    method: str = "dis"
+    proxy_width: int = 160
+    dis_preset: str = "medium"
+    proxy_fraction: float = 0.125
+
+    def __post_init__(self):
+        if self.method not in FLOW_METHODS:
+            raise ParameterError(f"flow.method must be one of {FLOW_METHODS}, got {self.method!r}")
+        if self.dis_preset not in DIS_PRESETS:
+            raise ParameterError(f"flow.dis_preset must be one of {sorted(DIS_PRESETS)}, got {self.dis_preset!r}")
+        if not (8 <= int(self.proxy_width) <= 7680):
+            raise ParameterError(f"flow.proxy_width must lie in 8..7680 px, got {self.proxy_width!r}")
+        if not (0.0 <= float(self.proxy_fraction) <= 1.0):  # NaN fails too
+            raise ParameterError(f"flow.proxy_fraction must lie in 0..1, got {self.proxy_fraction!r}")
+
+    def width_for(self, picture_width: int) -> int:
+        """The gray proxy's width for a picture ``picture_width`` px wide as shown, px:
+        ``max(proxy_width, proxy_fraction x picture_width rounded to 16 px)``, at most 7680."""
+        scaled = 16 * int(round(float(self.proxy_fraction) * max(int(picture_width), 0) / 16.0))
+        return int(min(max(int(self.proxy_width), scaled), 7680))
+
+
+@lru_cache(maxsize=16)
+def _dis(preset: str, h: int, w: int):
+    """One DIS object per preset AND frame size: OpenCV's DIS keeps buffers across calls, and a
+    call at another size changes later results (up to 0.06 px on a 160x68 pair; on the Sintel
+    trailer analysed after other sizes, per-tick motion moved by up to 0.19 frame widths/s).
+    Per size, results depend on the inputs only (tests/test_airflow.py)."""
+    return cv2.DISOpticalFlow_create(DIS_PRESETS[preset])
+
+
+def optical_flow(prev_gray: np.ndarray, gray: np.ndarray, *, params: FlowParams = FlowParams()) -> np.ndarray:
+    """Dense flow from ``prev_gray`` to ``gray`` (uint8 [shape=(h, w)]), px per frame interval.
+
+    Returns float32 [shape=(h, w, 2)] (dx, dy); zeros when the proxy is too small for flow.
+    """
+    a, b = as_gray(prev_gray), as_gray(gray)
+    if a.shape != b.shape:
+        raise ParameterError(f"flow needs two frames of one size, got {a.shape} and {b.shape}")
+    h, w = a.shape
+    if min(h, w) < _MIN_FLOW_SIDE:
+        return np.zeros((h, w, 2), np.float32)
+    if params.method == "dis":
+        flow = _dis(params.dis_preset, h, w).calc(a, b, None)
+    else:
+        win = max(5, int(round(w / 40)) | 1)
+        levels = max(1, min(5, int(math.log2(min(h, w) / 8))))
+        flow = cv2.calcOpticalFlowFarneback(a, b, None, 0.5, levels, win, 3, 5, 1.1, 0)
+    flow = np.asarray(flow, dtype=np.float32)
+    return np.where(np.isfinite(flow), flow, 0.0).astype(np.float32)
+
+
+def motion_magnitude(flow: np.ndarray, *, dt_s: float, width_px: int) -> np.ndarray:
+    """Flow magnitude in frame widths per second. flow [shape=(h, w, 2)] px -> float32 [shape=(h, w)]."""
+    if not (dt_s > 0 and width_px > 0):
+        raise ParameterError(f"motion_magnitude needs dt_s > 0 and width_px > 0, got {dt_s}, {width_px}")
+    flow = np.asarray(flow, dtype=np.float32)
+    mag = np.sqrt(flow[..., 0] ** 2 + flow[..., 1] ** 2) / (float(width_px) * float(dt_s))
+    return np.where(np.isfinite(mag), mag, 0.0).astype(np.float32)
+
+
+def motion_score(mag: np.ndarray) -> float:
+    """A frame's motion: the mean magnitude, frame widths per second (0 for an empty map)."""
+    mag = np.asarray(mag, dtype=np.float64)
+    return float(mag.mean()) if mag.size else 0.0
+
+
+def is_static(prev_gray: np.ndarray, gray: np.ndarray, *, params: AirflowParams = AirflowParams()) -> bool:
+    """True when nothing moved between two frames beyond noise (see AirflowParams)."""
+    a, b = as_gray(prev_gray), as_gray(gray)
+    if a.shape != b.shape:
+        return False
+    changed = cv2.absdiff(a, b) > params.static_level
+    return float(changed.mean()) < params.static_fraction
+
+
+def is_fade(prev_gray: np.ndarray, gray: np.ndarray, *, params: AirflowParams = AirflowParams()) -> bool:
+    """True when two frames differ only by a global change of brightness and contrast (a fade, a
+    flash, an exposure change), or are both too flat to hold any motion: there is no motion to read.
+
+    Optical flow assumes constant brightness and reads such a change as motion (module docstring:
+    the BBB opening's fade in from black read 0.3-0.9 frame widths/s at 640 px). Frames whose luma
+    standard deviation is below ``flat_std`` are flat; otherwise the higher-contrast frame's
+    brightness and contrast are mapped linearly onto the other's, and the pair is a fade when the
+    mean brightness moved by at least ``fade_min_step`` grey levels and the mapped pair is static
+    (``is_static``). A cut into or out of black is a cut first (:mod:`autohaptics.airflow.cuts`, checked
+    before); a dark picture straight after black counts as a fade (no flow to read across it).
+    """
+    a, b = as_gray(prev_gray), as_gray(gray)
+    if a.shape != b.shape:
+        return False
+    ma, sa = (float(v[0, 0]) for v in cv2.meanStdDev(a))
+    mb, sb = (float(v[0, 0]) for v in cv2.meanStdDev(b))
+    if sa < params.flat_std and sb < params.flat_std:
+        return True
+    if abs(ma - mb) < params.fade_min_step:
+        return False
+    if sa < sb:  # map the higher-contrast frame down: scaling the flatter one up would amplify its noise
+        a, b, ma, sa, mb, sb = b, a, mb, sb, ma, sa
+    alpha = sb / sa
+    mapped = cv2.convertScaleAbs(a, alpha=alpha, beta=mb - alpha * ma)
+    return is_static(mapped, b, params=params)

@@ -1,0 +1,41 @@
+"""Small image conversions the stages share: checked uint8 frames and aspect-kept resizing."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from autohaptics.errors import ParameterError
+
+
+def as_rgb(rgb: np.ndarray) -> np.ndarray:
+    """``rgb`` as a contiguous uint8 frame [shape=(h, w, 3)] (values clipped to 0..255, NaN as 0);
+    ParameterError naming the shape otherwise."""
+    rgb = np.asarray(rgb)
+    if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.shape[0] < 1 or rgb.shape[1] < 1:
+        raise ParameterError(f"expected an RGB frame of shape (h, w, 3), got {rgb.shape}")
+    if rgb.dtype != np.uint8:
+        rgb = np.clip(np.nan_to_num(rgb.astype(np.float64)), 0, 255).astype(np.uint8)
+    return np.ascontiguousarray(rgb)
+
+
+def as_gray(x: np.ndarray) -> np.ndarray:
+    """``x`` as a contiguous uint8 gray frame [shape=(h, w)] (RGB converted, values clipped)."""
+    x = np.asarray(x)
+    if x.ndim == 3 and x.shape[2] == 3:
+        x = cv2.cvtColor(np.ascontiguousarray(x, dtype=np.uint8), cv2.COLOR_RGB2GRAY)
+    if x.ndim != 2 or x.size == 0:
+        raise ParameterError(f"expected a gray frame of shape (h, w), got {x.shape}")
+    if x.dtype != np.uint8:
+        x = np.clip(np.nan_to_num(x.astype(np.float64)), 0, 255).astype(np.uint8)
+    return np.ascontiguousarray(x)
+
+
+def resized(rgb: np.ndarray, width: int) -> np.ndarray:
+    """``rgb`` scaled to ``width`` px, aspect kept (area when shrinking, bilinear when growing);
+    the same array when it already has that width."""
+    h, w = rgb.shape[:2]
+    if w == width:
+        return rgb
+    height = max(1, int(round(width * h / w)))
+    return cv2.resize(rgb, (width, height), interpolation=cv2.INTER_AREA if width < w else cv2.INTER_LINEAR)

@@ -1,0 +1,225 @@
+"""Decoding the audio stream into the analysis signal: float32 mono chunks at 48 kHz in digital
+full scale (calibration to pascal is the loudness stage's parameter); memory stays constant in the
+length of the film.
+
+Downmix (ALGORITHM.md section 2): the MEAN of the main channels (a sound panned everywhere keeps its
+level) plus the LFE channel with its cinema gain of +10 dB, also divided by the number of main
+channels: ``mono = (sum(main) + 10**(lfe_gain_db/20) * lfe) / n_main``. Channel roles come from the
+layout; 6 or 8 unlabelled channels are read in FFmpeg's default 5.1 / 7.1 order (LFE fourth); any
+other unlabelled layout has no LFE. Non-finite samples are replaced by 0 and counted.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+
+import av
+import numpy as np
+
+from autohaptics.errors import MediaError
+from autohaptics.media.probe import AudioReport, MediaInfo, decode_tolerant, open_container, probe
+from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
+
+
+def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_gain_db: float = 10.0,
+               chunk_s: float = 2.0, report: AudioReport | None = None) -> Iterator[np.ndarray]:
+    """Decode the first audio stream as float32 mono chunks at 48 kHz (digital full scale).
+
+    Time 0 is the container start (``info.start_s``): leading gaps are zero-filled so audio
+    stays aligned with the picture. ``chunk_s`` bounds the chunk length (seconds); memory is
+    constant in the film length. Raises MediaError when there is no audio stream or nothing
+    decodes; a decode error in the middle of a file is counted in ``report`` and skipped.
+    """
+    info = info or probe(path)
+    if info.audio is None:
+        raise MediaError(f"{info.path}: no audio stream")
+    report = report if report is not None else AudioReport()
+    sr_in = info.audio.sample_rate
+    out = _Chunks(max(1, int(chunk_s * ANALYSIS_SAMPLE_RATE)), report, sr_in)
+    next_t_in = 0.0  # seconds (relative to start) of the next expected input sample
+    lfe_gain = 10.0 ** (lfe_gain_db / 20.0)
+    with open_container(info.path) as c:
+        stream = c.streams.audio[0]
+        stream.thread_type = "AUTO"
+        mapping = None
+        interleave = _Interleaver()
+        for frame in decode_tolerant(c, stream, report, info.path):
+            frame_time = frame.time  # before _samples: interleaving clears the frame's pts
+            x = _to_float(_samples(frame, interleave))
+            if mapping is None:
+                mapping = _channel_roles(frame.layout, x.shape[0])
+                report.main_channels, report.lfe_channel = mapping
+            mono = _downmix(x, mapping, lfe_gain, report)
+            if frame_time is not None:  # align to the container clock: zero-fill gaps, drop overlaps
+                gap = float(frame_time) - info.start_s - next_t_in
+                if gap > 1.0 / sr_in * 2:
+                    out.emit(np.zeros(int(round(gap * sr_in)), np.float32))
+                    next_t_in += round(gap * sr_in) / sr_in
+                elif gap < -1.0 / sr_in * 2:
+                    mono = mono[min(mono.size, int(round(-gap * sr_in))):]
+            next_t_in += mono.size / sr_in
+            out.emit(mono)
+            yield from out.drain(False)
+        yield from out.finish()
+    if report.samples_out == 0:
+        reason = f" ({report.first_error})" if report.first_error else ""
+        raise MediaError(f"{info.path}: the audio stream holds no decodable samples{reason}")
+
+
+def _downmix(x: np.ndarray, mapping: tuple[list[int], int | None], lfe_gain: float,
+             report: AudioReport) -> np.ndarray:
+    """The mono analysis signal of one frame's samples [shape=(channels, n)] (module docstring);
+    non-finite samples become 0 and are counted in ``report``."""
+    bad = ~np.isfinite(x)
+    if bad.any():
+        report.nonfinite_samples += int(bad.sum())
+        x = np.where(bad, 0.0, x)
+    main, lfe = mapping
+    mono = x[main].sum(axis=0, dtype=np.float64)
+    if lfe is not None:
+        mono += lfe_gain * x[lfe]
+    return (mono / max(1, len(main))).astype(np.float32)
+
+
+class _Chunks:
+    """Mono samples at the input rate in, chunks of ``chunk_n`` samples at 48 kHz out."""
+
+    def __init__(self, chunk_n: int, report: AudioReport, sr_in: int):
+        self.chunk_n, self.report, self.sr_in = chunk_n, report, sr_in
+        self.pending: list[np.ndarray] = []
+        self.pending_n = 0
+        self.resampler = None
+        if sr_in != ANALYSIS_SAMPLE_RATE:
+            self.resampler = av.AudioResampler(format="flt", layout="mono", rate=ANALYSIS_SAMPLE_RATE)
+
+    def emit(self, mono: np.ndarray) -> None:
+        if self.resampler is not None and mono.size:
+            frame = av.AudioFrame.from_ndarray(mono[None, :], format="flt", layout="mono")
+            frame.sample_rate = self.sr_in
+            mono = _frames_to_array(self.resampler.resample(frame))
+        self._add(mono)
+
+    def _add(self, x: np.ndarray) -> None:
+        if x.size:
+            self.pending.append(x)
+            self.pending_n += x.size
+
+    def drain(self, final: bool) -> Iterator[np.ndarray]:
+        while self.pending_n >= self.chunk_n or (final and self.pending_n):
+            buf = np.concatenate(self.pending) if len(self.pending) > 1 else self.pending[0]
+            out, rest = buf[:self.chunk_n], buf[self.chunk_n:]
+            self.pending = [rest] if rest.size else []
+            self.pending_n = rest.size
+            self.report.samples_out += out.size
+            yield out.astype(np.float32, copy=False)
+
+    def finish(self) -> Iterator[np.ndarray]:
+        if self.resampler is not None:
+            self._add(_frames_to_array(self.resampler.resample(None)))
+        yield from self.drain(True)
+
+
+def read_audio(path: str | os.PathLike, **kwargs) -> np.ndarray:
+    """The whole mono 48 kHz track as one float32 array (tests and short clips only)."""
+    chunks = list(iter_audio(path, **kwargs))
+    return np.concatenate(chunks) if chunks else np.zeros(0, np.float32)
+
+
+_SAMPLE_DTYPES = {"u8": np.uint8, "s16": np.int16, "s32": np.int32, "s64": np.int64, "flt": np.float32,
+                  "dbl": np.float64}
+
+
+_PACKABLE_LAYOUTS = {"3.0", "quad", "4.0", "5.0", "5.1", "5.0(side)", "5.1(side)", "6.0", "6.1", "7.0", "7.1",
+                     "7.1(wide)", "7.1(wide-side)", "octagonal", "hexagonal"}
+
+
+class _Interleaver:
+    """Planar -> packed float at the same rate and layout, through one libswresample context
+    (same-rate format conversion holds no samples back)."""
+
+    def __init__(self):
+        self.key = None
+        self.resampler = None
+
+    def __call__(self, frame: av.AudioFrame) -> av.AudioFrame:
+        key = (frame.layout.name, frame.sample_rate)
+        if key != self.key:
+            self.key = key
+            self.resampler = av.AudioResampler(format="flt", layout=frame.layout.name, rate=frame.sample_rate)
+        frame.pts = None
+        return _join_packed(self.resampler.resample(frame), frame)
+
+
+def _join_packed(out: list, frame: av.AudioFrame) -> av.AudioFrame:
+    if len(out) == 1:
+        return out[0]
+    if not out:
+        packed = av.AudioFrame(format="flt", layout=frame.layout.name, samples=0)
+        packed.sample_rate = frame.sample_rate
+        return packed
+    data = np.concatenate([np.frombuffer(f.planes[0], np.float32, count=f.samples * f.layout.nb_channels)
+                           for f in out])
+    packed = av.AudioFrame.from_ndarray(data.reshape(1, -1), format="flt", layout=frame.layout.name)
+    packed.sample_rate = frame.sample_rate
+    return packed
+
+
+def _samples(frame: av.AudioFrame, interleave: "_Interleaver | None" = None) -> np.ndarray:
+    """Decoded samples as [shape=(channels, n)], read straight from the frame's planes.
+
+    (PyAV's ``to_ndarray`` crashes the interpreter on 8-channel planar frames; the planes'
+    buffers are read here with numpy instead.)
+    """
+    if frame.format.is_planar and frame.layout.nb_channels > 2 and frame.layout.name in _PACKABLE_LAYOUTS:
+        # Many-channel planar frames: PyAV's plane accessors read past AVFrame.data (8 pointers)
+        # for such layouts; let libswresample interleave them first (same rate, same layout).
+        frame = (interleave or _Interleaver())(frame)
+    name = frame.format.name
+    base = name[:-1] if name.endswith("p") else name
+    dtype = _SAMPLE_DTYPES.get(base)
+    nch = frame.layout.nb_channels
+    n = frame.samples
+    if dtype is None:
+        raise MediaError(f"unsupported audio sample format {name!r}")
+    if frame.format.is_planar:
+        return np.stack([np.frombuffer(frame.planes[i], dtype=dtype, count=n) for i in range(nch)])
+    return np.frombuffer(frame.planes[0], dtype=dtype, count=n * nch).reshape(n, nch).T
+
+
+def _to_float(x: np.ndarray) -> np.ndarray:
+    """Decoded samples (any sample format) -> float64 in digital full scale."""
+    if x.dtype.kind == "f":
+        return x.astype(np.float64, copy=False)
+    if x.dtype == np.uint8:
+        return (x.astype(np.float64) - 128.0) / 128.0
+    info = np.iinfo(x.dtype)
+    return x.astype(np.float64) / float(-info.min)
+
+
+# FFmpeg channel names for the LFE channel.
+_LFE_NAMES = {"LFE", "LFE2", "LOW_FREQUENCY", "LOW_FREQUENCY_2"}
+
+
+def _channel_roles(layout, n: int) -> tuple[list[int], int | None]:
+    """(main channel indices, LFE index or None) for a decoded layout of ``n`` channels."""
+    names = [ch.name for ch in layout.channels][:n]
+    known = [nm for nm in names if nm and nm.upper() not in ("NONE", "NA", "UNKNOWN", "UNUSED")]
+    if len(known) == n:
+        lfe = [i for i, nm in enumerate(names) if nm.upper() in _LFE_NAMES]
+    elif n in (6, 8):
+        lfe = [3]  # FFmpeg's default 5.1 / 7.1 order: FL FR FC LFE ...
+    else:
+        lfe = []
+    lfe_idx = lfe[0] if lfe else None
+    main = [i for i in range(n) if i != lfe_idx]
+    if not main:  # a lone LFE channel is the whole signal
+        return [lfe_idx], None
+    return main, lfe_idx
+
+
+def _frames_to_array(frames) -> np.ndarray:
+    if not frames:
+        return np.zeros(0, np.float32)
+    parts = [f.to_ndarray().reshape(-1) for f in frames]
+    return np.concatenate(parts).astype(np.float32, copy=False)

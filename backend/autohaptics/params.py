@@ -1,0 +1,205 @@
+"""Every parameter that shapes a timeline: :class:`GenerateParams`, one group per stage (each group
+the stage's own record), the quality presets, and which fields the analysis depends on.
+
+Each record is frozen and validates itself. A field is "analysis" (changing it needs the film
+decoded and analysed again) or "derive" (thresholds, mappings, the fan rule: re-derived from the
+cached analysis in milliseconds): a record's ``STAGE`` says which for all its fields, a field's
+``metadata["stage"]`` where one differs. :func:`analysis_key` follows these tags.
+
+Presets (dotted overrides, each knob individually overridable; docs/GUIDE.md and
+docs/BENCHMARKS.md have the figures behind them):
+
+- ``reference``: the exact ISO 532-1 filter bank, every frame decoded and analysed, flow on a third
+  of the picture's width (at least 640 px), 320 px saliency and depth, nothing skipped.
+- ``balanced`` (default): FFmpeg decodes only the reference frames, one frame (plus its successor
+  for flow) per 100 ms tick, flow on an eighth of the picture's width (at least 160 px), 256 px
+  saliency, 128 px depth, skipping on.
+- ``fast``: the picture read for every third tick, only I- and P-frames decoded from 40 fps up,
+  128 px flow at DIS "fast", 128 px saliency, 64 px depth.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from autohaptics.airflow import AirflowParams, FlowParams
+from autohaptics.airflow.cuts import CutParams
+from autohaptics.airflow.depth import DepthParams
+from autohaptics.errors import ParameterError
+from autohaptics.fusion import MODES, FusionParams, SaliencyParams
+from autohaptics.intensity import FEATURES, AudioFeatureParams, IntensityParams
+from autohaptics.media import DECODE_MODES
+from autohaptics.records import ANALYSIS, DERIVE, apply_overrides, stage, stage_of
+from autohaptics.temperature import ThermalParams
+
+TRACKS = ("vibration", "temperature", "fans")
+ANALYSIS_MODES = ("tick", "every")
+
+
+@dataclass(frozen=True)
+class VideoParams:
+    """Which frames the video pass analyses. Proxy sizes are the stages' own parameters: the gray
+    proxy (static check, flow, in-pair cuts) is ``flow.width_for(picture width)`` wide (at least
+    ``flow.proxy_width``; recorded as ``stats["flow"]["proxy_width"]``), the RGB proxy (colour,
+    saliency, depth, cuts between ticks) is ``max(saliency.proxy_width, depth.proxy_width)`` wide,
+    except that the spectral saliency (which reads the full frame's luma at 64 x 64) counts with
+    at most the gray proxy's width: its map is made ``saliency.proxy_width`` wide from that proxy.
+
+    analysis : "tick" (one frame plus its successor per 100 ms tick) or "every" (every decoded
+        frame; the reference preset).
+    skip : skip what a scene does not need (see the module docstring). False computes everything.
+    prefetch : frames decoded ahead in a background thread, overlapping decoding with analysis
+        (0 = decode in the calling thread).
+    decode : "full" (every frame, exactly), "nonref" (default: FFmpeg skips non-reference frames,
+        about half the decoding work on H.264; the frames it decodes are exact), "fast" (also skips
+        the deblocking filter) or "sparse" (the fast preset: also every B-frame at 40 fps and up,
+        so P-frames that referenced one come out approximate; see :func:`media.iter_video`).
+        With skipped frames the analysed frame is the decoded one nearest the tick's centre and a
+        flow pair spans the next decoded frame, with its true interval.
+    stride : ticks per analysed frame, 1..10 (default 1; the fast preset: 3). With ``stride`` s the
+        ticks are taken in groups of s, the frame nearest the group's centre is analysed (plus its
+        successor for flow) and every tick of the group gets its values: the picture is read at
+        10/s Hz instead of 10 Hz, and each tick's frame is at most s x 50 ms off its own centre.
+        Audio features stay at 10 Hz. Only with ``analysis="tick"``.
+    """
+
+    STAGE: ClassVar[str] = ANALYSIS
+
+    analysis: str = "tick"
+    skip: bool = True
+    prefetch: int = 8
+    decode: str = "nonref"
+    stride: int = 1
+
+    def __post_init__(self):
+        if self.decode not in DECODE_MODES:
+            raise ParameterError(f"video.decode must be one of {DECODE_MODES}, got {self.decode!r}")
+        if not (0 <= int(self.prefetch) <= 256):
+            raise ParameterError(f"video.prefetch must lie in 0..256 frames, got {self.prefetch!r}")
+        if self.analysis not in ANALYSIS_MODES:
+            raise ParameterError(f"video.analysis must be one of {ANALYSIS_MODES}, got {self.analysis!r}")
+        if isinstance(self.stride, bool) or not isinstance(self.stride, int) or not (1 <= self.stride <= 10):
+            raise ParameterError(f"video.stride must be a whole number of ticks in 1..10, got {self.stride!r}")
+        if self.stride > 1 and self.analysis != "tick":
+            raise ParameterError(f"video.stride={self.stride} needs video.analysis='tick' "
+                                 f"(the 'every' analysis reads every frame), got {self.analysis!r}")
+
+
+@dataclass(frozen=True)
+class GenerateParams:
+    """Every parameter that shapes a timeline (recorded in ``generator.params``).
+
+    mode : vibration rendering, the thesis's study conditions (table 4.1): "multimodal" (audio
+        intensity spread by saliency fusion, the full pipeline), "audio" (A1, A2, A5 from the audio
+        intensity), "visual" (the salient area's actuators, no audio), "random" (seeded random events).
+    tracks : which tracks to compute; a track left out is still present, off (zeros / neutral).
+    seed : random generator seed of the "random" mode.
+    lfe_gain_db : gain of the LFE channel in the downmix, dB (cinema playback: +10).
+    allow_truncated : accept a file whose streams decode shorter than declared (the missing part
+        is silence); otherwise such a file is an error.
+    """
+
+    STAGE: ClassVar[str] = ANALYSIS
+
+    mode: str = field(default="multimodal", metadata=stage(DERIVE))
+    tracks: tuple[str, ...] = TRACKS
+    seed: int = field(default=0, metadata=stage(DERIVE))
+    lfe_gain_db: float = 10.0
+    allow_truncated: bool = False
+    audio: AudioFeatureParams = field(default_factory=AudioFeatureParams)
+    intensity: IntensityParams = field(default_factory=IntensityParams)
+    video: VideoParams = field(default_factory=VideoParams)
+    saliency: SaliencyParams = field(default_factory=SaliencyParams)
+    fusion: FusionParams = field(default_factory=FusionParams)
+    thermal: ThermalParams = field(default_factory=ThermalParams)
+    flow: FlowParams = field(default_factory=FlowParams)
+    airflow: AirflowParams = field(default_factory=AirflowParams)
+    cuts: CutParams = field(default_factory=CutParams)
+    depth: DepthParams = field(default_factory=DepthParams)
+
+    def __post_init__(self):
+        if self.mode not in MODES:
+            raise ParameterError(f"mode must be one of {MODES}, got {self.mode!r}")
+        bad = [t for t in self.tracks if t not in TRACKS]
+        if bad:
+            raise ParameterError(f"unknown track(s) {bad}; choose from {list(TRACKS)}")
+        if not (-40.0 <= float(self.lfe_gain_db) <= 20.0):
+            raise ParameterError(f"lfe_gain_db must lie in -40..20 dB, got {self.lfe_gain_db!r}")
+
+
+PRESETS: dict[str, dict[str, Any]] = {
+    "reference": {
+        "audio.loudness_method": "iso",
+        "video.analysis": "every",
+        "video.decode": "full",
+        "video.skip": False,
+        "saliency.proxy_width": 320,
+        "depth.proxy_width": 320,
+        "flow.method": "dis",
+        "flow.dis_preset": "medium",
+        "flow.proxy_width": 640,
+        "flow.proxy_fraction": 1 / 3,
+    },
+    "balanced": {},
+    "fast": {
+        "video.decode": "sparse",
+        "video.stride": 3,
+        "saliency.proxy_width": 128,
+        "depth.proxy_width": 64,
+        "flow.proxy_width": 128,
+        "flow.proxy_fraction": 0.0625,
+        "flow.dis_preset": "fast",
+    },
+}
+DEFAULT_PRESET = "balanced"
+
+
+def preset_overrides(name: str) -> dict[str, Any]:
+    """The dotted overrides a preset applies (a copy)."""
+    if name not in PRESETS:
+        raise ParameterError(f"unknown preset {name!r}; choose one of {sorted(PRESETS)}")
+    return dict(PRESETS[name])
+
+
+def resolve_params(preset: str = DEFAULT_PRESET, overrides: dict[str, Any] | None = None,
+                   thresholds: dict[str, Any] | None = None) -> tuple[GenerateParams, str]:
+    """Build :class:`GenerateParams` from a preset, dotted overrides and threshold overrides."""
+    params = apply_overrides(GenerateParams(), preset_overrides(preset))
+    params = apply_overrides(params, overrides or {})
+    if thresholds:
+        th = dict(params.intensity.thresholds)
+        for name, value in thresholds.items():
+            if name not in FEATURES:
+                raise ParameterError(f"unknown threshold {name!r}; expected one of {list(FEATURES)}")
+            try:
+                th[name] = float(value)
+            except (TypeError, ValueError):
+                raise ParameterError(f"threshold {name} must be a number, got {value!r}") from None
+        params = dataclasses.replace(params, intensity=dataclasses.replace(params.intensity, thresholds=th))
+    return params, preset
+
+
+def analysis_key(doc: dict) -> dict:
+    """The part of a ``generator.params``-style dict (:func:`~autohaptics.overrides.params_to_dict`)
+    that the analysis depends on: compare two to know whether a cached analysis can serve."""
+    return _analysis_part(_DEFAULT, doc, "")
+
+
+def _analysis_part(record: Any, doc: dict, prefix: str) -> dict:
+    key = {}
+    for f in dataclasses.fields(record):
+        value = getattr(record, f.name)
+        if dataclasses.is_dataclass(value):
+            stages = {stage_of(value, g.name) for g in dataclasses.fields(value)}
+            if stages == {ANALYSIS}:  # a group the analysis reads whole
+                key[prefix + f.name] = doc.get(f.name)
+            elif ANALYSIS in stages:  # a derive-time group with some analysis-time fields
+                key.update(_analysis_part(value, doc.get(f.name) or {}, prefix + f.name + "."))
+        elif stage_of(record, f.name) == ANALYSIS:
+            key[prefix + f.name] = doc.get(f.name)
+    return key
+
+
+_DEFAULT = GenerateParams()

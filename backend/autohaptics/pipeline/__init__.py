@@ -1,0 +1,15 @@
+"""The pipeline: the stages composed into a timeline, and the one place that decides what to skip.
+
+:func:`analyse` (slow, decodes: the audio pass, then the video pass, :mod:`.video`) -> an
+:class:`Analysis`, the feature cache (:mod:`.cache`) -> :func:`derive` (fast, pure: thresholds,
+mode, mappings) -> :class:`~autohaptics.timeline.Timeline`. :func:`generate` does both. The editor
+re-thresholds with :func:`derive` alone.
+"""
+
+from autohaptics.pipeline.analyse import analyse, file_sha256
+from autohaptics.pipeline.cache import Analysis, reusable
+from autohaptics.pipeline.derive import derive
+from autohaptics.pipeline.generate import generate
+from autohaptics.pipeline.video import VideoAnalysis, video_pass
+
+__all__ = ["Analysis", "VideoAnalysis", "analyse", "derive", "file_sha256", "generate", "reusable", "video_pass"]

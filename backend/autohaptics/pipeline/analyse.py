@@ -1,0 +1,164 @@
+"""The analysis: decode each stream once and compute the feature cache, skipping what a scene does
+not need.
+
+The audio pass computes the four psychoacoustic features per 20 ms frame; the video pass runs after
+it, because which ticks need saliency follows from the audio intensity (saliency only where the
+chair vibrates, unless the mode needs every tick).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from autohaptics import intensity as inten
+from autohaptics import media
+from autohaptics.errors import MediaError
+from autohaptics.intensity import features as af
+from autohaptics.params import GenerateParams
+from autohaptics.pipeline.cache import Analysis
+from autohaptics.pipeline.video import video_pass
+from autohaptics.progress import CancelToken, ProgressFn, check_cancel, null_progress
+from autohaptics.records import params_to_dict
+from autohaptics.timebase import FRAMES_PER_TICK, n_ticks as ticks_for
+
+_AUDIO_SHARE = 0.15  # share of the progress bar given to the audio pass when there is video
+
+
+def file_sha256(path: str | Path, *, chunk: int = 1 << 20) -> str:
+    """SHA-256 of a file, read in 1 MiB chunks."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        while True:
+            b = fh.read(chunk)
+            if not b:
+                break
+            h.update(b)
+    return h.hexdigest()
+
+
+def analyse(path: str | Path, params: GenerateParams | None = None, *, progress: ProgressFn | None = None,
+            cancel: CancelToken | None = None, info: media.MediaInfo | None = None,
+            between_passes: Callable[[], Any] | None = None) -> Analysis:
+    """Decode ``path`` once per stream and compute the feature cache.
+
+    between_passes : called after each pass (the process's owner returns freed memory there).
+    Raises MediaError for unusable input (missing, not media, truncated, no audio in audio mode).
+    """
+    params = params or GenerateParams()
+    progress = progress or null_progress
+    info = info or media.probe(path)
+    n = ticks_for(info.duration_s)
+    stats: dict[str, Any] = {}
+    t0 = time.perf_counter()
+    sha = file_sha256(path)
+    stats["hash"] = {"seconds": time.perf_counter() - t0}
+    check_cancel(cancel)
+
+    need_colour = "temperature" in params.tracks and info.video is not None
+    need_flow = "fans" in params.tracks and info.video is not None
+    need_vib = "vibration" in params.tracks
+    audio = None
+    audio_share = _AUDIO_SHARE if info.video is not None else 1.0
+    if info.audio is None:
+        if params.mode == "audio" and need_vib:
+            raise MediaError(f"{info.path}: no audio stream (mode 'audio' needs one)")
+        stats["audio"] = {"skipped": "no audio stream"}
+    else:
+        audio = _audio_pass(info, params, n, stats, progress, cancel, share=audio_share)
+        if between_passes is not None:
+            between_passes()
+
+    video = None
+    need_saliency = _saliency_needed(params, audio, n) if (need_vib and info.video is not None) else np.zeros(n, bool)
+    if info.video is None:
+        if params.mode == "visual" and need_vib:
+            raise MediaError(f"{info.path}: no video stream (mode 'visual' needs one)")
+        stats["video"] = {"skipped": "no video stream"}
+    elif need_colour or need_flow or need_saliency.any():
+        t0 = time.perf_counter()
+
+        def video_progress(stage: str, fraction: float) -> None:
+            progress(stage, audio_share + (1.0 - audio_share) * fraction)
+
+        video = video_pass(info, n, params=params, need_saliency=need_saliency, need_flow=need_flow,
+                           need_colour=need_colour, progress=video_progress, cancel=cancel)
+        stats["video"] = {"seconds": time.perf_counter() - t0, **video.stats}
+        if between_passes is not None:
+            between_passes()
+    else:
+        stats["video"] = {"skipped": "no track needs the picture"}
+    if not params.allow_truncated:
+        _check_truncation(info, audio_end=stats["audio"].get("decoded_s") if audio is not None else None,
+                          video_end=(video.stats["frames"]["last_time_s"] + 1.0 / max(info.video.fps, 1.0))
+                          if video is not None else None)
+    progress("done", 1.0)
+    return Analysis(info=info.to_dict(), sha256=sha, n_ticks=n, params=params_to_dict(params),
+                    audio=audio, video=video, stats=stats)
+
+
+def _check_truncation(info: media.MediaInfo, *, audio_end: float | None, video_end: float | None) -> None:
+    """MediaError when the decoded streams end clearly before the file says they should.
+
+    A file cut short ends every stream early; a film whose audio simply outlasts its picture (or
+    the reverse) is not truncated: the LATEST decoded end is compared with the container's
+    duration. A stream decoded alone is compared with its own declared duration when the
+    container gives one (else with the container's, when it is the only stream).
+    """
+    ends = {name: end for name, end in (("audio", audio_end), ("video", video_end)) if end is not None}
+    if not ends:
+        return
+    if len(ends) == 2 or (info.audio is None) != (info.video is None):
+        name = max(ends, key=ends.get)
+        media.check_truncation(info, ends[name], name if len(ends) == 1 else "audio and video")
+        return
+    (name, end), = ends.items()
+    declared = getattr(info, name).duration_s
+    if declared:
+        media.check_truncation(dataclasses.replace(info, duration_s=declared), end, name)
+
+
+def _saliency_needed(params: GenerateParams, audio: dict | None, n: int) -> np.ndarray:
+    """Ticks whose saliency the mode needs: every tick for "visual" (and for "multimodal" without
+    skipping), the ticks with non-zero audio intensity for "multimodal", none otherwise."""
+    if params.mode == "visual" or (params.mode == "multimodal" and not params.video.skip):
+        return np.ones(n, bool)
+    if params.mode != "multimodal" or audio is None:
+        return np.zeros(n, bool)
+    norm = inten.normalise_features(audio, params=params.intensity)
+    return inten.tick_intensity(norm, n, params=params.intensity) > 0
+
+
+def _audio_pass(info: media.MediaInfo, params: GenerateParams, n: int, stats: dict,
+                progress: ProgressFn, cancel: CancelToken | None, *, share: float) -> dict[str, np.ndarray]:
+    t0 = time.perf_counter()
+    report = media.AudioReport()
+    duration = info.duration_s
+
+    def chunk_progress(seconds_done: float) -> None:
+        check_cancel(cancel)
+        progress("audio", share * min(1.0, seconds_done / duration))
+
+    chunks = media.iter_audio(info.path, info=info, lfe_gain_db=params.lfe_gain_db, report=report)
+    feats = af.compute_audio_features(chunks, params=params.audio, progress=chunk_progress, cancel=cancel)
+    n_frames = n * FRAMES_PER_TICK
+    out = {}
+    for name in inten.FEATURES:
+        x = np.asarray(getattr(feats, name), dtype=np.float64)
+        x = np.where(np.isfinite(x), np.maximum(x, 0.0), 0.0)
+        if x.size < n_frames:
+            x = np.concatenate([x, np.zeros(n_frames - x.size)])
+        out[name] = x[:n_frames]
+    stats["audio"] = {
+        "seconds": time.perf_counter() - t0, "frames": int(n_frames), "decoded_s": round(report.duration_s, 4),
+        "nonfinite_samples_repaired": report.nonfinite_samples, "decode_errors": report.decode_errors,
+        "downmix": {"main_channels": report.main_channels, "lfe_channel": report.lfe_channel,
+                    "lfe_gain_db": params.lfe_gain_db},
+    }
+    return out

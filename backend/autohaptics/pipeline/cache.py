@@ -1,0 +1,63 @@
+"""The analysis cache: what :func:`~autohaptics.pipeline.derive.derive` needs of a film, stored as
+one .npz file, and whether it can serve a set of parameters."""
+
+from __future__ import annotations
+
+import io
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from autohaptics import __version__
+from autohaptics.params import GenerateParams, analysis_key
+from autohaptics.pipeline.video import VideoAnalysis
+from autohaptics.records import params_to_dict
+
+
+@dataclass
+class Analysis:
+    """The feature cache of one file: what :func:`derive` needs, nothing that depends on thresholds.
+
+    audio : {"loudness" sone, "sharpness" acum, "booming" 1, "low_energy" Pa^2}, each float64
+        [shape=(n_frames,)] on the 20 ms grid, n_frames = n_ticks * 5; None without an audio stream.
+    """
+
+    info: dict
+    sha256: str
+    n_ticks: int
+    params: dict
+    audio: dict[str, np.ndarray] | None
+    video: VideoAnalysis | None = None
+    stats: dict = field(default_factory=dict)
+
+    def save(self, path: str | Path) -> None:
+        """Write the cache as one .npz file (arrays plus a JSON header)."""
+        arrays = {f"audio_{k}": v for k, v in (self.audio or {}).items()}
+        if self.video is not None:
+            arrays.update({f"video_{k}": v for k, v in self.video.arrays().items()})
+        header = {"info": self.info, "sha256": self.sha256, "n_ticks": self.n_ticks, "params": self.params,
+                  "stats": self.stats, "has_audio": self.audio is not None, "has_video": self.video is not None,
+                  "version": __version__}
+        buf = io.BytesIO()
+        np.savez(buf, header=np.frombuffer(json.dumps(header).encode(), dtype=np.uint8), **arrays)
+        Path(path).write_bytes(buf.getvalue())
+
+    @classmethod
+    def load(cls, path: str | Path) -> "Analysis":
+        with np.load(path, allow_pickle=False) as z:
+            header = json.loads(bytes(z["header"]).decode())
+            audio = {k[len("audio_"):]: z[k] for k in z.files if k.startswith("audio_")}
+            video = {k[len("video_"):]: z[k] for k in z.files if k.startswith("video_")}
+        return cls(info=header["info"], sha256=header["sha256"], n_ticks=int(header["n_ticks"]),
+                   params=header["params"], audio=audio if header["has_audio"] else None,
+                   video=VideoAnalysis.from_arrays(video) if header.get("has_video") else None,
+                   stats=header["stats"])
+
+
+def reusable(analysis: Analysis, params: GenerateParams | dict) -> bool:
+    """True when ``analysis`` was computed with the analysis-time parameters of ``params`` (a
+    record or its ``params_to_dict`` form): deriving from it then equals analysing again."""
+    doc = params if isinstance(params, dict) else params_to_dict(params)
+    return analysis_key(analysis.params) == analysis_key(doc)

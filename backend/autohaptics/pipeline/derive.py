@@ -1,0 +1,84 @@
+"""The derive: a feature cache and the derive-time parameters (thresholds, mode, mappings, the fan
+rule) -> a :class:`~autohaptics.timeline.Timeline`, without decoding (milliseconds for a feature
+film). Each track comes from its stage: intensity and fusion (vibration), temperature, airflow (fans).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+
+import numpy as np
+
+from autohaptics import intensity as inten
+from autohaptics.airflow import fan_track
+from autohaptics.fusion import vibration_track
+from autohaptics.layout import TEMP_NEUTRAL_C
+from autohaptics.media import source_block
+from autohaptics.params import DEFAULT_PRESET, GenerateParams
+from autohaptics.pipeline.cache import Analysis
+from autohaptics.records import params_to_dict
+from autohaptics.temperature import temperature_track
+from autohaptics.timebase import TICK_S, frames_to_ticks
+from autohaptics.timeline import Timeline, default_generator
+
+
+def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: str = DEFAULT_PRESET) -> Timeline:
+    """Turn a feature cache into a timeline (no decoding; milliseconds for a feature film).
+
+    ``stats["needs_analysis"]`` is set when vibrating ticks lack saliency of their own (their
+    weights were borrowed or fell back to A5): analysing them would refine the timeline.
+    """
+    params = params or GenerateParams()
+    t0 = time.perf_counter()
+    n = analysis.n_ticks
+    tl = Timeline.empty(n, source=source_block(analysis.info, sha256=analysis.sha256))
+    stats = json.loads(json.dumps(analysis.stats))
+    intensity = _intensity(analysis, params, tl)
+    video = analysis.video
+    if "vibration" in params.tracks:
+        vib, vstats = vibration_track(params.mode, intensity, seed=params.seed,
+                                      beta=None if video is None else video.beta,
+                                      have_beta=None if video is None else video.saliency_mask,
+                                      cut=None if video is None else video.cut)
+        tl.vibration[:] = vib
+        if params.mode == "multimodal":
+            stats["fusion"] = vstats
+            if vstats.get("ticks_estimated"):
+                stats["needs_analysis"] = True
+    temp_low, temp_high = float(params.thermal.temp_low), float(params.thermal.temp_high)
+    tl.temperature_c[:] = float(np.clip(TEMP_NEUTRAL_C, temp_low, temp_high))
+    if "temperature" in params.tracks and video is not None:
+        tl.temperature_c[:] = temperature_track(video.mean_rgb, params=params.thermal, tick_s=TICK_S)
+    if video is not None:
+        peak = float(video.motion.max()) if video.motion.size else 0.0
+        tl.features["motion"] = np.clip(video.motion / peak, 0.0, 1.0) if peak > 0 else np.zeros(n)
+        tl.features["motion_fw_per_s"] = video.motion.astype(np.float64)
+        if "fans" in params.tracks:
+            _, stats["airflow"] = fan_track(video.motion, video.cell_motion, video.nearness, video.cut,
+                                            video.depth_mask, params=params.airflow, out=tl.fans)
+    gen_params = params_to_dict(params)
+    gen_params["thresholds"] = dict(params.intensity.thresholds)
+    gen_params["temp_low"], gen_params["temp_high"] = temp_low, temp_high
+    tl.generator = default_generator(mode=params.mode, preset=preset, params=gen_params)
+    stats["derive"] = {"seconds": time.perf_counter() - t0}
+    stats["vibration"] = {"active_ticks": int((tl.vibration.max(axis=1) > 0).sum()), "ticks": n}
+    tl.stats = stats
+    return tl.validate()
+
+
+def _intensity(analysis: Analysis, params: GenerateParams, tl: Timeline) -> np.ndarray:
+    """The per-tick audio intensity (0 everywhere without an audio stream); the normalised
+    features go into ``tl.features``."""
+    n = analysis.n_ticks
+    if analysis.audio is None:
+        for name in inten.FEATURES:
+            tl.features[name] = np.zeros(n)
+        intensity = np.zeros(n)
+    else:
+        norm = inten.normalise_features(analysis.audio, params=params.intensity)
+        intensity = inten.tick_intensity(norm, n, params=params.intensity)
+        for name in inten.FEATURES:
+            tl.features[name] = frames_to_ticks(norm[name], n)
+    tl.features["intensity"] = intensity
+    return intensity

@@ -1,0 +1,368 @@
+"""The video pass: which frames are analysed, at what size, and which stages run on them.
+
+Per 100 ms tick k the pass takes the decoded frame nearest the tick's centre (``video.analysis``
+"tick") and the frame that follows it (a flow pair over one frame interval), or every decoded
+frame ("every", the reference: colour, motion and depth are averaged over the tick's frames;
+saliency stays on the centre frame, because averaging salient positions across a tick would put
+weight where no object ever was). Results per tick (:class:`VideoAnalysis`):
+
+- ``mean_rgb``   mean colour, float32 [shape=(n, 3)], 0..255 (temperature)
+- ``cut``, ``static``  a hard cut at tick k; the flow pair is identical up to noise (no flow)
+- ``motion``     mean flow magnitude, frame widths/s, float32 [shape=(n,)]
+- ``cell_motion``, ``nearness``  per fan cell, float16 [shape=(n, 9, 17)] (nearness only where depth ran)
+- ``beta``       actuator weights from saliency fusion, 0..1, only where saliency ran, [shape=(n, 9)]
+
+Skipping (``video.skip``): saliency where the audio intensity is zero (unless the mode needs every
+tick), flow on static pairs and across cuts, depth where the motion is below the airflow floor.
+Proxies are made only when a stage runs. A tick without a frame of its own (below 10 fps, or a later
+tick of a ``video.stride`` group) holds the values of the analysed tick before it.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import cv2
+import numpy as np
+
+from autohaptics import fusion, media
+from autohaptics.airflow import cuts, depth
+from autohaptics.airflow.pair import PairParams, pair_motion
+from autohaptics.fusion import saliency
+from autohaptics.imaging import resized
+from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS
+from autohaptics.params import GenerateParams
+from autohaptics.progress import CancelToken, ProgressFn, check_cancel
+from autohaptics.temperature import mean_colour
+from autohaptics.timebase import TICK_S, tick_of_time
+
+# Cut signatures are always taken from an RGB proxy this wide, so every two frames compare alike
+# (a histogram of a 128 px proxy is wider than one of a 48 px proxy of the same picture).
+SIGNATURE_WIDTH = 48
+STAGES = ("decode_wait", "proxy", "cuts", "static", "colour", "saliency", "flow", "depth")
+
+
+@dataclass
+class VideoAnalysis:
+    """Per-tick results of the video pass (see the module docstring for units)."""
+
+    mean_rgb: np.ndarray
+    cut: np.ndarray
+    static: np.ndarray
+    motion: np.ndarray
+    cell_motion: np.ndarray
+    nearness: np.ndarray
+    depth_mask: np.ndarray
+    flow_mask: np.ndarray
+    beta: np.ndarray
+    saliency_mask: np.ndarray
+    frame_mask: np.ndarray
+    stats: dict = field(default_factory=dict)
+
+    ARRAYS = ("mean_rgb", "cut", "static", "motion", "cell_motion", "nearness", "depth_mask", "flow_mask",
+              "beta", "saliency_mask", "frame_mask")
+
+    @classmethod
+    def empty(cls, n: int) -> "VideoAnalysis":
+        return cls(
+            mean_rgb=np.zeros((n, 3), np.float32), cut=np.zeros(n, bool), static=np.zeros(n, bool),
+            motion=np.zeros(n, np.float32), cell_motion=np.zeros((n, FAN_ROWS, FAN_COLS), np.float16),
+            nearness=np.zeros((n, FAN_ROWS, FAN_COLS), np.float16), depth_mask=np.zeros(n, bool),
+            flow_mask=np.zeros(n, bool), beta=np.zeros((n, N_ACTUATORS), np.float32),
+            saliency_mask=np.zeros(n, bool), frame_mask=np.zeros(n, bool))
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {name: getattr(self, name) for name in self.ARRAYS}
+
+    @classmethod
+    def from_arrays(cls, arrays: dict[str, np.ndarray], stats: dict | None = None) -> "VideoAnalysis":
+        return cls(**{name: arrays[name] for name in cls.ARRAYS}, stats=stats or {})
+
+
+class _Stage:
+    """Seconds and tick counts of one stage."""
+
+    def __init__(self):
+        self.seconds = 0.0
+        self.computed = 0
+
+    def run(self, fn, *args, **kwargs):
+        t0 = time.perf_counter()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            self.seconds += time.perf_counter() - t0
+            self.computed += 1
+
+
+def video_pass(info: media.MediaInfo, n: int, *, params: GenerateParams, need_saliency: np.ndarray,
+               need_flow: bool, need_colour: bool, progress: ProgressFn | None = None,
+               cancel: CancelToken | None = None) -> VideoAnalysis:
+    """Decode the video once and run the per-tick stages (module docstring).
+
+    need_saliency : bool [shape=(n,)], ticks whose saliency is needed (already reflects skipping).
+    need_flow : compute motion and depth at all (the fans track is wanted).
+    need_colour : compute the mean colour (the temperature track is wanted).
+    """
+    vp = _Pass(info, n, params, need_saliency, need_flow, need_colour)
+    stream = media.iter_video(info.path, info=info, prefetch=params.video.prefetch, decode=params.video.decode)
+    duration = max(info.duration_s, 1e-9)
+    for frame, centre_tick in centre_frames(vp.timed(stream), n, int(params.video.stride)):
+        vp.frame(frame, centre_tick)
+        if frame.index % 16 == 0:
+            check_cancel(cancel)
+            if progress is not None:
+                progress("video", min(1.0, frame.time_s / duration))
+    return vp.finish()
+
+
+class _Pass:
+    """One video pass's state: the stages' parameters and backends, the previous frame's cut
+    signature and saliency luma, and the flow pair waiting for its successor frame."""
+
+    def __init__(self, info: media.MediaInfo, n: int, params: GenerateParams, need_saliency: np.ndarray,
+                 need_flow: bool, need_colour: bool):
+        flow_params = params.flow
+        if info.video is not None:  # the gray proxy's width follows the picture's (FlowParams.width_for)
+            flow_params = replace(flow_params, proxy_width=flow_params.width_for(info.video.display_size[0]))
+        self.n, self.params, self.flow_params = n, params, flow_params
+        self.need_saliency, self.need_flow, self.need_colour = need_saliency, need_flow, need_colour
+        self.stages = {name: _Stage() for name in STAGES}
+        self.sal_backend = saliency.make_saliency_backend(params.saliency) if need_saliency.any() else None
+        self.depth_backend = depth.make_depth_backend(params.depth) if need_flow else None
+        self.pair_params = PairParams(flow=flow_params, airflow=params.airflow, cuts=params.cuts, depth=params.depth,
+                                      floor=float(params.airflow.floor) if params.video.skip else -1.0,
+                                      skip=params.video.skip)
+        self.sal_luma_size = saliency.working_size(params.saliency)
+        # a backend fed the full frame's luma (spectral) needs only the proxy's size for its map: its
+        # RGB proxy is then not made wider than the luma it is resampled from
+        sal_width = params.saliency.proxy_width if self.sal_luma_size is None else min(
+            params.saliency.proxy_width, flow_params.proxy_width)
+        self.rgb_width = max(sal_width, params.depth.proxy_width if need_flow else 0)
+        self.every = params.video.analysis == "every"
+        self.stride = int(params.video.stride)
+        self.out = VideoAnalysis.empty(n)
+        self.acc = _Accumulator(self.out)
+        self.prev_sig = None  # signature of the previous analysed frame (cut detection)
+        self.prev_sal_gray = None  # luma of the previous saliency proxy (the saliency motion cue)
+        self.pending = None  # (tick, gray, rgb, sig, time) waiting for its successor frame (flow pair)
+        self.last_time = 0.0
+
+    def timed(self, stream):
+        """``stream``'s frames, the time spent waiting for each counted as ``decode_wait``."""
+        wait = self.stages["decode_wait"]
+        t = time.perf_counter()
+        for f in stream:
+            wait.seconds += time.perf_counter() - t
+            yield f
+            t = time.perf_counter()
+
+    def frame(self, frame: media.Frame, centre_tick: int | None) -> None:
+        """Take one decoded frame: the successor of the waiting flow pair, an analysed frame, both or neither."""
+        self.last_time = frame.time_s
+        k = min(int(tick_of_time(frame.time_s)), self.n - 1)
+        analyse_this = k >= 0 and (centre_tick is not None or self.every)
+        is_successor = self.pending is not None
+        if not (analyse_this or is_successor):
+            return
+        if centre_tick is not None:
+            k = centre_tick
+        want_sal = centre_tick is not None and bool(self.need_saliency[k:k + self.stride].any())
+        rgb, gray, luma, sig = self._proxies(frame, analyse_this, want_sal)
+        if is_successor:
+            self._pair(frame, gray, sig)
+        if analyse_this:
+            self._analyse(frame, k, rgb, gray, luma, sig, want_sal)
+
+    def _proxies(self, frame, analyse_this: bool, want_sal: bool):
+        st, fw = self.stages, self.flow_params.proxy_width
+        rgb = sig_rgb = luma = None
+        if analyse_this and (self.need_colour or want_sal or self.need_flow):
+            if want_sal and self.sal_luma_size is not None:
+                rgb, gray, luma = st["proxy"].run(frame.rgb_and_gray, self.rgb_width, fw, luma_size=self.sal_luma_size)
+            else:
+                rgb, gray = st["proxy"].run(frame.rgb_and_gray, self.rgb_width, fw)
+            sig_rgb = resized(rgb, SIGNATURE_WIDTH)
+        else:
+            gray = st["proxy"].run(frame.gray, fw)
+        sig = st["cuts"].run(cuts.frame_signature, sig_rgb) if sig_rgb is not None else None
+        return rgb, gray, luma, sig
+
+    def _pair(self, frame, gray, sig) -> None:
+        """The waiting flow pair's motion, now that its successor frame is here."""
+        pk, pgray, prgb, psig, pt = self.pending
+        self.pending = None
+        st = self.stages
+
+        def successor_sig():
+            # colour matters for the in-pair cut check (a green and a grey shot can share their
+            # luma); read only when the pair moves enough to matter
+            return sig if sig is not None else st["cuts"].run(
+                cuts.frame_signature, st["proxy"].run(frame.proxy, SIGNATURE_WIDTH))
+
+        res = pair_motion(pgray, gray, prgb, psig, successor_sig, max(frame.time_s - pt, 1e-3),
+                          params=self.pair_params, depth_backend=self.depth_backend,
+                          timer=lambda name, fn, *a, **kw: st[name].run(fn, *a, **kw))
+        if res.cut:
+            self.out.cut[pk] = True
+            return
+        if res.static:
+            self.out.static[pk] = True  # nothing moved beyond noise, or only the brightness changed (a fade)
+        else:
+            self.out.flow_mask[pk] = True
+        self.acc.add_motion(pk, res.score, res.cells)
+        if res.near is not None:
+            self.acc.add_near(pk, res.near)
+            self.out.depth_mask[pk] = True
+
+    def _analyse(self, frame, k: int, rgb, gray, luma, sig, want_sal: bool) -> None:
+        """Colour, the cut against the previous analysed frame, saliency, and the flow pair to come."""
+        out, st, params = self.out, self.stages, self.params
+        out.frame_mask[k] = True
+        if sig is None:
+            sig = st["cuts"].run(cuts.frame_signature, gray)
+        if self.prev_sig is not None and self.prev_sig.shape == sig.shape and \
+                cuts.is_cut(self.prev_sig, sig, params=params.cuts):
+            out.cut[k] = True
+        self.prev_sig = sig
+        if self.need_colour:
+            self.acc.add_colour(k, st["colour"].run(mean_colour, rgb))
+        if want_sal:
+            # no wider than the picture itself: upsampling a 64 px film to a 256 px map adds
+            # nothing but work (16x the pixels on each of a 2-hour film's 72,000 ticks)
+            sal_rgb = resized(rgb, min(params.saliency.proxy_width, max(1, frame.width)))
+            sal_gray = cv2.cvtColor(sal_rgb, cv2.COLOR_RGB2GRAY) if params.saliency.motion_weight > 0 else None
+            smap = st["saliency"].run(saliency.saliency_map, sal_rgb, params=params.saliency,
+                                      backend=self.sal_backend, prev_gray=self.prev_sal_gray, luma=luma)
+            self.prev_sal_gray = sal_gray
+            self.acc.add_beta(k, fusion.actuator_weights(smap, params=params.fusion))
+        if self.need_flow:
+            self.pending = (k, gray, rgb, sig, frame.time_s)
+
+    def finish(self) -> VideoAnalysis:
+        """The per-tick results with their stats (ticks held, skipped, computed per stage)."""
+        out, n = self.out, self.n
+        self.acc.finish()
+        if self.pending is not None and self.pending[0] > 0 and self.acc.motion_n[self.pending[0]] == 0:
+            # the clip ended before the last analysed frame's successor: its motion is unknown, so the
+            # tick holds the previous analysed one's (the rule for ticks without a frame of their own)
+            k = self.pending[0]
+            before = np.flatnonzero(out.frame_mask[:k])
+            if before.size:
+                for name in ("motion", "cell_motion", "nearness", "depth_mask", "static"):
+                    getattr(out, name)[k] = getattr(out, name)[before[-1]]
+        computed = {"saliency": out.saliency_mask.copy(), "flow": out.flow_mask.copy(), "depth": out.depth_mask.copy()}
+        sources = _hold_missing(out)
+        out.stats = {name: {"seconds": round(st.seconds, 4), "computed": st.computed} for name, st in self.stages.items()}
+        for name, mask in computed.items():
+            # held: ticks without a frame of their own that took the values of the analysed tick before
+            # them, where that tick computed the stage; one that copied a tick which skipped it counts as skipped
+            done, held = int(mask.sum()), int(mask[sources].sum())
+            out.stats[name].update({"ticks_computed": done, "ticks_held": held, "ticks_skipped": int(n - done - held)})
+        out.stats["flow"]["proxy_width"] = int(self.flow_params.proxy_width)
+        out.stats["static"]["ticks_static"] = int(out.static.sum())
+        out.stats["cuts"]["cuts"] = int(out.cut.sum())
+        out.stats["frames"] = {"ticks_with_frame": int(out.frame_mask.sum()), "ticks": n,
+                               "last_time_s": round(self.last_time, 6)}
+        return out
+
+
+def centre_frames(frames, n: int, stride: int = 1):
+    """Yield every frame once, in order, as (frame, tick) where ``tick`` is the tick whose CENTRE
+    (0.1 k + 0.05 s) this frame is nearest to among the tick's frames, else (frame, None).
+
+    The vibration of tick k goes with the picture at that instant, so that is the frame analysed
+    for it (saliency; colour and flow too in the tick analysis); the frame is known one frame late
+    (one frame of look-ahead). With ``stride`` s > 1 the ticks go in groups of s (the last one may
+    be shorter): the frame nearest the group's centre is chosen, and ``tick`` is the group's first.
+    """
+    held = None  # (frame, tick): the best candidate so far for its tick (group), not yet yielded
+    done = -1  # last tick (group's first tick) whose frame was chosen
+    for f in frames:
+        k = min(int(tick_of_time(f.time_s)), n - 1)
+        if stride > 1 and k >= 0:
+            k -= k % stride
+        if held is not None:
+            hf, hk = held
+            centre = (hk + 0.5 * min(stride, n - hk)) * TICK_S
+            if k == hk and abs(f.time_s - centre) < abs(hf.time_s - centre):
+                yield hf, None
+                held = (f, k)
+                continue
+            yield hf, hk
+            done = hk
+            held = None
+        if k > done and k >= 0:
+            held = (f, k)
+        else:
+            yield f, None
+    if held is not None:
+        yield held
+
+
+class _Accumulator:
+    """Per-tick sums written straight into the output arrays (several frames per tick in the
+    'every' analysis), divided by the counts at the end: no second set of (n, 9, 17) arrays."""
+
+    def __init__(self, out: VideoAnalysis):
+        self.out = out
+        n = out.motion.size
+        self.colour_n = np.zeros(n, np.int32)
+        self.beta_n = np.zeros(n, np.int32)
+        self.motion_n = np.zeros(n, np.int32)
+        self.near_n = np.zeros(n, np.int32)
+
+    def add_colour(self, k, rgb_mean):
+        self.out.mean_rgb[k] += rgb_mean
+        self.colour_n[k] += 1
+
+    def add_beta(self, k, beta):
+        self.out.beta[k] += beta
+        self.beta_n[k] += 1
+
+    def add_motion(self, k, score, cells):
+        self.out.motion[k] += score
+        self.out.cell_motion[k] += cells
+        self.motion_n[k] += 1
+
+    def add_near(self, k, near):
+        self.out.nearness[k] += near
+        self.near_n[k] += 1
+
+    def finish(self) -> None:
+        out = self.out
+
+        def mean(arr, count):
+            many = count > 1
+            if many.any():
+                arr[many] /= count[many].reshape((-1,) + (1,) * (arr.ndim - 1)).astype(arr.dtype)
+            return count > 0
+
+        mean(out.mean_rgb, self.colour_n)
+        ok = mean(out.beta, self.beta_n)
+        many = self.beta_n > 1
+        if many.any():  # the mean of several frames' weights: strongest actuator back to 1
+            peak = out.beta[many].max(axis=1, keepdims=True)
+            out.beta[many] = np.where(peak > 0, out.beta[many] / np.maximum(peak, 1e-12), out.beta[many])
+        out.saliency_mask[:] = ok
+        mean(out.motion, self.motion_n)
+        mean(out.cell_motion, self.motion_n)
+        mean(out.nearness, self.near_n)
+
+
+def _hold_missing(out: VideoAnalysis) -> np.ndarray:
+    """Ticks without a frame of their own (``video.stride`` > 1, a frame rate below 10 fps) take the
+    values of the analysed tick before them. Returns the analysed tick each filled tick copied,
+    int [shape=(filled,)]."""
+    missing = ~out.frame_mask
+    if not missing.any() or not out.frame_mask.any():
+        return np.zeros(0, np.int64)
+    idx = np.where(out.frame_mask, np.arange(out.frame_mask.size), -1)
+    src = np.maximum.accumulate(idx)
+    fill = missing & (src >= 0)
+    rows = np.flatnonzero(fill)
+    for name in ("mean_rgb", "motion", "cell_motion", "nearness", "depth_mask", "beta", "saliency_mask", "static"):
+        arr = getattr(out, name)
+        arr[rows] = arr[src[rows]]
+    return src[rows]
