@@ -5,10 +5,10 @@
  * and exposes the read-only debug handle `window.autohaptics` (tests and the benchmark read it).
  */
 
-import { Api } from "./api.js";
-import { h } from "./dom.js";
-import { errorText } from "./history.js";
-import { EditorPage, startEditorLoads } from "./pages/editor.js";
+import { Api } from "./data/api.js";
+import { h } from "./core/dom.js";
+import { errorText } from "./data/edit-session.js";
+import { EditorPage, startEditorLoads } from "./pages/editor/shell.js";
 import { ProjectsPage } from "./pages/projects.js";
 
 const api = new Api("");
@@ -24,7 +24,7 @@ function editorRoute() {
   return m ? decodeURIComponent(m[1]) : null;
 }
 
-/** @param {import("./pages/editor.js").EditorLoads} [loads] requests already started for this route */
+/** @param {import("./pages/editor/shell.js").EditorLoads} [loads] requests already started for this route */
 async function route(loads) {
   if (page) page.destroy();
   page = null;

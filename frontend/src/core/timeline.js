@@ -7,7 +7,7 @@
  * (`seek`, `selection`); `view` on every zoom/scroll change (the editor saves it, debounced).
  */
 
-import { Emitter } from "../events.js";
+import { Emitter } from "./events.js";
 
 export const LABEL_WIDTH = 132;
 export const RULER_HEIGHT = 24;

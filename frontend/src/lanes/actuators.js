@@ -4,15 +4,15 @@
  * scaled onto the lane without smoothing.
  */
 
-import { HEAT_LUT } from "../colormap.js";
-import { ACTUATOR_IDS, N_ACTUATORS } from "../timeline-data.js";
+import { HEAT_LUT } from "../core/colormap.js";
+import { ACTUATOR_IDS, N_ACTUATORS } from "../data/timeline-data.js";
 import { Columns, background, message } from "./common.js";
 
 const ROW_H = 15;
 
 export class ActuatorsLane {
   /**
-   * @param {{data: () => import("../timeline-data.js").TimelineData|null, zones?: Record<string, string>}} hooks
+   * @param {{data: () => import("../data/timeline-data.js").TimelineData|null, zones?: Record<string, string>}} hooks
    */
   constructor(hooks) {
     this.id = "actuators";

@@ -2,7 +2,7 @@
  * Helpers every lane uses: per-pixel-column envelopes read from a pyramid, and plain backgrounds.
  */
 
-import { COLORS } from "../colormap.js";
+import { COLORS } from "../core/colormap.js";
 
 export class Columns {
   constructor() {
@@ -12,7 +12,7 @@ export class Columns {
 
   /**
    * Fill min/max per pixel column of the visible range.
-   * @param {import("../pyramid.js").MinMaxPyramid} pyr
+   * @param {import("../data/pyramid.js").MinMaxPyramid} pyr
    * @param {import("../core/timeline.js").TimelineView} view
    * @param {number} width
    * @param {number} samplesPerS samples per second of `pyr` (10 for ticks)

@@ -3,11 +3,11 @@
  * over the video at the playhead by ../fan-overlay.js).
  */
 
-import { COLORS } from "../colormap.js";
+import { COLORS } from "../core/colormap.js";
 import { Columns, areaPath, background, message } from "./common.js";
 
 export class FansLane {
-  /** @param {{data: () => import("../timeline-data.js").TimelineData|null}} hooks */
+  /** @param {{data: () => import("../data/timeline-data.js").TimelineData|null}} hooks */
   constructor(hooks) {
     this.id = "fans";
     this.label = "Fans";

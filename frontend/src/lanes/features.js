@@ -5,7 +5,7 @@
  * sends to the server (PUT /params) to re-derive the vibration.
  */
 
-import { COLORS } from "../colormap.js";
+import { COLORS } from "../core/colormap.js";
 import { Columns, areaPath, background, message } from "./common.js";
 
 const PAD = 3;
@@ -13,7 +13,7 @@ const GRAB_PX = 6;
 
 /**
  * @typedef {{
- *   data: () => import("../timeline-data.js").TimelineData|null,
+ *   data: () => import("../data/timeline-data.js").TimelineData|null,
  *   threshold: (name: string) => number|null,
  *   onInput: (name: string, value: number) => void,
  *   onCommit: (name: string, value: number) => void,

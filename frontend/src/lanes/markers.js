@@ -4,7 +4,7 @@
  * it to rename, double-click empty space to add one.
  */
 
-import { COLORS } from "../colormap.js";
+import { COLORS } from "../core/colormap.js";
 import { background } from "./common.js";
 
 const HIT_PX = 6;

@@ -5,7 +5,7 @@
  *   into one `temp_points` op when the user applies it.
  */
 
-import { COLORS } from "../colormap.js";
+import { COLORS } from "../core/colormap.js";
 import { background, message, Columns } from "./common.js";
 import { drawCurve } from "./curve.js";
 import { PencilStroke } from "./pencil.js";
@@ -15,7 +15,7 @@ const HIT_PX = 7;
 
 /**
  * @typedef {{
- *   data: () => import("../timeline-data.js").TimelineData|null,
+ *   data: () => import("../data/timeline-data.js").TimelineData|null,
  *   range: () => {lo: number, hi: number, neutral: number},
  *   onPencil: (op: Record<string, any>) => void,
  *   onPointsChange: (points: Array<[number, number]>) => void,

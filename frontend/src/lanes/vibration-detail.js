@@ -3,8 +3,8 @@
  * per-tick values (y = intensity) and becomes one `pencil` op on release.
  */
 
-import { COLORS } from "../colormap.js";
-import { ACTUATOR_IDS } from "../timeline-data.js";
+import { COLORS } from "../core/colormap.js";
+import { ACTUATOR_IDS } from "../data/timeline-data.js";
 import { background, message } from "./common.js";
 import { Columns } from "./common.js";
 import { drawCurve } from "./curve.js";
@@ -14,7 +14,7 @@ const PAD = 4;
 
 export class VibrationDetailLane {
   /**
-   * @param {{data: () => import("../timeline-data.js").TimelineData|null,
+   * @param {{data: () => import("../data/timeline-data.js").TimelineData|null,
    *   onPencil: (op: Record<string, any>) => void, onChange: () => void}} hooks
    */
   constructor(hooks) {

@@ -3,8 +3,8 @@
  * from a min/max pyramid.
  */
 
-import { COLORS } from "../colormap.js";
-import { MinMaxPyramid } from "../pyramid.js";
+import { COLORS } from "../core/colormap.js";
+import { MinMaxPyramid } from "../data/pyramid.js";
 import { Columns, background, message } from "./common.js";
 
 export class WaveformLane {
@@ -21,7 +21,7 @@ export class WaveformLane {
     this.cols = new Columns();
   }
 
-  /** @param {import("../api.js").Waveform} wf */
+  /** @param {import("../data/api.js").Waveform} wf */
   setPeaks(wf) {
     if (!wf.points || !wf.duration_s) {
       this.pyr = null;

@@ -3,9 +3,9 @@
  * holds no state of its own; the editor calls `update()` with what is selected.
  */
 
-import { h } from "../dom.js";
-import { formatTime } from "../format.js";
-import { ACTUATOR_IDS } from "../timeline-data.js";
+import { h } from "../core/dom.js";
+import { formatTime } from "../data/format.js";
+import { ACTUATOR_IDS } from "../data/timeline-data.js";
 
 export const EDIT_LANES = [...ACTUATOR_IDS, "temperature", "fans"];
 const LANE_TEXT = /** @type {Record<string, string>} */ ({ temperature: "Temp", fans: "Fans" });

@@ -8,31 +8,31 @@
  * - playback position and connection status (neither): Player and the status line.
  */
 
-import { ApiError } from "../api.js";
-import { ChairDiagram } from "../chair.js";
-import { ChairSync } from "../chair-sync.js";
-import { FrameLoop } from "../core/frameloop.js";
-import { TimelineView } from "../core/timeline.js";
-import { h, promptDialog, toast } from "../dom.js";
-import { Clipboard, clearOp, fadeOp, markerAddOp, markerDeleteOp, markerUpdateOp, scaleOp, setOp, tempPointsOp } from "../editing.js";
-import { FanOverlay } from "../fan-overlay.js";
-import { formatTime } from "../format.js";
-import { EditSession, errorText } from "../history.js";
-import { ActuatorsLane } from "../lanes/actuators.js";
-import { FeatureLane } from "../lanes/features.js";
-import { FansLane } from "../lanes/fans.js";
-import { MarkersLane } from "../lanes/markers.js";
-import { TemperatureLane } from "../lanes/temperature.js";
-import { VibrationDetailLane } from "../lanes/vibration-detail.js";
-import { WaveformLane } from "../lanes/waveform.js";
-import { ChairPanel } from "../panels/chair-panel.js";
-import { exportMenu } from "../panels/export-menu.js";
-import { JobProgress } from "../panels/job-progress.js";
-import { regenerateDialog } from "../panels/regenerate.js";
-import { ThresholdsPanel } from "../panels/thresholds.js";
-import { EditToolbar } from "../panels/toolbar.js";
-import { Player } from "../player.js";
-import { ACTUATOR_IDS, AUDIO_FEATURES, FIRST_BLOCKS, TimelineData } from "../timeline-data.js";
+import { ApiError } from "../../data/api.js";
+import { ChairDiagram } from "../../chair/diagram.js";
+import { ChairSync } from "../../chair/sync.js";
+import { FrameLoop } from "../../core/frameloop.js";
+import { TimelineView } from "../../core/timeline.js";
+import { h, promptDialog, toast } from "../../core/dom.js";
+import { Clipboard, clearOp, fadeOp, markerAddOp, markerDeleteOp, markerUpdateOp, scaleOp, setOp, tempPointsOp } from "../../data/edit-ops.js";
+import { FanOverlay } from "../../chair/fan-overlay.js";
+import { formatTime } from "../../data/format.js";
+import { EditSession, errorText } from "../../data/edit-session.js";
+import { ActuatorsLane } from "../../lanes/actuators.js";
+import { FeatureLane } from "../../lanes/features.js";
+import { FansLane } from "../../lanes/fans.js";
+import { MarkersLane } from "../../lanes/markers.js";
+import { TemperatureLane } from "../../lanes/temperature.js";
+import { VibrationDetailLane } from "../../lanes/vibration-detail.js";
+import { WaveformLane } from "../../lanes/waveform.js";
+import { ChairPanel } from "../../chair/panel.js";
+import { exportMenu } from "../../panels/export-menu.js";
+import { JobProgress } from "../../panels/job-progress.js";
+import { regenerateDialog } from "../../panels/regenerate.js";
+import { ThresholdsPanel } from "../../panels/thresholds.js";
+import { EditToolbar } from "../../panels/toolbar.js";
+import { Player } from "../../core/player.js";
+import { ACTUATOR_IDS, AUDIO_FEATURES, FIRST_BLOCKS, TimelineData } from "../../data/timeline-data.js";
 
 const VIEW_SAVE_DELAY_MS = 600;
 const ZOOM_STEP = 1.5;
@@ -40,7 +40,7 @@ const ZOOM_STEP = 1.5;
 /**
  * @typedef {{
  *   config: Record<string, any>,
- *   api: import("../api.js").Api,
+ *   api: import("../../data/api.js").Api,
  * }} EditorContext
  */
 /**
@@ -48,7 +48,7 @@ const ZOOM_STEP = 1.5;
  * @typedef {Promise<{value: T}|{error: unknown}>} Settled
  */
 /**
- * @typedef {{project: Settled<import("../api.js").Project>, edits: Settled<import("../api.js").EditList>,
+ * @typedef {{project: Settled<import("../../data/api.js").Project>, edits: Settled<import("../../data/api.js").EditList>,
  *   bin: Settled<ArrayBuffer>|null}} EditorLoads
  */
 
@@ -56,7 +56,7 @@ const ZOOM_STEP = 1.5;
  * The requests the editor needs first, all at once. `early` holds the same requests when
  * index.html started them before the modules loaded. Failures are kept, not thrown, until the
  * editor reads them.
- * @param {import("../api.js").Api} api
+ * @param {import("../../data/api.js").Api} api
  * @param {string} projectId
  * @param {{project: Promise<Response>, edits: Promise<Response>, bin: Promise<Response>}|null} [early]
  * @returns {EditorLoads}
@@ -93,7 +93,7 @@ export class EditorPage {
     this.loop = new FrameLoop();
     /** @type {TimelineData|null} */
     this.data = null;
-    /** @type {import("../api.js").Project|null} */
+    /** @type {import("../../data/api.js").Project|null} */
     this.project = null;
     /** @type {EditSession|null} */
     this.session = null;
@@ -556,7 +556,7 @@ export class EditorPage {
     this._updateHistoryButtons();
   }
 
-  /** @param {import("../api.js").Project} project */
+  /** @param {import("../../data/api.js").Project} project */
   async _loadWaveform(project) {
     const n = project.n_ticks || Math.ceil((project.duration_s || 0) / this.tickS);
     const points = Math.max(1000, Math.min(60000, n * 4));
@@ -572,7 +572,7 @@ export class EditorPage {
     this.timeline.invalidate("waveform");
   }
 
-  /** @param {import("../api.js").Project} project */
+  /** @param {import("../../data/api.js").Project} project */
   _setNoTimeline(project) {
     const running = project.job && (project.job.status === "queued" || project.job.status === "running");
     if (!running) {
@@ -708,7 +708,7 @@ export class EditorPage {
     this._updateToolbar();
   }
 
-  /** @param {(sel: import("../core/timeline.js").Selection) => Record<string, any>} build */
+  /** @param {(sel: import("../../core/timeline.js").Selection) => Record<string, any>} build */
   _selectionOp(build) {
     const sel = this.timeline.selection;
     if (!sel) {
@@ -882,7 +882,7 @@ export class EditorPage {
     this.timeline.invalidate();
     if (!this.session || value === before) return;
     const thresholds = { ...this.thresholds };
-    /** @type {import("../api.js").Job|null} */
+    /** @type {import("../../data/api.js").Job|null} */
     let job = null;
     let derived = false;
     const ok = await this.session.run(async () => {
@@ -933,7 +933,7 @@ export class EditorPage {
     await this._followJob(res.job);
   }
 
-  /** @param {import("../api.js").Job} job */
+  /** @param {import("../../data/api.js").Job} job */
   async _followJob(job) {
     this.jobsFollowed += 1;
     try {
@@ -943,7 +943,7 @@ export class EditorPage {
     }
   }
 
-  /** @param {import("../api.js").Job} job */
+  /** @param {import("../../data/api.js").Job} job */
   async _followJobInner(job) {
     if (this.jobProgress) this.jobProgress.close();
     const progress = new JobProgress(this.api);

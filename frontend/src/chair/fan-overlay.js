@@ -4,7 +4,7 @@
  * (object-fit: contain leaves bars).
  */
 
-import { FAN_COLS, FAN_ROWS } from "./timeline-data.js";
+import { FAN_COLS, FAN_ROWS } from "../data/timeline-data.js";
 
 export class FanOverlay {
   /**

@@ -4,10 +4,10 @@
  * neither saved nor undoable; latency and comfort are the server's chair settings (stored there).
  */
 
-import { errorText } from "../history.js";
-import { Emitter } from "../events.js";
-import { h, progressBar, toast } from "../dom.js";
-import { formatTime } from "../format.js";
+import { errorText } from "../data/edit-session.js";
+import { Emitter } from "../core/events.js";
+import { h, progressBar, toast } from "../core/dom.js";
+import { formatTime } from "../data/format.js";
 
 export const LATENCY_RANGE_MS = [-500, 500];
 const ZONES = /** @type {const} */ ([
@@ -26,14 +26,14 @@ const STATE_TEXT = /** @type {Record<string, string>} */ ({
 });
 
 /**
- * @typedef {import("../api.js").ChairStatus} ChairStatus
+ * @typedef {import("../data/api.js").ChairStatus} ChairStatus
  * @typedef {{status: ChairStatus, active: boolean}} ChairPanelEvents
  */
 
 /** @extends {Emitter<{status: ChairPanelEvents}>} */
 export class ChairPanel extends Emitter {
   /**
-   * @param {import("../api.js").Api} api
+   * @param {import("../data/api.js").Api} api
    * @param {{projectId: string, range: () => {startS: number, endS: number, label: string}}} opts
    */
   constructor(api, { projectId, range }) {
@@ -273,7 +273,7 @@ export class ChairPanel extends Emitter {
   }
 
   /**
-   * @param {import("../api.js").ChairSettings} settings
+   * @param {import("../data/api.js").ChairSettings} settings
    * @param {boolean} force also overwrite a field the user is typing in
    */
   _renderSettings(settings, force) {

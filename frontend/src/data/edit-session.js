@@ -6,7 +6,7 @@
  */
 
 import { ApiError } from "./api.js";
-import { Emitter } from "./events.js";
+import { Emitter } from "../core/events.js";
 
 /**
  * @typedef {{revision: number, cursor: number, nOps: number}} HistoryState

@@ -4,7 +4,7 @@
  * layout the server sends (/api/config), grouped by zone: back, armrests, seat.
  */
 
-import { heatColor, temperatureColor } from "./colormap.js";
+import { heatColor, temperatureColor } from "../core/colormap.js";
 
 const SVG = "http://www.w3.org/2000/svg";
 
@@ -70,7 +70,7 @@ export class ChairDiagram {
   }
 
   /**
-   * @param {import("./timeline-data.js").TickValues|null} v values at the playhead (null: no timeline)
+   * @param {import("../data/timeline-data.js").TickValues|null} v values at the playhead (null: no timeline)
    * @param {string[]} ids actuator ids in the order of `v.vibration`
    */
   update(v, ids) {
