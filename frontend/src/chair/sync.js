@@ -10,7 +10,7 @@
  * `halt()` drops whatever is still queued (used by STOP).
  */
 
-import { ApiError } from "../data/api.js";
+import { ApiError } from "../data/http.js";
 
 export const HEARTBEAT_MS = 1000;
 

@@ -4,9 +4,7 @@
  */
 
 import { COLORS } from "../core/colormap.js";
-import { ACTUATOR_IDS } from "../data/timeline-data.js";
-import { background, message } from "./common.js";
-import { Columns } from "./common.js";
+import { Columns, background, message } from "./common.js";
 import { drawCurve } from "./curve.js";
 import { PencilStroke } from "./pencil.js";
 
@@ -14,8 +12,8 @@ const PAD = 4;
 
 export class VibrationDetailLane {
   /**
-   * @param {{data: () => import("../data/timeline-data.js").TimelineData|null,
-   *   onPencil: (op: Record<string, any>) => void, onChange: () => void}} hooks
+   * @param {{data: () => import("../data/timeline-data.js").TimelineData|null, actuatorIds: string[],
+   *   onPencil: (op: Record<string, any>) => void, onChange: () => void}} hooks actuator ids in the timeline's order
    */
   constructor(hooks) {
     this.id = "detail";
@@ -23,7 +21,7 @@ export class VibrationDetailLane {
     this.title = "One actuator's intensity as a curve; draw on it with the pencil tool";
     this.height = 64;
     this.hooks = hooks;
-    this.actuator = "A1";
+    this.actuator = hooks.actuatorIds[0];
     /** @type {PencilStroke|null} */
     this.stroke = null;
     this.cols = new Columns();
@@ -31,7 +29,7 @@ export class VibrationDetailLane {
 
   /** @param {string} id */
   setActuator(id) {
-    if (!ACTUATOR_IDS.includes(id)) return;
+    if (!this.hooks.actuatorIds.includes(id)) return;
     this.actuator = id;
     if (this.select) this.select.value = id;
     this.hooks.onChange();
@@ -43,7 +41,7 @@ export class VibrationDetailLane {
     select.className = "tl-select";
     select.setAttribute("aria-label", "Actuator shown in the detail lane");
     select.setAttribute("data-testid", "detail-actuator");
-    for (const id of ACTUATOR_IDS) select.add(new Option(id, id));
+    for (const id of this.hooks.actuatorIds) select.add(new Option(id, id));
     select.value = this.actuator;
     select.addEventListener("change", () => this.setActuator(select.value));
     this.select = select;
@@ -76,7 +74,7 @@ export class VibrationDetailLane {
       message(ctx, f.width, f.height, "");
       return;
     }
-    const pyr = data.vibrationPyr[ACTUATOR_IDS.indexOf(this.actuator)];
+    const pyr = data.vibrationPyr[this.hooks.actuatorIds.indexOf(this.actuator)];
     drawCurve(ctx, this.cols, pyr, f, 1 / data.tickS, (b) => this.yOf(b / 255), COLORS.vibration);
     if (this.stroke) this.stroke.draw(ctx, f.view, (v) => this.yOf(v));
   }

@@ -3,10 +3,11 @@
  * generation progress with Cancel; and the list of projects with open, rename, duplicate, delete.
  */
 
-import { isTerminal } from "../data/api.js";
-import { confirmDialog, h, progressBar, promptDialog, toast } from "../core/dom.js";
+import { isTerminal } from "../data/streams.js";
+import { h } from "../core/dom.js";
+import { confirmDialog, progressBar, promptDialog, toast } from "../panels/widgets.js";
 import { formatBytes, formatDate, formatTime } from "../data/format.js";
-import { errorText } from "../data/edit-session.js";
+import { errorText } from "../data/http.js";
 import { JobProgress } from "../panels/job-progress.js";
 
 const STATUS_TEXT = /** @type {Record<string, string>} */ ({

@@ -2,8 +2,9 @@
  * A generation job's progress bar with a Cancel button, fed by the job's Server-Sent Events.
  */
 
-import { errorText } from "../data/edit-session.js";
-import { h, progressBar } from "../core/dom.js";
+import { errorText } from "../data/http.js";
+import { h } from "../core/dom.js";
+import { progressBar } from "./widgets.js";
 
 const STAGES = /** @type {Record<string, string>} */ ({
   queued: "queued",

@@ -3,7 +3,8 @@
  * to POST to /generate, or null when cancelled.
  */
 
-import { h, modal } from "../core/dom.js";
+import { h } from "../core/dom.js";
+import { modal } from "./widgets.js";
 import { FEATURE_LABELS } from "../lanes/features.js";
 
 /**
