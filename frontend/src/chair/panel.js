@@ -43,14 +43,6 @@ export class ChairPanel extends Emitter {
     this.projectId = projectId;
     this.tickS = tickS;
     this.range = range;
-    /** @type {ChairStatus|null} */
-    this.status = null;
-    this.busy = false;
-    /** @type {null|(() => void)} */
-    this._unwatch = null;
-    /** @type {Promise<void>|null} */
-    this._settingsChain = null;
-
     this.portSelect = h("select", { class: "input chair-port", id: "chair-port", "data-testid": "chair-port" });
     this.refreshBtn = h("button", { class: "btn btn-small", type: "button", "aria-label": "Refresh the port list", title: "Refresh the port list", "data-testid": "chair-refresh", onclick: () => this.refreshPorts() }, "↻");
     this.connectBtn = h("button", { class: "btn btn-small btn-primary", type: "button", "data-testid": "chair-connect", onclick: () => this.toggleConnection() }, "Connect");
@@ -98,6 +90,13 @@ export class ChairPanel extends Emitter {
       chips,
       h("div", { class: "chair-row" }, this.pushBtn, this.pushProgress.el),
     );
+    /** @type {ChairStatus|null} */
+    this.status = null;
+    this.busy = false;
+    /** @type {null|(() => void)} */
+    this._unwatch = null;
+    /** @type {Promise<void>|null} */
+    this._settingsChain = null;
     this._render();
   }
 

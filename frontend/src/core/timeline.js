@@ -222,7 +222,7 @@ export class TimelineView extends Emitter {
     if (lane.title) label.title = lane.title;
     label.append(name);
     if (lane.decorateLabel) lane.decorateLabel(label);
-    const canvas = /** @type {HTMLCanvasElement} */ (h("canvas", { class: "tl-canvas" }));
+    const canvas = h("canvas", { class: "tl-canvas" });
     canvas.setAttribute("role", "img");
     canvas.setAttribute("aria-label", lane.title || lane.label);
     canvas.dataset.lane = lane.id;
@@ -307,7 +307,7 @@ export class TimelineView extends Emitter {
     rulerRow.style.height = `${RULER_HEIGHT}px`;
     const rulerLabel = h("div", { class: "tl-label tl-ruler-label" });
     rulerLabel.textContent = "time";
-    this.rulerCanvas = /** @type {HTMLCanvasElement} */ (h("canvas", { class: "tl-canvas tl-ruler" }));
+    this.rulerCanvas = h("canvas", { class: "tl-canvas tl-ruler" });
     this.rulerCanvas.setAttribute("data-testid", "ruler");
     this.rulerCanvas.setAttribute("aria-label", "Time ruler: click or drag to move the playhead");
     this.rulerCtx = /** @type {CanvasRenderingContext2D} */ (this.rulerCanvas.getContext("2d"));

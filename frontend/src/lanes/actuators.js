@@ -5,23 +5,23 @@
  */
 
 import { HEAT_LUT } from "../core/colormap.js";
-import { Columns, background, message } from "./common.js";
+import { BaseLane, background, message } from "./common.js";
 
 const ROW_H = 15;
 
-export class ActuatorsLane {
-  /**
-   * @param {{data: () => import("../data/timeline-data.js").TimelineData|null,
-   *   actuators: import("../data/layout.js").ActuatorInfo[]}} hooks the actuators in the timeline's order
-   */
+/**
+ * @typedef {{data: () => import("../data/timeline-data.js").TimelineData|null,
+ *   actuators: import("../data/layout.js").ActuatorInfo[]}} ActuatorsHooks the actuators in the timeline's order
+ */
+
+/** @extends {BaseLane<ActuatorsHooks>} */
+export class ActuatorsLane extends BaseLane {
+  /** @param {ActuatorsHooks} hooks */
   constructor(hooks) {
-    this.ids = hooks.actuators.map((a) => a.id);
-    this.id = "actuators";
-    this.label = "Vibration";
-    this.title = "Vibration A1..A9 as a heat map (dark = off, yellow = full); drag across rows to select them";
-    this.height = ROW_H * this.ids.length;
-    this.hooks = hooks;
-    this.cols = new Columns();
+    const ids = hooks.actuators.map((a) => a.id);
+    const title = `Vibration ${ids[0]}..${ids[ids.length - 1]} as a heat map (dark = off, yellow = full); drag across rows to select them`;
+    super({ id: "actuators", label: "Vibration", title, height: ROW_H * ids.length }, hooks);
+    this.ids = ids;
     /** @type {ImageData|null} */
     this.image = null;
     this.scratch = document.createElement("canvas");

@@ -6,7 +6,7 @@
  */
 
 import { COLORS } from "../core/colormap.js";
-import { background, message, Columns } from "./common.js";
+import { BaseLane, background, message } from "./common.js";
 import { drawCurve } from "./curve.js";
 import { PencilStroke } from "./pencil.js";
 
@@ -22,21 +22,18 @@ const HIT_PX = 7;
  * }} TemperatureHooks
  */
 
-export class TemperatureLane {
+/** @extends {BaseLane<TemperatureHooks>} */
+export class TemperatureLane extends BaseLane {
   /** @param {TemperatureHooks} hooks */
   constructor(hooks) {
-    this.id = "temperature";
-    this.label = "Temperature";
-    this.title = "Target temperature in °C (dashed: neutral); pencil draws, points tool places breakpoints";
-    this.height = 72;
-    this.hooks = hooks;
+    const title = "Target temperature in °C (dashed: neutral); pencil draws, points tool places breakpoints";
+    super({ id: "temperature", label: "Temperature", title, height: 72 }, hooks);
     /** @type {PencilStroke|null} */
     this.stroke = null;
     /** @type {Array<[number, number]>} draft breakpoints [tick, C], sorted by tick */
     this.points = [];
     /** @type {number} index of the point being dragged */
     this._dragging = -1;
-    this.cols = new Columns();
   }
 
   /** @param {number} height */

@@ -4,27 +4,25 @@
  */
 
 import { COLORS } from "../core/colormap.js";
-import { Columns, background, message } from "./common.js";
+import { BaseLane, background, message } from "./common.js";
 import { drawCurve } from "./curve.js";
 import { PencilStroke } from "./pencil.js";
 
 const PAD = 4;
 
-export class VibrationDetailLane {
-  /**
-   * @param {{data: () => import("../data/timeline-data.js").TimelineData|null, actuatorIds: string[],
-   *   onPencil: (op: Record<string, any>) => void, onChange: () => void}} hooks actuator ids in the timeline's order
-   */
+/**
+ * @typedef {{data: () => import("../data/timeline-data.js").TimelineData|null, actuatorIds: string[],
+ *   onPencil: (op: Record<string, any>) => void, onChange: () => void}} DetailHooks actuator ids in the timeline's order
+ */
+
+/** @extends {BaseLane<DetailHooks>} */
+export class VibrationDetailLane extends BaseLane {
+  /** @param {DetailHooks} hooks */
   constructor(hooks) {
-    this.id = "detail";
-    this.label = "Detail";
-    this.title = "One actuator's intensity as a curve; draw on it with the pencil tool";
-    this.height = 64;
-    this.hooks = hooks;
+    super({ id: "detail", label: "Detail", title: "One actuator's intensity as a curve; draw on it with the pencil tool", height: 64 }, hooks);
     this.actuator = hooks.actuatorIds[0];
     /** @type {PencilStroke|null} */
     this.stroke = null;
-    this.cols = new Columns();
   }
 
   /** @param {string} id */

@@ -5,20 +5,17 @@
 
 import { COLORS } from "../core/colormap.js";
 import { MinMaxPyramid } from "../data/pyramid.js";
-import { Columns, background, message } from "./common.js";
+import { BaseLane, background, message } from "./common.js";
 
-export class WaveformLane {
+/** @extends {BaseLane<null>} */
+export class WaveformLane extends BaseLane {
   /** @param {{height?: number}} [opts] */
   constructor(opts = {}) {
-    this.id = "waveform";
-    this.label = "Audio";
-    this.title = "Audio waveform (peaks computed by the server)";
-    this.height = opts.height ?? 56;
+    super({ id: "waveform", label: "Audio", title: "Audio waveform (peaks computed by the server)", height: opts.height ?? 56 }, null);
     /** @type {MinMaxPyramid|null} */
     this.pyr = null;
     this.pointsPerS = 0;
     this.status = "Loading waveform…";
-    this.cols = new Columns();
   }
 
   /** @param {import("../data/api.js").Waveform} wf */

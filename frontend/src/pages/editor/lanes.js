@@ -56,7 +56,7 @@ export class EditorLanes {
       onPencil: (op) => page.edits.submitStroke(op, this.temperature),
       onPointsChange: (pts) => page.edits.takePoints(pts),
     });
-    this.fans = new FansLane({ data });
+    this.fans = new FansLane({ data, grid: { rows: page.layout.fanRows, cols: page.layout.fanCols } });
     const markers = page.markers;
     this.markers = new MarkersLane({
       markers: () => markers.list,

@@ -47,16 +47,13 @@ export class EditorPage {
     this.layout = ctx.layout;
     this.projectId = projectId;
     this.loop = new FrameLoop();
-    /** @type {import("../../data/timeline-data.js").TimelineData|null} */
-    this.data = null;
-    /** @type {import("../../data/api.js").Project|null} */
-    this.project = null;
-    /** @type {import("../../data/edit-session.js").EditSession|null} */
-    this.session = null;
-    /** @type {TimelineView|null} */
-    this.timeline = null;
-    /** @type {number|null} revision of the timeline last drawn on the lanes */
-    this.drawnRevision = null;
+    // What is open, each null until it is loaded or built.
+    this.project = /** @type {import("../../data/api.js").Project|null} */ (null);
+    this.data = /** @type {import("../../data/timeline-data.js").TimelineData|null} */ (null);
+    this.session = /** @type {import("../../data/edit-session.js").EditSession|null} */ (null);
+    this.timeline = /** @type {TimelineView|null} */ (null);
+    /** revision of the timeline last drawn on the lanes */
+    this.drawnRevision = /** @type {number|null} */ (null);
     this.disposed = false;
     /** @type {Array<() => void>} */
     this.cleanups = [];
