@@ -5,10 +5,13 @@
  * and exposes the read-only debug handle `window.autohaptics` (tests and the benchmark read it).
  */
 
-import { Api } from "./api.js";
-import { h } from "./dom.js";
-import { errorText } from "./history.js";
-import { EditorPage, startEditorLoads } from "./pages/editor.js";
+import { h } from "./core/dom.js";
+import { Api } from "./data/api.js";
+import { errorText } from "./data/http.js";
+import { chairLayout } from "./data/layout.js";
+import { clientXOf, debugState, laneRect, valuesAt } from "./pages/editor/debug.js";
+import { startEditorLoads } from "./pages/editor/loading.js";
+import { EditorPage } from "./pages/editor/shell.js";
 import { ProjectsPage } from "./pages/projects.js";
 
 const api = new Api("");
@@ -17,6 +20,8 @@ const app = /** @type {HTMLElement} */ (document.getElementById("app"));
 let page = null;
 /** @type {Record<string, any>} */
 let config = {};
+/** @type {import("./data/layout.js").ChairLayout|null} the chair, as config describes it */
+let layout = null;
 
 /** The project id of an editor URL (#/project/<id>), else null. */
 function editorRoute() {
@@ -24,14 +29,14 @@ function editorRoute() {
   return m ? decodeURIComponent(m[1]) : null;
 }
 
-/** @param {import("./pages/editor.js").EditorLoads} [loads] requests already started for this route */
+/** @param {import("./pages/editor/loading.js").EditorLoads} [loads] requests already started for this route */
 async function route(loads) {
   if (page) page.destroy();
   page = null;
   delete app.dataset.ready;
   const id = editorRoute();
   if (id) {
-    const editor = new EditorPage(app, { api, config }, id);
+    const editor = new EditorPage(app, { api, config, layout }, id);
     page = editor;
     await editor.open(loads);
   } else {
@@ -51,22 +56,22 @@ function installDebugHandle() {
     /** A snapshot of the editor's state (null on the projects screen). */
     state() {
       const e = editor();
-      return e ? e.debugState() : null;
+      return e ? debugState(e) : null;
     },
     /** Composed values at one tick: {vibration[9], temperature_c, fans, fan_grid[153], features}. */
     valuesAt(/** @type {number} */ tick) {
       const e = editor();
-      return e ? e.valuesAt(tick) : null;
+      return e ? valuesAt(e, tick) : null;
     },
     /** Page rectangle of a lane canvas ("waveform", "feature-loudness", "actuators", "detail", "temperature", "fans", "markers"). */
     laneRect(/** @type {string} */ id) {
       const e = editor();
-      return e ? e.laneRect(id) : null;
+      return e ? laneRect(e, id) : null;
     },
     /** Client x of a time (seconds) on the timeline. */
     clientXOf(/** @type {number} */ timeS) {
       const e = editor();
-      return e ? e.clientXOf(timeS) : null;
+      return e ? clientXOf(e, timeS) : null;
     },
     /** Frame statistics of the editor's animation-frame loop (ms). */
     perf() {
@@ -87,6 +92,11 @@ function installDebugHandle() {
   Object.defineProperty(window, "autohaptics", { value: Object.freeze(handle), writable: false, configurable: false });
 }
 
+/** @param {string} text why the app cannot start */
+function fatal(text) {
+  app.replaceChildren(h("div", { class: "empty", role: "alert", "data-testid": "fatal" }, text));
+}
+
 async function start() {
   installDebugHandle();
   // `autohaptics serve --open-sample` opens /?project=<id>: turn it into the editor's route.
@@ -99,7 +109,13 @@ async function start() {
   try {
     config = await (early ? api.readJson(early.config, "GET /api/config") : api.config());
   } catch (err) {
-    app.replaceChildren(h("div", { class: "empty", role: "alert", "data-testid": "fatal" }, `The autohaptics server is not answering: ${errorText(err)}`));
+    fatal(`The autohaptics server is not answering: ${errorText(err)}`);
+    return;
+  }
+  try {
+    layout = chairLayout(config);
+  } catch (err) {
+    fatal(`The autohaptics server sent an incomplete configuration: ${errorText(err)}`);
     return;
   }
   window.addEventListener("hashchange", () => {

@@ -1,26 +1,27 @@
 /**
- * The nine vibration actuators A1..A9 as a heat map, one row each. Per pixel column the row shows
+ * The vibration actuators (A1..A9) as a heat map, one row each. Per pixel column the row shows
  * the strongest value in the column's ticks (max pyramid), written into a width x 9 image that is
  * scaled onto the lane without smoothing.
  */
 
-import { HEAT_LUT } from "../colormap.js";
-import { ACTUATOR_IDS, N_ACTUATORS } from "../timeline-data.js";
-import { Columns, background, message } from "./common.js";
+import { HEAT_LUT } from "../core/colormap.js";
+import { BaseLane, background, message } from "./common.js";
 
 const ROW_H = 15;
 
-export class ActuatorsLane {
-  /**
-   * @param {{data: () => import("../timeline-data.js").TimelineData|null, zones?: Record<string, string>}} hooks
-   */
+/**
+ * @typedef {{data: () => import("../data/timeline-data.js").TimelineData|null,
+ *   actuators: import("../data/layout.js").ActuatorInfo[]}} ActuatorsHooks the actuators in the timeline's order
+ */
+
+/** @extends {BaseLane<ActuatorsHooks>} */
+export class ActuatorsLane extends BaseLane {
+  /** @param {ActuatorsHooks} hooks */
   constructor(hooks) {
-    this.id = "actuators";
-    this.label = "Vibration";
-    this.title = "Vibration A1..A9 as a heat map (dark = off, yellow = full); drag across rows to select them";
-    this.height = ROW_H * N_ACTUATORS;
-    this.hooks = hooks;
-    this.cols = new Columns();
+    const ids = hooks.actuators.map((a) => a.id);
+    const title = `Vibration ${ids[0]}..${ids[ids.length - 1]} as a heat map (dark = off, yellow = full); drag across rows to select them`;
+    super({ id: "actuators", label: "Vibration", title, height: ROW_H * ids.length }, hooks);
+    this.ids = ids;
     /** @type {ImageData|null} */
     this.image = null;
     this.scratch = document.createElement("canvas");
@@ -29,20 +30,20 @@ export class ActuatorsLane {
 
   /** @param {number} height */
   editRows(height) {
-    const h = height / N_ACTUATORS;
-    return ACTUATOR_IDS.map((lane, i) => ({ lane, y0: i * h, y1: (i + 1) * h }));
+    const h = height / this.ids.length;
+    return this.ids.map((lane, i) => ({ lane, y0: i * h, y1: (i + 1) * h }));
   }
 
   /** @param {HTMLElement} label */
   decorateLabel(label) {
     const list = document.createElement("div");
     list.className = "tl-sublabels";
-    for (const id of ACTUATOR_IDS) {
+    for (const a of this.hooks.actuators) {
       const s = document.createElement("span");
-      s.textContent = id;
+      s.textContent = a.id;
       s.style.height = `${ROW_H}px`;
-      const zone = this.hooks.zones && this.hooks.zones[id];
-      if (zone) s.title = `${id}: ${zone}`;
+      const zone = a.body || a.zone;
+      if (zone) s.title = `${a.id}: ${zone}`;
       list.append(s);
     }
     label.classList.add("tl-label-rows");
@@ -60,14 +61,15 @@ export class ActuatorsLane {
       message(ctx, width, height, "");
       return;
     }
+    const rows = this.ids.length;
     if (!this.image || this.image.width !== width) {
-      this.image = new ImageData(width, N_ACTUATORS);
+      this.image = new ImageData(width, rows);
       this.scratch.width = width;
-      this.scratch.height = N_ACTUATORS;
+      this.scratch.height = rows;
     }
     const words = new Uint32Array(this.image.data.buffer);
     const bg = HEAT_LUT[0];
-    for (let a = 0; a < N_ACTUATORS; a++) {
+    for (let a = 0; a < rows; a++) {
       const { max } = this.cols.fill(data.vibrationPyr[a], view, width, 1 / data.tickS);
       const row = a * width;
       for (let x = 0; x < width; x++) {
@@ -78,13 +80,13 @@ export class ActuatorsLane {
     this.scratchCtx.putImageData(this.image, 0, 0);
     ctx.save();
     ctx.imageSmoothingEnabled = false;
-    ctx.drawImage(this.scratch, 0, 0, width, N_ACTUATORS, 0, 0, width, height);
+    ctx.drawImage(this.scratch, 0, 0, width, rows, 0, 0, width, height);
     ctx.restore();
     ctx.strokeStyle = "rgba(0, 0, 0, 0.55)";
     ctx.lineWidth = 1;
     ctx.beginPath();
-    for (let a = 1; a < N_ACTUATORS; a++) {
-      const y = Math.round((a * height) / N_ACTUATORS) + 0.5;
+    for (let a = 1; a < rows; a++) {
+      const y = Math.round((a * height) / rows) + 0.5;
       ctx.moveTo(0, y);
       ctx.lineTo(width, y);
     }

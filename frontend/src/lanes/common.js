@@ -1,8 +1,28 @@
 /**
- * Helpers every lane uses: per-pixel-column envelopes read from a pyramid, and plain backgrounds.
+ * What every lane shares: the fields the timeline core reads (core/timeline.js `Lane`),
+ * per-pixel-column envelopes read from a pyramid, and plain backgrounds.
  */
 
-import { COLORS } from "../colormap.js";
+import { COLORS } from "../core/colormap.js";
+
+/**
+ * A lane's id, label, tooltip and height, its hooks into the editor, and its column buffers.
+ * @template H
+ */
+export class BaseLane {
+  /**
+   * @param {{id: string, label: string, title: string, height: number}} spec
+   * @param {H} hooks
+   */
+  constructor({ id, label, title, height }, hooks) {
+    this.id = id;
+    this.label = label;
+    this.title = title;
+    this.height = height;
+    this.hooks = hooks;
+    this.cols = new Columns();
+  }
+}
 
 export class Columns {
   constructor() {
@@ -12,7 +32,7 @@ export class Columns {
 
   /**
    * Fill min/max per pixel column of the visible range.
-   * @param {import("../pyramid.js").MinMaxPyramid} pyr
+   * @param {import("../data/pyramid.js").MinMaxPyramid} pyr
    * @param {import("../core/timeline.js").TimelineView} view
    * @param {number} width
    * @param {number} samplesPerS samples per second of `pyr` (10 for ticks)

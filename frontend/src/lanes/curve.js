@@ -8,7 +8,7 @@ import { Columns } from "./common.js";
 /**
  * @param {CanvasRenderingContext2D} ctx
  * @param {Columns} cols
- * @param {import("../pyramid.js").MinMaxPyramid} pyr
+ * @param {import("../data/pyramid.js").MinMaxPyramid} pyr
  * @param {import("../core/timeline.js").LaneFrame} f
  * @param {number} samplesPerS
  * @param {(value: number) => number} yOf maps a stored sample to a y coordinate

@@ -1,20 +1,19 @@
 /**
- * Fan activity: the fraction of the 17 x 9 fans that are on, per tick (the grid itself is drawn
- * over the video at the playhead by ../fan-overlay.js).
+ * Fan activity: the fraction of the fans (17 x 9 on the chair) that are on, per tick (the grid itself is drawn
+ * over the video at the playhead by ../chair/fan-overlay.js).
  */
 
-import { COLORS } from "../colormap.js";
-import { Columns, areaPath, background, message } from "./common.js";
+import { COLORS } from "../core/colormap.js";
+import { BaseLane, areaPath, background, message } from "./common.js";
 
-export class FansLane {
-  /** @param {{data: () => import("../timeline-data.js").TimelineData|null}} hooks */
+/** @typedef {{data: () => import("../data/timeline-data.js").TimelineData|null, grid: {rows: number, cols: number}}} FansHooks */
+
+/** @extends {BaseLane<FansHooks>} */
+export class FansLane extends BaseLane {
+  /** @param {FansHooks} hooks */
   constructor(hooks) {
-    this.id = "fans";
-    this.label = "Fans";
-    this.title = "Airflow: fraction of the 17 x 9 fans that are on";
-    this.height = 40;
-    this.hooks = hooks;
-    this.cols = new Columns();
+    const { rows, cols } = hooks.grid;
+    super({ id: "fans", label: "Fans", title: `Airflow: fraction of the ${cols} x ${rows} fans that are on`, height: 40 }, hooks);
   }
 
   /** @param {number} height */

@@ -5,15 +5,15 @@
  * sends to the server (PUT /params) to re-derive the vibration.
  */
 
-import { COLORS } from "../colormap.js";
-import { Columns, areaPath, background, message } from "./common.js";
+import { COLORS } from "../core/colormap.js";
+import { BaseLane, areaPath, background, message } from "./common.js";
 
 const PAD = 3;
 const GRAB_PX = 6;
 
 /**
  * @typedef {{
- *   data: () => import("../timeline-data.js").TimelineData|null,
+ *   data: () => import("../data/timeline-data.js").TimelineData|null,
  *   threshold: (name: string) => number|null,
  *   onInput: (name: string, value: number) => void,
  *   onCommit: (name: string, value: number) => void,
@@ -28,21 +28,18 @@ export const FEATURE_LABELS = /** @type {Record<string, string>} */ ({
   low_energy: "Low energy",
 });
 
-export class FeatureLane {
+/** @extends {BaseLane<FeatureLaneHooks>} */
+export class FeatureLane extends BaseLane {
   /**
    * @param {string} name feature name
    * @param {FeatureLaneHooks} hooks
    */
   constructor(name, hooks) {
+    const label = FEATURE_LABELS[name] || name;
+    super({ id: `feature-${name}`, label, title: `${label} (normalised 0..1) and its threshold: drag the pink line`, height: 46 }, hooks);
     this.name = name;
-    this.id = `feature-${name}`;
-    this.label = FEATURE_LABELS[name] || name;
-    this.title = `${this.label} (normalised 0..1) and its threshold: drag the pink line`;
-    this.height = 46;
-    this.hooks = hooks;
     /** @type {number|null} value shown while the line is dragged */
     this.draft = null;
-    this.cols = new Columns();
   }
 
   /** The threshold drawn now (the draft while dragging). */

@@ -4,8 +4,8 @@
  * it to rename, double-click empty space to add one.
  */
 
-import { COLORS } from "../colormap.js";
-import { background } from "./common.js";
+import { COLORS } from "../core/colormap.js";
+import { BaseLane, background } from "./common.js";
 
 const HIT_PX = 6;
 
@@ -21,14 +21,11 @@ const HIT_PX = 6;
  * }} MarkerHooks
  */
 
-export class MarkersLane {
+/** @extends {BaseLane<MarkerHooks>} */
+export class MarkersLane extends BaseLane {
   /** @param {MarkerHooks} hooks */
   constructor(hooks) {
-    this.id = "markers";
-    this.label = "Markers";
-    this.title = "Markers: double-click to add, drag to move, double-click a marker to rename";
-    this.height = 28;
-    this.hooks = hooks;
+    super({ id: "markers", label: "Markers", title: "Markers: double-click to add, drag to move, double-click a marker to rename", height: 28 }, hooks);
     /** @type {{id: string, t_s: number, moved: boolean}|null} */
     this.drag = null;
   }

@@ -4,7 +4,7 @@
  * one `pencil` op (docs/API.md) when the pointer is released.
  */
 
-import { COLORS } from "../colormap.js";
+import { COLORS } from "../core/colormap.js";
 
 export class PencilStroke {
   /**

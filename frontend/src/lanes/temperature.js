@@ -5,8 +5,8 @@
  *   into one `temp_points` op when the user applies it.
  */
 
-import { COLORS } from "../colormap.js";
-import { background, message, Columns } from "./common.js";
+import { COLORS } from "../core/colormap.js";
+import { BaseLane, background, message } from "./common.js";
 import { drawCurve } from "./curve.js";
 import { PencilStroke } from "./pencil.js";
 
@@ -15,28 +15,25 @@ const HIT_PX = 7;
 
 /**
  * @typedef {{
- *   data: () => import("../timeline-data.js").TimelineData|null,
+ *   data: () => import("../data/timeline-data.js").TimelineData|null,
  *   range: () => {lo: number, hi: number, neutral: number},
  *   onPencil: (op: Record<string, any>) => void,
  *   onPointsChange: (points: Array<[number, number]>) => void,
  * }} TemperatureHooks
  */
 
-export class TemperatureLane {
+/** @extends {BaseLane<TemperatureHooks>} */
+export class TemperatureLane extends BaseLane {
   /** @param {TemperatureHooks} hooks */
   constructor(hooks) {
-    this.id = "temperature";
-    this.label = "Temperature";
-    this.title = "Target temperature in °C (dashed: neutral); pencil draws, points tool places breakpoints";
-    this.height = 72;
-    this.hooks = hooks;
+    const title = "Target temperature in °C (dashed: neutral); pencil draws, points tool places breakpoints";
+    super({ id: "temperature", label: "Temperature", title, height: 72 }, hooks);
     /** @type {PencilStroke|null} */
     this.stroke = null;
     /** @type {Array<[number, number]>} draft breakpoints [tick, C], sorted by tick */
     this.points = [];
     /** @type {number} index of the point being dragged */
     this._dragging = -1;
-    this.cols = new Columns();
   }
 
   /** @param {number} height */

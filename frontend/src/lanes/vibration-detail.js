@@ -3,35 +3,31 @@
  * per-tick values (y = intensity) and becomes one `pencil` op on release.
  */
 
-import { COLORS } from "../colormap.js";
-import { ACTUATOR_IDS } from "../timeline-data.js";
-import { background, message } from "./common.js";
-import { Columns } from "./common.js";
+import { COLORS } from "../core/colormap.js";
+import { BaseLane, background, message } from "./common.js";
 import { drawCurve } from "./curve.js";
 import { PencilStroke } from "./pencil.js";
 
 const PAD = 4;
 
-export class VibrationDetailLane {
-  /**
-   * @param {{data: () => import("../timeline-data.js").TimelineData|null,
-   *   onPencil: (op: Record<string, any>) => void, onChange: () => void}} hooks
-   */
+/**
+ * @typedef {{data: () => import("../data/timeline-data.js").TimelineData|null, actuatorIds: string[],
+ *   onPencil: (op: Record<string, any>) => void, onChange: () => void}} DetailHooks actuator ids in the timeline's order
+ */
+
+/** @extends {BaseLane<DetailHooks>} */
+export class VibrationDetailLane extends BaseLane {
+  /** @param {DetailHooks} hooks */
   constructor(hooks) {
-    this.id = "detail";
-    this.label = "Detail";
-    this.title = "One actuator's intensity as a curve; draw on it with the pencil tool";
-    this.height = 64;
-    this.hooks = hooks;
-    this.actuator = "A1";
+    super({ id: "detail", label: "Detail", title: "One actuator's intensity as a curve; draw on it with the pencil tool", height: 64 }, hooks);
+    this.actuator = hooks.actuatorIds[0];
     /** @type {PencilStroke|null} */
     this.stroke = null;
-    this.cols = new Columns();
   }
 
   /** @param {string} id */
   setActuator(id) {
-    if (!ACTUATOR_IDS.includes(id)) return;
+    if (!this.hooks.actuatorIds.includes(id)) return;
     this.actuator = id;
     if (this.select) this.select.value = id;
     this.hooks.onChange();
@@ -43,7 +39,7 @@ export class VibrationDetailLane {
     select.className = "tl-select";
     select.setAttribute("aria-label", "Actuator shown in the detail lane");
     select.setAttribute("data-testid", "detail-actuator");
-    for (const id of ACTUATOR_IDS) select.add(new Option(id, id));
+    for (const id of this.hooks.actuatorIds) select.add(new Option(id, id));
     select.value = this.actuator;
     select.addEventListener("change", () => this.setActuator(select.value));
     this.select = select;
@@ -76,7 +72,7 @@ export class VibrationDetailLane {
       message(ctx, f.width, f.height, "");
       return;
     }
-    const pyr = data.vibrationPyr[ACTUATOR_IDS.indexOf(this.actuator)];
+    const pyr = data.vibrationPyr[this.hooks.actuatorIds.indexOf(this.actuator)];
     drawCurve(ctx, this.cols, pyr, f, 1 / data.tickS, (b) => this.yOf(b / 255), COLORS.vibration);
     if (this.stroke) this.stroke.draw(ctx, f.view, (v) => this.yOf(v));
   }

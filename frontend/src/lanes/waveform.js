@@ -3,25 +3,22 @@
  * from a min/max pyramid.
  */
 
-import { COLORS } from "../colormap.js";
-import { MinMaxPyramid } from "../pyramid.js";
-import { Columns, background, message } from "./common.js";
+import { COLORS } from "../core/colormap.js";
+import { MinMaxPyramid } from "../data/pyramid.js";
+import { BaseLane, background, message } from "./common.js";
 
-export class WaveformLane {
+/** @extends {BaseLane<null>} */
+export class WaveformLane extends BaseLane {
   /** @param {{height?: number}} [opts] */
   constructor(opts = {}) {
-    this.id = "waveform";
-    this.label = "Audio";
-    this.title = "Audio waveform (peaks computed by the server)";
-    this.height = opts.height ?? 56;
+    super({ id: "waveform", label: "Audio", title: "Audio waveform (peaks computed by the server)", height: opts.height ?? 56 }, null);
     /** @type {MinMaxPyramid|null} */
     this.pyr = null;
     this.pointsPerS = 0;
     this.status = "Loading waveform…";
-    this.cols = new Columns();
   }
 
-  /** @param {import("../api.js").Waveform} wf */
+  /** @param {import("../data/api.js").Waveform} wf */
   setPeaks(wf) {
     if (!wf.points || !wf.duration_s) {
       this.pyr = null;

@@ -3,10 +3,11 @@
  * generation progress with Cancel; and the list of projects with open, rename, duplicate, delete.
  */
 
-import { isTerminal } from "../api.js";
-import { confirmDialog, h, progressBar, promptDialog, toast } from "../dom.js";
-import { formatBytes, formatDate, formatTime } from "../format.js";
-import { errorText } from "../history.js";
+import { isTerminal } from "../data/streams.js";
+import { h } from "../core/dom.js";
+import { confirmDialog, progressBar, promptDialog, toast } from "../panels/widgets.js";
+import { formatBytes, formatDate, formatTime } from "../data/format.js";
+import { errorText } from "../data/http.js";
 import { JobProgress } from "../panels/job-progress.js";
 
 const STATUS_TEXT = /** @type {Record<string, string>} */ ({
@@ -20,7 +21,7 @@ const STATUS_TEXT = /** @type {Record<string, string>} */ ({
 export class ProjectsPage {
   /**
    * @param {HTMLElement} host
-   * @param {{config: Record<string, any>, api: import("../api.js").Api}} ctx
+   * @param {{config: Record<string, any>, api: import("../data/api.js").Api}} ctx
    */
   constructor(host, ctx) {
     this.host = host;
@@ -125,7 +126,7 @@ export class ProjectsPage {
     this.emptyEl.hidden = projects.length > 0;
   }
 
-  /** @param {import("../api.js").Project} p */
+  /** @param {import("../data/api.js").Project} p */
   _row(p) {
     const open = h("a", { class: "project-name-link", href: `#/project/${encodeURIComponent(p.id)}`, "data-testid": "project-open" }, p.name);
     const status = h("span", { class: `badge badge-${p.status}`, "data-testid": "project-status" }, STATUS_TEXT[p.status] || p.status);
@@ -154,7 +155,7 @@ export class ProjectsPage {
     return row;
   }
 
-  /** @param {import("../api.js").Project} p */
+  /** @param {import("../data/api.js").Project} p */
   async rename(p) {
     const name = await promptDialog({ title: "Rename the project", label: "Name", value: p.name, ok: "Rename" });
     if (name === null || name === p.name || !name) return;
@@ -166,7 +167,7 @@ export class ProjectsPage {
     await this.refresh();
   }
 
-  /** @param {import("../api.js").Project} p */
+  /** @param {import("../data/api.js").Project} p */
   async duplicate(p) {
     try {
       const copy = await this.api.duplicateProject(p.id);
@@ -177,7 +178,7 @@ export class ProjectsPage {
     await this.refresh();
   }
 
-  /** @param {import("../api.js").Project} p */
+  /** @param {import("../data/api.js").Project} p */
   async remove(p) {
     const ok = await confirmDialog({
       title: "Delete the project?",

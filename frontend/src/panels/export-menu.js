@@ -2,7 +2,7 @@
  * The Export menu: one download link per format the server offers.
  */
 
-import { h } from "../dom.js";
+import { h } from "../core/dom.js";
 
 const LABELS = /** @type {Record<string, string>} */ ({
   json: "JSON (native timeline)",
@@ -13,7 +13,7 @@ const LABELS = /** @type {Record<string, string>} */ ({
 });
 
 /**
- * @param {import("../api.js").Api} api
+ * @param {import("../data/api.js").Api} api
  * @param {string} projectId
  * @param {Array<{name: string, description: string}>} formats
  */

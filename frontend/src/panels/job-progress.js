@@ -2,8 +2,9 @@
  * A generation job's progress bar with a Cancel button, fed by the job's Server-Sent Events.
  */
 
-import { errorText } from "../history.js";
-import { h, progressBar } from "../dom.js";
+import { errorText } from "../data/http.js";
+import { h } from "../core/dom.js";
+import { progressBar } from "./widgets.js";
 
 const STAGES = /** @type {Record<string, string>} */ ({
   queued: "queued",
@@ -16,7 +17,7 @@ const STAGES = /** @type {Record<string, string>} */ ({
 
 export class JobProgress {
   /**
-   * @param {import("../api.js").Api} api
+   * @param {import("../data/api.js").Api} api
    * @param {{label?: string, testid?: string}} [opts]
    */
   constructor(api, opts = {}) {
@@ -25,7 +26,7 @@ export class JobProgress {
     this.cancelBtn = h("button", { class: "btn btn-small", type: "button", "data-testid": "generation-cancel" }, "Cancel");
     this.status = h("span", { class: "job-status", "data-testid": "generation-status" });
     this.el = h("div", { class: "job-progress" }, this.bar.el, this.cancelBtn, this.status);
-    /** @type {{promise: Promise<import("../api.js").Job>, close: () => void}|null} */
+    /** @type {{promise: Promise<import("../data/api.js").Job>, close: () => void}|null} */
     this.watch = null;
     /** @type {string|null} */
     this.jobId = null;
@@ -34,8 +35,8 @@ export class JobProgress {
 
   /**
    * Follow a job until it ends; resolves with the final job.
-   * @param {import("../api.js").Job} job
-   * @returns {Promise<import("../api.js").Job>}
+   * @param {import("../data/api.js").Job} job
+   * @returns {Promise<import("../data/api.js").Job>}
    */
   async follow(job) {
     this.close();

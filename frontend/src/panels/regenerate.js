@@ -3,12 +3,13 @@
  * to POST to /generate, or null when cancelled.
  */
 
-import { h, modal } from "../dom.js";
+import { h } from "../core/dom.js";
+import { modal } from "./widgets.js";
 import { FEATURE_LABELS } from "../lanes/features.js";
 
 /**
  * @param {{presets: string[], modes: string[], preset: string, mode: string, thresholds: Record<string, number>}} opts
- * @returns {Promise<import("../api.js").Params|null>}
+ * @returns {Promise<import("../data/api.js").Params|null>}
  */
 export function regenerateDialog({ presets, modes, preset, mode, thresholds }) {
   return new Promise((resolve) => {

@@ -3,7 +3,7 @@
  * preview, `change` (release, or a keyboard step) the commit.
  */
 
-import { h } from "../dom.js";
+import { h } from "../core/dom.js";
 import { FEATURE_LABELS } from "../lanes/features.js";
 
 export class ThresholdsPanel {

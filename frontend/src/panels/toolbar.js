@@ -3,11 +3,8 @@
  * holds no state of its own; the editor calls `update()` with what is selected.
  */
 
-import { h } from "../dom.js";
-import { formatTime } from "../format.js";
-import { ACTUATOR_IDS } from "../timeline-data.js";
-
-export const EDIT_LANES = [...ACTUATOR_IDS, "temperature", "fans"];
+import { h } from "../core/dom.js";
+import { formatTime } from "../data/format.js";
 const LANE_TEXT = /** @type {Record<string, string>} */ ({ temperature: "Temp", fans: "Fans" });
 
 /**
@@ -29,8 +26,11 @@ const LANE_TEXT = /** @type {Record<string, string>} */ ({ temperature: "Temp", 
  */
 
 export class EditToolbar {
-  /** @param {ToolbarActions} actions */
-  constructor(actions) {
+  /**
+   * @param {ToolbarActions} actions
+   * @param {string[]} editLanes the lanes an edit can address (/api/config `lanes`)
+   */
+  constructor(actions, editLanes) {
     const btn = (/** @type {string} */ text, /** @type {string} */ testid, /** @type {() => void} */ fn, /** @type {string} */ title = "") =>
       h("button", { class: "btn btn-small", type: "button", "data-testid": testid, title: title || undefined, onclick: fn }, text);
 
@@ -45,7 +45,7 @@ export class EditToolbar {
     /** @type {Map<string, HTMLButtonElement>} */
     this.chips = new Map();
     const chipGroup = h("div", { class: "chip-group", role: "group", "aria-label": "Lanes the edit applies to" });
-    for (const lane of EDIT_LANES) {
+    for (const lane of editLanes) {
       const chip = h("button", { class: "chip", type: "button", "aria-pressed": "false", "data-testid": `lane-chip-${lane}`, onclick: () => actions.toggleLane(lane) }, LANE_TEXT[lane] || lane);
       this.chips.set(lane, chip);
       chipGroup.append(chip);

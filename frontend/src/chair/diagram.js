@@ -1,16 +1,14 @@
 /**
- * The chair diagram: the nine actuators at the playhead (colour and size = intensity) on a seat
+ * The chair diagram: the actuators at the playhead (colour and size = intensity) on a seat
  * outline, with the temperature and the share of fans that are on. Positions come from the
  * layout the server sends (/api/config), grouped by zone: back, armrests, seat.
  */
 
-import { heatColor, temperatureColor } from "./colormap.js";
+import { heatColor, temperatureColor } from "../core/colormap.js";
 
 const SVG = "http://www.w3.org/2000/svg";
 
-/**
- * @typedef {{id: string, x: number, y: number, zone: string, body?: string}} ActuatorInfo
- */
+/** @typedef {import("../data/layout.js").ActuatorInfo} ActuatorInfo */
 
 /**
  * @param {string} tag
@@ -32,10 +30,12 @@ function place(a) {
 export class ChairDiagram {
   /**
    * @param {HTMLElement} host
-   * @param {{actuators: ActuatorInfo[], temperature: {lo: number, hi: number, neutral: number}}} opts
+   * @param {{actuators: ActuatorInfo[], temperature: import("../data/layout.js").TemperatureRange}} opts
+   *   the actuators in the order of a tick's `vibration` values
    */
   constructor(host, { actuators, temperature }) {
     this.temperature = temperature;
+    this.ids = actuators.map((a) => a.id);
     const root = svg("svg", { viewBox: "0 0 200 250", class: "chair-svg", role: "img", "aria-label": "Chair: actuator intensities at the playhead" });
     root.setAttribute("data-testid", "chair");
     root.append(
@@ -70,11 +70,10 @@ export class ChairDiagram {
   }
 
   /**
-   * @param {import("./timeline-data.js").TickValues|null} v values at the playhead (null: no timeline)
-   * @param {string[]} ids actuator ids in the order of `v.vibration`
+   * @param {import("../data/timeline-data.js").TickValues|null} v values at the playhead (null: no timeline)
    */
-  update(v, ids) {
-    ids.forEach((id, i) => {
+  update(v) {
+    this.ids.forEach((id, i) => {
       const d = this.dots.get(id);
       if (!d) return;
       const value = v ? v.vibration[i] : 0;

@@ -13,23 +13,21 @@ export const FIRST_BLOCKS = "vibration,temperature_c,fan_activity,features";
 import { parseTimelineBin } from "./binary.js";
 import { MinMaxPyramid, channel } from "./pyramid.js";
 
-export const N_ACTUATORS = 9;
-export const FAN_ROWS = 9;
-export const FAN_COLS = 17;
-export const ACTUATOR_IDS = ["A1", "A2", "A3", "A4", "A5", "A6", "A7", "A8", "A9"];
-export const AUDIO_FEATURES = ["loudness", "sharpness", "booming", "low_energy"];
-
 /**
  * @typedef {{vibration: number[], temperature_c: number, fans: number, fan_grid: Float32Array,
  *   features: Record<string, number>}} TickValues
+ * @typedef {Pick<import("./layout.js").ChairLayout, "actuatorIds"|"fanRows"|"fanCols">} GridShape
  */
 
 export class TimelineData {
   /**
    * @param {import("./binary.js").ParsedBin} parsed
+   * @param {GridShape} shape the chair's actuators and fan grid (data/layout.js)
    */
-  constructor(parsed) {
+  constructor(parsed, shape) {
     const { header, blocks } = parsed;
+    this.shape = shape;
+    const nAct = shape.actuatorIds.length;
     const n = header.n_ticks;
     if (!Number.isInteger(n) || n < 1) throw new Error(`binary timeline has n_ticks=${n}`);
     this.nTicks = n;
@@ -42,17 +40,17 @@ export class TimelineData {
       return b;
     };
     const vib = need("vibration");
-    checkShape(vib.info, [n, N_ACTUATORS]);
-    /** @type {Uint8Array} (n, 9) bytes, value = byte / 255 */
+    checkShape(vib.info, [n, nAct]);
+    /** @type {Uint8Array} (n, actuators) bytes, value = byte / 255 */
     this.vibration = /** @type {Uint8Array} */ (vib.data);
     const temp = need("temperature_c");
     checkShape(temp.info, [n]);
     /** @type {Float32Array} */
     this.temperature = /** @type {Float32Array} */ (temp.data);
-    /** @type {Uint8Array|null} (n, 9, 17) bytes; null until the `fans` block is loaded */
+    /** @type {Uint8Array|null} (n, rows, cols) bytes; null until the `fans` block is loaded */
     this.fans = null;
     const fans = blocks.get("fans");
-    if (fans) this.fans = fansOf(fans, n);
+    if (fans) this.fans = fansOf(fans, n, shape);
     const act = need("fan_activity");
     checkShape(act.info, [n]);
     /** @type {Uint8Array} fraction of fans on x 255 */
@@ -64,7 +62,7 @@ export class TimelineData {
     }
 
     /** @type {MinMaxPyramid[]} */
-    this.vibrationPyr = ACTUATOR_IDS.map((_, i) => new MinMaxPyramid(channel(this.vibration, n, N_ACTUATORS, i)));
+    this.vibrationPyr = shape.actuatorIds.map((_, i) => new MinMaxPyramid(channel(this.vibration, n, nAct, i)));
     this.temperaturePyr = new MinMaxPyramid(this.temperature);
     this.fanActivityPyr = new MinMaxPyramid(this.fanActivity);
     /** @type {Map<string, MinMaxPyramid>} */
@@ -81,9 +79,9 @@ export class TimelineData {
     this.temperatureMax = tmax;
   }
 
-  /** @param {ArrayBuffer} buf */
-  static fromBuffer(buf) {
-    return new TimelineData(parseTimelineBin(buf));
+  /** @param {ArrayBuffer} buf @param {GridShape} shape */
+  static fromBuffer(buf, shape) {
+    return new TimelineData(parseTimelineBin(buf), shape);
   }
 
   /** The fan grid is here (or not yet). */
@@ -103,7 +101,7 @@ export class TimelineData {
     const b = blocks.get("fans");
     if (!b) throw new Error('binary timeline has no "fans" block');
     const copy = Object.assign(Object.create(TimelineData.prototype), this);
-    copy.fans = fansOf(b, this.nTicks);
+    copy.fans = fansOf(b, this.nTicks, this.shape);
     return /** @type {TimelineData} */ (copy);
   }
 
@@ -123,9 +121,10 @@ export class TimelineData {
    */
   valuesAt(tick) {
     const k = Math.min(this.nTicks - 1, Math.max(0, Math.floor(tick)));
+    const nAct = this.shape.actuatorIds.length;
     const vibration = [];
-    for (let i = 0; i < N_ACTUATORS; i++) vibration.push(this.vibration[k * N_ACTUATORS + i] / 255);
-    const cells = FAN_ROWS * FAN_COLS;
+    for (let i = 0; i < nAct; i++) vibration.push(this.vibration[k * nAct + i] / 255);
+    const cells = this.shape.fanRows * this.shape.fanCols;
     const grid = new Float32Array(cells);
     const fans = this.fans;
     if (fans) for (let i = 0; i < cells; i++) grid[i] = fans[k * cells + i] / 255;
@@ -143,7 +142,7 @@ export class TimelineData {
 
   /**
    * Per-tick values of edit lanes over [t0, t1), in the shape the `paste` op takes.
-   * @param {string[]} lanes "A1".."A9", "temperature", "fans"
+   * @param {string[]} lanes actuator ids, "temperature", "fans"
    * @param {number} t0
    * @param {number} t1
    * @returns {Record<string, any[]>}
@@ -160,19 +159,21 @@ export class TimelineData {
       } else if (lane === "fans") {
         const fans = this.fans;
         if (!fans) throw new Error("The fan grid is still loading; copy again in a moment.");
+        const { fanRows, fanCols } = this.shape;
         for (let k = t0; k < t1; k++) {
           const rows = [];
-          for (let r = 0; r < FAN_ROWS; r++) {
+          for (let r = 0; r < fanRows; r++) {
             const row = [];
-            for (let c = 0; c < FAN_COLS; c++) row.push(round4(fans[(k * FAN_ROWS + r) * FAN_COLS + c] / 255));
+            for (let c = 0; c < fanCols; c++) row.push(round4(fans[(k * fanRows + r) * fanCols + c] / 255));
             rows.push(row);
           }
           values.push(rows);
         }
       } else {
-        const i = ACTUATOR_IDS.indexOf(lane);
+        const ids = this.shape.actuatorIds;
+        const i = ids.indexOf(lane);
         if (i < 0) throw new Error(`unknown lane ${lane}`);
-        for (let k = t0; k < t1; k++) values.push(round4(this.vibration[k * N_ACTUATORS + i] / 255));
+        for (let k = t0; k < t1; k++) values.push(round4(this.vibration[k * ids.length + i] / 255));
       }
       out[lane] = values;
     }
@@ -183,10 +184,11 @@ export class TimelineData {
 /**
  * @param {{info: import("./binary.js").BlockInfo, data: any}} block
  * @param {number} n
+ * @param {GridShape} shape
  * @returns {Uint8Array}
  */
-function fansOf(block, n) {
-  checkShape(block.info, [n, FAN_ROWS, FAN_COLS]);
+function fansOf(block, n, shape) {
+  checkShape(block.info, [n, shape.fanRows, shape.fanCols]);
   return /** @type {Uint8Array} */ (block.data);
 }
 

@@ -3,7 +3,7 @@
  * selection, and the clipboard. Pure functions: the editor submits what they return.
  */
 
-/** @typedef {import("./core/timeline.js").Selection} Selection */
+/** @typedef {import("../core/timeline.js").Selection} Selection */
 
 /**
  * `set`: one value on every selected lane. Temperature values are in C, the others 0..1, so a

@@ -1,8 +1,11 @@
 /**
  * The HTTP client for docs/API.md. Every method maps to one route; errors become ApiError with the
- * server's one-sentence `detail`. Uploads use XMLHttpRequest (fetch has no upload progress), job
- * progress uses Server-Sent Events.
+ * server's one-sentence `detail` (./http.js); job progress and the chair's status come as
+ * Server-Sent Events (./streams.js).
  */
+
+import { postMultipart, reach } from "./http.js";
+import { watchChair, watchJob } from "./streams.js";
 
 /**
  * @typedef {{id: string, project_id: string, status: "queued"|"running"|"done"|"failed"|"cancelled",
@@ -30,26 +33,6 @@
  *   push: ChairPush|null, settings: ChairSettings}} ChairStatus
  * @typedef {{project_id: string, state: "play"|"pause"|"seek", position_s: number, heartbeat?: boolean}} ChairReport
  */
-
-export class ApiError extends Error {
-  /**
-   * @param {number} status HTTP status (0 when the request never reached the server)
-   * @param {string} detail
-   */
-  constructor(status, detail) {
-    super(detail);
-    this.name = "ApiError";
-    this.status = status;
-    this.detail = detail;
-  }
-}
-
-const TERMINAL = new Set(["done", "failed", "cancelled"]);
-
-/** @param {string} status */
-export function isTerminal(status) {
-  return TERMINAL.has(status);
-}
 
 export class Api {
   /** @param {string} [base] origin prefix, "" for the page's own origin */
@@ -269,14 +252,7 @@ export class Api {
    * @returns {() => void} closes the stream
    */
   watchChair(onStatus, onStream = () => {}) {
-    const source = new EventSource(`${this.base}/api/chair/events`);
-    source.addEventListener("status", (e) => {
-      const data = parse(/** @type {MessageEvent} */ (e).data);
-      if (data) onStatus(data);
-    });
-    source.onopen = () => onStream(true);
-    source.onerror = () => onStream(false);
-    return () => source.close();
+    return watchChair(`${this.base}/api/chair/events`, onStatus, onStream);
   }
 
   /**
@@ -309,33 +285,7 @@ export class Api {
    * @param {(fraction: number, loaded: number, total: number) => void} onProgress
    */
   _multipart(path, file, fields, onProgress) {
-    const xhr = new XMLHttpRequest();
-    const form = new FormData();
-    for (const [k, v] of Object.entries(fields)) form.append(k, v);
-    form.append("file", file, file.name);
-    const promise = new Promise((resolve, reject) => {
-      xhr.open("POST", this.base + path);
-      xhr.responseType = "text";
-      xhr.setRequestHeader("Accept", "application/json");
-      xhr.upload.onprogress = (e) => {
-        if (e.lengthComputable && e.total > 0) onProgress(e.loaded / e.total, e.loaded, e.total);
-      };
-      xhr.upload.onload = () => onProgress(1, file.size, file.size);
-      xhr.onload = () => {
-        let body = null;
-        try {
-          body = xhr.responseText ? JSON.parse(xhr.responseText) : null;
-        } catch (err) {
-          body = null;
-        }
-        if (xhr.status >= 200 && xhr.status < 300) resolve(body);
-        else reject(new ApiError(xhr.status, detailOf(body, xhr.status, `POST ${path}`)));
-      };
-      xhr.onerror = () => reject(new ApiError(0, `The upload to ${path} failed: the server could not be reached.`));
-      xhr.onabort = () => reject(new ApiError(0, "The upload was cancelled."));
-      xhr.send(form);
-    });
-    return { promise, abort: () => xhr.abort() };
+    return postMultipart(this.base + path, path, file, fields, onProgress);
   }
 
   /**
@@ -345,117 +295,11 @@ export class Api {
    * @returns {{promise: Promise<Job>, close: () => void}} resolves with the final job (done, failed or cancelled)
    */
   watchJob(jobId, onProgress) {
-    const url = `${this.base}/api/jobs/${enc(jobId)}/events`;
-    const source = new EventSource(url);
-    let settled = false;
-    /** @type {(job: Job) => void} */
-    let resolveFn = () => {};
-    /** @type {(err: Error) => void} */
-    let rejectFn = () => {};
-    const promise = new Promise((resolve, reject) => {
-      resolveFn = resolve;
-      rejectFn = reject;
-    });
-    /** @param {Job} job */
-    const finish = (job) => {
-      if (settled) return;
-      settled = true;
-      source.close();
-      resolveFn(job);
-    };
-    source.addEventListener("progress", (e) => {
-      const data = parse(/** @type {MessageEvent} */ (e).data);
-      if (data && typeof data.progress === "number") onProgress(data.progress, String(data.stage || ""));
-    });
-    for (const name of TERMINAL) {
-      source.addEventListener(name, (e) => {
-        const data = parse(/** @type {MessageEvent} */ (e).data) || {};
-        finish({ id: jobId, project_id: data.project_id || "", progress: data.progress ?? 1, ...data, status: name });
-      });
-    }
-    // The stream closes after the final event; a drop before it is retried by EventSource. Ask the
-    // job itself so a job that ended while we were disconnected is not waited on forever.
-    source.onerror = () => {
-      if (settled) return;
-      this.job(jobId).then(
-        (job) => {
-          if (isTerminal(job.status)) finish(job);
-        },
-        (err) => {
-          if (settled) return;
-          if (err instanceof ApiError && err.status === 404) {
-            settled = true;
-            source.close();
-            rejectFn(err);
-          }
-        },
-      );
-    };
-    return {
-      promise,
-      close: () => {
-        settled = true;
-        source.close();
-      },
-    };
+    return watchJob(`${this.base}/api/jobs/${enc(jobId)}/events`, jobId, () => this.job(jobId), onProgress);
   }
 }
 
 /** @param {string} s */
 function enc(s) {
   return encodeURIComponent(s);
-}
-
-/**
- * The response of a request, or ApiError when it never arrived or failed.
- * @param {Promise<Response>} pending
- * @param {string} what
- */
-async function reach(pending, what) {
-  let res;
-  try {
-    res = await pending;
-  } catch (err) {
-    throw new ApiError(0, `The server could not be reached (${what}).`);
-  }
-  if (!res.ok) throw await errorFrom(res, what);
-  return res;
-}
-
-/** @param {string} text */
-function parse(text) {
-  try {
-    return JSON.parse(text);
-  } catch (err) {
-    return null;
-  }
-}
-
-/**
- * @param {Response} res
- * @param {string} what
- */
-async function errorFrom(res, what) {
-  let body = null;
-  try {
-    body = await res.json();
-  } catch (err) {
-    body = null;
-  }
-  return new ApiError(res.status, detailOf(body, res.status, what));
-}
-
-/**
- * @param {any} body
- * @param {number} status
- * @param {string} what
- */
-function detailOf(body, status, what) {
-  const d = body && body.detail;
-  if (typeof d === "string" && d) return d;
-  if (Array.isArray(d) && d.length) {
-    // FastAPI validation errors: [{loc, msg, type}]
-    return d.map((e) => `${(e.loc || []).slice(1).join(".") || "request"}: ${e.msg}`).join("; ");
-  }
-  return `${what} failed with HTTP ${status}.`;
 }

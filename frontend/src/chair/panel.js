@@ -4,10 +4,11 @@
  * neither saved nor undoable; latency and comfort are the server's chair settings (stored there).
  */
 
-import { errorText } from "../history.js";
-import { Emitter } from "../events.js";
-import { h, progressBar, toast } from "../dom.js";
-import { formatTime } from "../format.js";
+import { errorText } from "../data/http.js";
+import { Emitter } from "../core/events.js";
+import { h } from "../core/dom.js";
+import { progressBar, toast } from "../panels/widgets.js";
+import { formatTime } from "../data/format.js";
 
 export const LATENCY_RANGE_MS = [-500, 500];
 const ZONES = /** @type {const} */ ([
@@ -26,29 +27,22 @@ const STATE_TEXT = /** @type {Record<string, string>} */ ({
 });
 
 /**
- * @typedef {import("../api.js").ChairStatus} ChairStatus
+ * @typedef {import("../data/api.js").ChairStatus} ChairStatus
  * @typedef {{status: ChairStatus, active: boolean}} ChairPanelEvents
  */
 
 /** @extends {Emitter<{status: ChairPanelEvents}>} */
 export class ChairPanel extends Emitter {
   /**
-   * @param {import("../api.js").Api} api
-   * @param {{projectId: string, range: () => {startS: number, endS: number, label: string}}} opts
+   * @param {import("../data/api.js").Api} api
+   * @param {{projectId: string, tickS: number, range: () => {startS: number, endS: number, label: string}}} opts
    */
-  constructor(api, { projectId, range }) {
+  constructor(api, { projectId, tickS, range }) {
     super();
     this.api = api;
     this.projectId = projectId;
+    this.tickS = tickS;
     this.range = range;
-    /** @type {ChairStatus|null} */
-    this.status = null;
-    this.busy = false;
-    /** @type {null|(() => void)} */
-    this._unwatch = null;
-    /** @type {Promise<void>|null} */
-    this._settingsChain = null;
-
     this.portSelect = h("select", { class: "input chair-port", id: "chair-port", "data-testid": "chair-port" });
     this.refreshBtn = h("button", { class: "btn btn-small", type: "button", "aria-label": "Refresh the port list", title: "Refresh the port list", "data-testid": "chair-refresh", onclick: () => this.refreshPorts() }, "↻");
     this.connectBtn = h("button", { class: "btn btn-small btn-primary", type: "button", "data-testid": "chair-connect", onclick: () => this.toggleConnection() }, "Connect");
@@ -78,6 +72,36 @@ export class ChairPanel extends Emitter {
     this.latencyHint = h("span", { class: "field-hint", id: "chair-latency-hint" }, "ms, −500…500; positive sends earlier");
     this.latencyInput.addEventListener("change", () => this.commitLatency());
 
+    const chips = this._buildComfort();
+
+    this.pushBtn = h("button", { class: "btn btn-small", type: "button", "data-testid": "chair-push", onclick: () => this.pushRange() }, "Push to chair");
+    this.pushProgress = progressBar("Push to the chair", "chair-push-progress");
+    this.pushProgress.el.hidden = true;
+
+    this.el = h(
+      "section",
+      { class: "panel chair-panel", "aria-labelledby": "chair-panel-title", "data-testid": "chair-panel" },
+      h("h2", { class: "panel-title", id: "chair-panel-title" }, "Chair ", this.stateEl),
+      h("div", { class: "chair-row" }, h("label", { class: "visually-hidden", for: "chair-port" }, "Chair port"), this.portSelect, this.refreshBtn, this.connectBtn),
+      h("dl", { class: "chair-status", "data-testid": "chair-status" }, ...rows.flatMap(([k, v]) => [h("dt", {}, k), v])),
+      this.errorEl,
+      h("label", { class: "chair-field", for: "chair-latency" }, h("span", {}, "Latency offset"), h("span", { class: "chair-field-input" }, this.latencyInput, this.latencyHint)),
+      h("label", { class: "threshold-row", for: "chair-intensity" }, h("span", {}, "Intensity"), this.intensityInput, this.intensityOut),
+      chips,
+      h("div", { class: "chair-row" }, this.pushBtn, this.pushProgress.el),
+    );
+    /** @type {ChairStatus|null} */
+    this.status = null;
+    this.busy = false;
+    /** @type {null|(() => void)} */
+    this._unwatch = null;
+    /** @type {Promise<void>|null} */
+    this._settingsChain = null;
+    this._render();
+  }
+
+  /** The comfort controls: overall intensity and one mute per zone; returns the mute chips. */
+  _buildComfort() {
     this.intensityInput = h("input", { type: "range", class: "range", id: "chair-intensity", min: 0, max: 1, step: 0.05, value: "1", "data-testid": "chair-intensity" });
     this.intensityOut = h("output", { class: "range-value", for: "chair-intensity" }, "1.00");
     this.intensityInput.addEventListener("input", () => {
@@ -97,24 +121,7 @@ export class ChairPanel extends Emitter {
       this.muteBtns.set(zone, btn);
       chips.append(btn);
     }
-
-    this.pushBtn = h("button", { class: "btn btn-small", type: "button", "data-testid": "chair-push", onclick: () => this.pushRange() }, "Push to chair");
-    this.pushProgress = progressBar("Push to the chair", "chair-push-progress");
-    this.pushProgress.el.hidden = true;
-
-    this.el = h(
-      "section",
-      { class: "panel chair-panel", "aria-labelledby": "chair-panel-title", "data-testid": "chair-panel" },
-      h("h2", { class: "panel-title", id: "chair-panel-title" }, "Chair ", this.stateEl),
-      h("div", { class: "chair-row" }, h("label", { class: "visually-hidden", for: "chair-port" }, "Chair port"), this.portSelect, this.refreshBtn, this.connectBtn),
-      h("dl", { class: "chair-status", "data-testid": "chair-status" }, ...rows.flatMap(([k, v]) => [h("dt", {}, k), v])),
-      this.errorEl,
-      h("label", { class: "chair-field", for: "chair-latency" }, h("span", {}, "Latency offset"), h("span", { class: "chair-field-input" }, this.latencyInput, this.latencyHint)),
-      h("label", { class: "threshold-row", for: "chair-intensity" }, h("span", {}, "Intensity"), this.intensityInput, this.intensityOut),
-      chips,
-      h("div", { class: "chair-row" }, this.pushBtn, this.pushProgress.el),
-    );
-    this._render();
+    return chips;
   }
 
   /** The range to push changed (a new selection). */
@@ -257,7 +264,7 @@ export class ChairPanel extends Emitter {
     const v = this.values;
     v.port.textContent = s.port || "–";
     v.frames.textContent = String(s.frames_sent);
-    v.lastTick.textContent = s.last_tick === null ? "–" : `${s.last_tick} (${formatTime(s.last_tick * 0.1)})`;
+    v.lastTick.textContent = s.last_tick === null ? "–" : `${s.last_tick} (${formatTime(s.last_tick * this.tickS)})`;
     const chair = s.diagnostics && s.diagnostics.chair;
     v.errors.textContent = chair ? `CRC ${chair.crc_errors} · length ${chair.length_errors}` : "–";
     v.safe.textContent = chair ? (chair.safe ? `yes (${chair.safe_reason})` : "no") : "–";
@@ -273,7 +280,7 @@ export class ChairPanel extends Emitter {
   }
 
   /**
-   * @param {import("../api.js").ChairSettings} settings
+   * @param {import("../data/api.js").ChairSettings} settings
    * @param {boolean} force also overwrite a field the user is typing in
    */
   _renderSettings(settings, force) {

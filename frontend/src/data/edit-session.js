@@ -5,8 +5,8 @@
  * list is reloaded and the editor is told, so it can reload the timeline and say so.
  */
 
-import { ApiError } from "./api.js";
-import { Emitter } from "./events.js";
+import { ApiError, errorText } from "./http.js";
+import { Emitter } from "../core/events.js";
 
 /**
  * @typedef {{revision: number, cursor: number, nOps: number}} HistoryState
@@ -175,11 +175,4 @@ export class EditSession extends Emitter {
     this._lastError = err;
     this.emit("save", { state: "error", message: `Not saved: ${errorText(err)}` });
   }
-}
-
-/** @param {unknown} err */
-export function errorText(err) {
-  if (err instanceof ApiError) return err.detail;
-  if (err instanceof Error) return err.message;
-  return String(err);
 }

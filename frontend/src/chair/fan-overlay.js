@@ -1,17 +1,18 @@
 /**
- * The 17 x 9 fan grid drawn over the video picture at the playhead (row 0 = top of the frame,
+ * The fan grid (17 x 9 on the chair) drawn over the video picture at the playhead (row 0 = top of the frame,
  * column 0 = left). The canvas covers the element; the grid covers only the picture inside it
  * (object-fit: contain leaves bars).
  */
-
-import { FAN_COLS, FAN_ROWS } from "./timeline-data.js";
 
 export class FanOverlay {
   /**
    * @param {HTMLCanvasElement} canvas absolutely placed over the video
    * @param {HTMLVideoElement} video
+   * @param {{rows: number, cols: number}} grid the fan grid's size
    */
-  constructor(canvas, video) {
+  constructor(canvas, video, { rows, cols }) {
+    this.rows = rows;
+    this.cols = cols;
     this.canvas = canvas;
     this.video = video;
     this.ctx = /** @type {CanvasRenderingContext2D} */ (canvas.getContext("2d"));
@@ -30,7 +31,7 @@ export class FanOverlay {
     this.draw();
   }
 
-  /** @param {Float32Array|null} grid 153 fan levels, row-major */
+  /** @param {Float32Array|null} grid rows x cols fan levels, row-major */
   update(grid) {
     this.grid = grid;
     if (this.visible) this.draw();
@@ -61,11 +62,12 @@ export class FanOverlay {
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
     ctx.clearRect(0, 0, w, h);
     const r = this.pictureRect();
-    const cw = r.w / FAN_COLS;
-    const ch = r.h / FAN_ROWS;
-    for (let row = 0; row < FAN_ROWS; row++) {
-      for (let col = 0; col < FAN_COLS; col++) {
-        const v = this.grid ? this.grid[row * FAN_COLS + col] : 0;
+    const { rows, cols } = this;
+    const cw = r.w / cols;
+    const ch = r.h / rows;
+    for (let row = 0; row < rows; row++) {
+      for (let col = 0; col < cols; col++) {
+        const v = this.grid ? this.grid[row * cols + col] : 0;
         if (v > 0) {
           ctx.fillStyle = `rgba(103, 232, 249, ${0.15 + 0.55 * v})`;
           ctx.fillRect(r.x + col * cw, r.y + row * ch, cw, ch);
@@ -75,12 +77,12 @@ export class FanOverlay {
     ctx.strokeStyle = "rgba(255, 255, 255, 0.22)";
     ctx.lineWidth = 1;
     ctx.beginPath();
-    for (let c = 0; c <= FAN_COLS; c++) {
+    for (let c = 0; c <= cols; c++) {
       const x = Math.round(r.x + c * cw) + 0.5;
       ctx.moveTo(x, r.y);
       ctx.lineTo(x, r.y + r.h);
     }
-    for (let row = 0; row <= FAN_ROWS; row++) {
+    for (let row = 0; row <= rows; row++) {
       const y = Math.round(r.y + row * ch) + 0.5;
       ctx.moveTo(r.x, y);
       ctx.lineTo(r.x + r.w, y);

@@ -24,7 +24,7 @@ import { Emitter } from "./events.js";
 export class Player extends Emitter {
   /**
    * @param {HTMLVideoElement} video
-   * @param {{durationS: number, frameLoop: import("./core/frameloop.js").FrameLoop}} opts
+   * @param {{durationS: number, frameLoop: import("./frameloop.js").FrameLoop}} opts
    */
   constructor(video, { durationS, frameLoop }) {
     super();

@@ -10,15 +10,15 @@
  * `halt()` drops whatever is still queued (used by STOP).
  */
 
-import { ApiError } from "./api.js";
+import { ApiError } from "../data/http.js";
 
 export const HEARTBEAT_MS = 1000;
 
 export class ChairSync {
   /**
-   * @param {import("./api.js").Api} api
+   * @param {import("../data/api.js").Api} api
    * @param {string} projectId
-   * @param {import("./player.js").Player} player
+   * @param {import("../core/player.js").Player} player
    * @param {{onError?: (message: string) => void, heartbeatMs?: number}} [opts]
    */
   constructor(api, projectId, player, opts = {}) {
@@ -103,7 +103,7 @@ export class ChairSync {
       try {
         if (generation !== this.generation || !(this.active || last)) return;
         const position = Math.max(0, timeS === null ? this.player.currentTime : timeS);
-        /** @type {import("./api.js").ChairReport} */
+        /** @type {import("../data/api.js").ChairReport} */
         const report = { project_id: this.projectId, state, position_s: Math.round(position * 1000) / 1000 };
         if (heartbeat) report.heartbeat = true;
         const sending = this.api.chairPlayback(report);

@@ -1,0 +1,134 @@
+/**
+ * The picture and the playhead: the <video> with the fan-grid overlay, the player that clocks the
+ * editor, the transport bar (play, time, zoom, follow, overlay, the lane and key menus), and what
+ * is shown at the playhead (the time, the chair diagram, the overlay).
+ */
+
+import { h } from "../../core/dom.js";
+import { Player } from "../../core/player.js";
+import { FanOverlay } from "../../chair/fan-overlay.js";
+import { formatTime } from "../../data/format.js";
+import { errorText } from "../../data/http.js";
+import { toast } from "../../panels/widgets.js";
+import { ZOOM_STEP, keysMenu } from "./keys.js";
+
+export class EditorMedia {
+  /** @param {import("./shell.js").EditorPage} page */
+  constructor(page) {
+    this.page = page;
+    /** @type {Player|null} */
+    this.player = null;
+    /** @type {FanOverlay|null} */
+    this.fanOverlay = null;
+    /** the tick whose values are shown (-1: show them again) */
+    this.lastTick = -1;
+  }
+
+  /** The video with the fan overlay over it, and the player. @param {number} durationS */
+  buildVideo(durationS) {
+    // The media source is set once the timeline is drawn (attach), so the video's first range
+    // requests do not compete with timeline.bin for the server.
+    this.video = h("video", { class: "video", preload: "auto", playsinline: true, "data-testid": "video" });
+    const overlay = h("canvas", { class: "fan-overlay", hidden: true, "data-testid": "fan-overlay", "aria-label": "Fan grid at the playhead" });
+    const { fanRows, fanCols } = this.page.layout;
+    this.fanOverlay = new FanOverlay(overlay, this.video, { rows: fanRows, cols: fanCols });
+    this.player = new Player(this.video, { durationS, frameLoop: this.page.loop });
+    return h("div", { class: "video-wrap" }, this.video, overlay);
+  }
+
+  /** The transport bar: playback and view controls. @param {number} durationS */
+  buildTransport(durationS) {
+    const page = this.page;
+    const zoom = (/** @type {number} */ f) => page.timeline.zoomBy(f);
+    this.playBtn = h("button", { class: "btn btn-primary btn-play", type: "button", "data-testid": "play", "aria-label": "Play (Space)", onclick: () => this.togglePlay() }, "▶");
+    this.timeEl = h("span", { class: "time", "data-testid": "time" }, `0:00.0 / ${formatTime(durationS)}`);
+    this.overlayBtn = h("button", { class: "btn", type: "button", "aria-pressed": "false", "data-testid": "toggle-fan-overlay", onclick: () => this.setOverlay(!this.fanOverlay.visible) }, "Fan grid");
+    this.followBtn = h("button", { class: "btn", type: "button", "aria-pressed": "true", "data-testid": "toggle-follow", title: "Keep the playhead in view while playing", onclick: () => this.setFollow(!page.timeline.follow) }, "Follow");
+    const zoomOut = h("button", { class: "btn", type: "button", "aria-label": "Zoom out (-)", "data-testid": "zoom-out", onclick: () => zoom(1 / ZOOM_STEP) }, "−");
+    const zoomFit = h("button", { class: "btn", type: "button", "aria-label": "Show the whole timeline (0)", "data-testid": "zoom-fit", onclick: () => page.timeline.fit() }, "Fit");
+    const zoomIn = h("button", { class: "btn", type: "button", "aria-label": "Zoom in (+)", "data-testid": "zoom-in", onclick: () => zoom(ZOOM_STEP) }, "+");
+    return h(
+      "div",
+      { class: "transport", role: "group", "aria-label": "Playback and view" },
+      this.playBtn,
+      this.timeEl,
+      h("div", { class: "btn-group", role: "group", "aria-label": "Zoom" }, zoomOut, zoomFit, zoomIn),
+      this.followBtn,
+      this.overlayBtn,
+      page.lanes.menu,
+      keysMenu(),
+    );
+  }
+
+  /** Follow the player; returns the unsubscribers. */
+  wire() {
+    const player = this.player;
+    return [
+      player.on("time", ({ timeS, playing }) => this.showAt(timeS, playing)),
+      player.on("state", ({ playing }) => {
+        this.playBtn.textContent = playing ? "❚❚" : "▶";
+        this.playBtn.setAttribute("aria-label", playing ? "Pause (Space)" : "Play (Space)");
+      }),
+      player.on("media-error", ({ message }) => this.page.showNotice(message)),
+    ];
+  }
+
+  /** Give the video its source (once). */
+  attach() {
+    if (this.video.getAttribute("src")) return;
+    this.video.src = this.page.api.mediaUrl(this.page.projectId);
+  }
+
+  /** Move the playhead and show the values at it. @param {number} timeS @param {boolean} playing */
+  showAt(timeS, playing) {
+    const { timeline, data, chair } = this.page;
+    timeline.setPlayhead(timeS, { page: playing });
+    this.timeEl.textContent = `${formatTime(timeS)} / ${formatTime(timeline.durationS)}`;
+    const tick = data ? data.tickAt(timeS) : -1;
+    if (data && tick === this.lastTick) return;
+    this.lastTick = tick;
+    const v = data ? data.valuesAt(tick) : null;
+    chair.diagram.update(v);
+    this.fanOverlay.update(v ? v.fan_grid : null);
+  }
+
+  /** Show the values at the playhead again (new data, or the overlay toggled). */
+  refresh() {
+    this.lastTick = -1;
+    this.showAt(this.player.currentTime, this.player.playing);
+  }
+
+  async togglePlay() {
+    try {
+      await this.player.toggle();
+    } catch (err) {
+      toast(`Playback failed: ${errorText(err)}`, "error");
+    }
+  }
+
+  /** @param {number} timeS */
+  seek(timeS) {
+    this.player.seek(timeS);
+    this.page.timeline.reveal(this.player.currentTime);
+  }
+
+  /** @param {boolean} on */
+  setOverlay(on) {
+    this.fanOverlay.setVisible(on);
+    this.overlayBtn.setAttribute("aria-pressed", String(on));
+    this.refresh();
+    this.page.view.scheduleSave();
+  }
+
+  /** @param {boolean} on */
+  setFollow(on) {
+    this.page.timeline.follow = on;
+    this.followBtn.setAttribute("aria-pressed", String(on));
+    this.page.view.scheduleSave();
+  }
+
+  destroy() {
+    if (this.player) this.player.destroy();
+    if (this.fanOverlay) this.fanOverlay.destroy();
+  }
+}
