@@ -1,4 +1,4 @@
-"""The compact binary timeline (autohaptics.server.binary): layout, alignment, round trip."""
+"""The compact binary timeline (autohaptics.timeline.wire): layout, alignment, round trip."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from hypothesis.extra.numpy import arrays
 
 from autohaptics.errors import ParameterError
 from autohaptics.layout import FAN_COLS, FAN_ROWS
-from autohaptics.server.binary import MAGIC, U8_SCALE, decode, encode
+from autohaptics.timeline.wire import MAGIC, U8_SCALE, decode, encode
 from autohaptics.timeline import Timeline
 
 

@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from autohaptics.chair.comfort import Comfort, DeviceProfile, compose_frame, quantize_u8, temperature_cc
+from autohaptics.chair.comfort import Comfort, DeviceProfile, compose_frame, temperature_cc
+from autohaptics.timeline.quantise import to_u8 as quantize_u8
 from autohaptics.chair.protocol import Hello
 from autohaptics.errors import ParameterError
 from autohaptics.timeline import Timeline

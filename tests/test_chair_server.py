@@ -124,7 +124,7 @@ def connected(client, chair):
 
 def composed(client, pid: str) -> Timeline:
     """The composed timeline as the service holds it (exact values, not the 4-decimal JSON)."""
-    return client.app.state.timelines.compose(pid).timeline
+    return client.app.state.composer.compose(pid).timeline
 
 
 def play(client, pid: str, position_s: float, state: str = "play", **extra):

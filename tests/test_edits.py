@@ -1,4 +1,4 @@
-"""Edit operations (autohaptics.server.edits): every op with known answers, validation, properties."""
+"""Edit operations (autohaptics.timeline.edits): every op with known answers, validation, properties."""
 
 from __future__ import annotations
 
@@ -11,7 +11,8 @@ from hypothesis import strategies as st
 
 from autohaptics.errors import ParameterError
 from autohaptics.layout import FAN_COLS, FAN_ROWS, TEMP_NEUTRAL_C
-from autohaptics.server.edits import LANES, OPS, apply_ops, validate_op
+from autohaptics.timeline.edit_ops import LANES, OPS
+from autohaptics.timeline.edits import apply_ops, validate_op
 from autohaptics.timeline import Timeline
 
 N = 10

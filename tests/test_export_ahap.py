@@ -15,8 +15,8 @@ from hypothesis import strategies as st
 
 from autohaptics.bench.export import synthetic_timeline
 from autohaptics.errors import ParameterError
-from autohaptics.export import export_timeline
-from autohaptics.export.ahap import CURVE_MAX_POINTS, EVENT_MAX_S, pattern_chunks
+from autohaptics.formats import export_timeline
+from autohaptics.formats.ahap import CURVE_MAX_POINTS, EVENT_MAX_S, pattern_chunks
 from autohaptics.layout import ACTUATOR_IDS
 from autohaptics.timeline import Timeline
 

@@ -18,7 +18,7 @@ from autohaptics.cli import importer as cli_importer
 from autohaptics.cli import main as cli_main
 from autohaptics.cli.main import main
 from autohaptics.errors import ParameterError
-from autohaptics.export import FORMATS, export_timeline, get_format
+from autohaptics.formats import FORMATS, export_timeline, get_format
 from autohaptics.timeline import Timeline
 
 

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from autohaptics.bench.export import synthetic_timeline
-from autohaptics.export import export_timeline
-from autohaptics.export.csv import CSV_COLUMNS, sidecar_dict, write_csv, write_csv_sidecar
-from autohaptics.importers import import_timeline, parse_timeline
+from autohaptics.formats import export_timeline
+from autohaptics.formats.csv import CSV_COLUMNS, sidecar_dict, write_csv, write_csv_sidecar
+from autohaptics.formats.importing import import_timeline, parse_timeline
 from autohaptics.layout import FAN_COLS, FAN_ROWS
 
 

@@ -13,10 +13,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from autohaptics.bench.export import synthetic_timeline
-from autohaptics.export import export_timeline
-from autohaptics.export._common import breakpoints
+from autohaptics.formats import export_timeline
+from autohaptics.formats.common import breakpoints
 from autohaptics.errors import ParameterError
-from autohaptics.export.hjif import (
+from autohaptics.formats.hjif import (
     ACTUATOR_MASK,
     BODY_PART_BITS,
     MAX_EFFECT_KEYFRAMES,

@@ -8,7 +8,7 @@ import json
 import numpy as np
 
 from autohaptics.bench.export import synthetic_timeline
-from autohaptics.export import export_timeline
+from autohaptics.formats import export_timeline
 from autohaptics.timeline import FORMAT, Timeline
 
 

@@ -8,8 +8,8 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from autohaptics.bench.export import synthetic_timeline
-from autohaptics.export import export_timeline
-from autohaptics.export.mpegv import AH_NS, LOCATION_CS, SEDL_NS, SI_NS, XSI_NS, fan_location
+from autohaptics.formats import export_timeline
+from autohaptics.formats.mpegv import AH_NS, LOCATION_CS, SEDL_NS, SI_NS, XSI_NS, fan_location
 from autohaptics.layout import ACTUATOR_IDS, FAN_COLS, FAN_ROWS
 from autohaptics.timeline import Timeline
 

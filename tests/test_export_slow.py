@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 from autohaptics.bench.export import synthetic_timeline
-from autohaptics.export import FORMATS, export_timeline
-from autohaptics.export.hjif import MAX_EFFECT_KEYFRAMES, MAX_EFFECT_MS
-from autohaptics.export.mpegv import SEDL_NS
-from autohaptics.importers import import_timeline
+from autohaptics.formats import FORMATS, export_timeline
+from autohaptics.formats.hjif import MAX_EFFECT_KEYFRAMES, MAX_EFFECT_MS
+from autohaptics.formats.mpegv import SEDL_NS
+from autohaptics.formats.importing import import_timeline
 from autohaptics.timeline import Timeline
 
 N_TICKS = 72_000

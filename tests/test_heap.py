@@ -1,4 +1,4 @@
-"""autohaptics.heap: the C heap gives freed multi-megabyte temporaries back to the OS."""
+"""autohaptics.runner.heap: the C heap gives freed multi-megabyte temporaries back to the OS."""
 
 import os
 import subprocess
@@ -7,13 +7,13 @@ import textwrap
 
 import pytest
 
-from autohaptics import heap
+from autohaptics.runner import heap
 
 linux_glibc = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt/malloc_trim")
 
 _PROBE = textwrap.dedent("""
     import sys, numpy as np
-    from autohaptics.heap import bound_heap
+    from autohaptics.runner.heap import bound_heap
     if sys.argv[1] == "bound":
         assert bound_heap()
     def rss():
@@ -119,7 +119,7 @@ def test_only_clean_private_read_only_file_pages_are_chosen():
 
 _RELEASE_PROBE = textwrap.dedent("""
     import numpy as np, cv2, scipy.signal
-    from autohaptics.heap import release_library_pages
+    from autohaptics.runner.heap import release_library_pages
     def rss():
         with open("/proc/self/statm") as fh:
             return int(fh.read().split()[1]) * 4096 / 2**20

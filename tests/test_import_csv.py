@@ -13,9 +13,9 @@ from autohaptics.bench.export import synthetic_timeline
 from autohaptics.cli import export as cli_export
 from autohaptics.cli import importer as cli_importer
 from autohaptics.errors import ParameterError
-from autohaptics.export import export_timeline
-from autohaptics.export.csv import CSV_COLUMNS, write_csv_sidecar
-from autohaptics.importers import (
+from autohaptics.formats import export_timeline
+from autohaptics.formats.csv import CSV_COLUMNS, write_csv_sidecar
+from autohaptics.formats.importing import (
     MAX_PROBLEMS,
     ImportProblem,
     TimelineImportError,

@@ -16,7 +16,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from autohaptics.server.app import create_app
-from autohaptics.server.binary import decode
+from autohaptics.timeline.wire import decode
 from autohaptics.server.settings import Settings
 from autohaptics.timeline import Timeline
 

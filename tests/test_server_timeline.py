@@ -9,8 +9,6 @@ A 20 s synthetic film, generated in audio mode, is the project; each test works 
 from __future__ import annotations
 
 import gzip
-import json
-import sqlite3
 import time
 from pathlib import Path
 
@@ -18,9 +16,9 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-from autohaptics.server import generated as generated_file
+from autohaptics.timeline import npz as generated_file
 from autohaptics.server.app import create_app
-from autohaptics.server.binary import decode
+from autohaptics.timeline.wire import decode
 from autohaptics.server.settings import Settings
 from autohaptics.testing import Scene, Segment, Tone, write_scene
 from autohaptics.timeline import Timeline
@@ -120,7 +118,7 @@ def test_an_import_is_stored_as_a_file_and_the_edit_list_stays_light(client, pro
     np.testing.assert_array_equal(Timeline.load(stored).vibration, known().vibration)
     edits = client.get(f"/api/projects/{pid}/edits")
     assert len(edits.content) < 1000 and edits.json()["ops"] == [op]
-    composed = client.app.state.timelines.compose(pid).timeline
+    composed = client.app.state.composer.compose(pid).timeline
     np.testing.assert_array_equal(composed.vibration, known().vibration)
     assert client.get(f"/api/projects/{pid}/timeline").json()["edits"] == [op]
 
@@ -129,7 +127,7 @@ def test_an_import_is_stored_as_a_file_and_the_edit_list_stays_light(client, pro
     other.vibration[:] = 0.5
     res = edit(client, pid, {"op": "import", "timeline": other.to_dict()})
     assert set(res["op"]) == {"op", "ref", "name", "n_ticks"} and res["op"]["n_ticks"] == 150
-    composed = client.app.state.timelines.compose(pid).timeline
+    composed = client.app.state.composer.compose(pid).timeline
     assert np.all(composed.vibration[:150] == 0.5) and np.all(composed.vibration[150:] == 0)
 
     # A stored import can be named again (it exists in this project); an unknown one cannot.
@@ -144,33 +142,12 @@ def test_an_import_is_stored_as_a_file_and_the_edit_list_stays_light(client, pro
     try:
         with TestClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as restarted:
             for p in (pid, copy["id"]):
-                t = restarted.app.state.timelines.compose(p).timeline
+                t = restarted.app.state.composer.compose(p).timeline
                 np.testing.assert_array_equal(t.vibration, known().vibration)
     finally:
         client.delete(f"/api/projects/{copy['id']}")
 
 
-def test_imports_stored_inline_by_an_older_server_move_to_files_on_start(client, project, data_dir):
-    pid = project["id"]
-    rev = client.get(f"/api/projects/{pid}").json()["revision"]
-    inline = {"op": "import", "timeline": known().to_dict()}
-    db = sqlite3.connect(data_dir / "autohaptics.sqlite3")
-    with db:
-        db.execute("INSERT INTO edits (project_id, seq, op, created_at) VALUES (?, 0, ?, 'then')",
-                   (pid, json.dumps(inline)))
-        db.execute("UPDATE projects SET cursor=1, revision=revision+1 WHERE id=?", (pid,))
-    db.close()
-    with TestClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as restarted:
-        edits = restarted.get(f"/api/projects/{pid}/edits").json()
-        assert edits["revision"] == rev + 1
-        (op,) = edits["ops"]
-        assert set(op) == {"op", "ref", "name", "n_ticks"}
-        assert (data_dir / "projects" / pid / "imports" / f"{op['ref']}.json").is_file()
-        np.testing.assert_array_equal(restarted.app.state.timelines.compose(pid).timeline.vibration,
-                                      known().vibration)
-
-
-# ------------------------------------------------------------------------------ binary
 def test_binary_blocks_gzip_and_revalidation(client, project):
     pid = project["id"]
     url = f"/api/projects/{pid}/timeline.bin"
@@ -231,26 +208,11 @@ def test_rederive_keeps_the_derived_timeline_in_memory(client, project, monkeypa
     def no_reading(path):
         raise AssertionError(f"{path} was read back after the re-derive")
 
-    monkeypatch.setattr("autohaptics.server.timelines.load_npz", no_reading)
-    composed = client.app.state.timelines.compose(pid)
+    monkeypatch.setattr("autohaptics.server.composer.load_npz", no_reading)
+    composed = client.app.state.composer.compose(pid)
     assert composed.revision == r.json()["revision"]
     assert composed.timeline.generator["params"]["thresholds"]["loudness"] == 0.2
     assert client.get(f"/api/projects/{pid}/timeline.bin").status_code == 200
-
-
-def test_a_project_from_before_npz_is_converted_once(client, project, data_dir):
-    pid = project["id"]
-    pdir = data_dir / "projects" / pid
-    tl = generated_file.load_npz(pdir / "generated.npz")
-    tl.save(pdir / "generated.json")  # what older servers wrote
-    (pdir / "generated.npz").unlink()
-    with TestClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as restarted:
-        header, blocks = decode(restarted.get(f"/api/projects/{pid}/timeline.bin").content)
-        assert header["n_ticks"] == N_TICKS
-        assert (pdir / "generated.npz").is_file() and not (pdir / "generated.json").exists()
-        converted = generated_file.load_npz(pdir / "generated.npz")
-        np.testing.assert_allclose(converted.vibration, tl.vibration, atol=5e-5)  # JSON keeps 4 decimals
-        assert restarted.get(f"/api/projects/{pid}").json()["revision"] == project["revision"]
 
 
 def test_npz_round_trip_and_errors(tmp_path):

@@ -31,7 +31,7 @@ from autohaptics.errors import ParameterError
 from autohaptics.fusion import MODES, FusionParams, SaliencyParams
 from autohaptics.intensity import FEATURES, AudioFeatureParams, IntensityParams
 from autohaptics.media import DECODE_MODES
-from autohaptics.records import ANALYSIS, DERIVE, apply_overrides, stage, stage_of
+from autohaptics.records import ANALYSIS, DERIVE, apply_overrides, params_to_dict, stage, stage_of
 from autohaptics.temperature import ThermalParams
 
 TRACKS = ("vibration", "temperature", "fans")
@@ -179,6 +179,43 @@ def resolve_params(preset: str = DEFAULT_PRESET, overrides: dict[str, Any] | Non
                 raise ParameterError(f"threshold {name} must be a number, got {value!r}") from None
         params = dataclasses.replace(params, intensity=dataclasses.replace(params.intensity, thresholds=th))
     return params, preset
+
+
+# A project's stored parameters: {preset, mode, thresholds (the four effective values), overrides
+# (the user's dotted overrides)}; the editor and the API change them field by field.
+DEFAULT_PARAMS = {"preset": DEFAULT_PRESET, "mode": None, "thresholds": {}, "overrides": {}}
+
+
+def params_from_doc(doc: dict) -> tuple[GenerateParams, str]:
+    """(GenerateParams, preset) for a stored parameter document."""
+    overrides = dict(doc.get("overrides") or {})
+    if doc.get("mode"):
+        overrides["mode"] = doc["mode"]
+    return resolve_params(doc.get("preset") or DEFAULT_PRESET, overrides, doc.get("thresholds") or {})
+
+
+def resolve_doc(current: dict | None, *, preset: str | None = None, mode: str | None = None,
+            thresholds: dict | None = None, overrides: dict | None = None) -> tuple[dict, GenerateParams]:
+    """New stored parameters: each given field replaces the current one whole, the others stay."""
+    cur = {**DEFAULT_PARAMS, **(current or {})}
+    doc = {
+        "preset": preset if preset is not None else cur["preset"],
+        "mode": mode if mode is not None else cur["mode"],
+        "thresholds": dict(thresholds) if thresholds is not None else dict(cur["thresholds"]),
+        "overrides": dict(overrides) if overrides is not None else dict(cur["overrides"]),
+    }
+    params, preset_name = params_from_doc(doc)
+    doc["preset"] = preset_name
+    doc["mode"] = params.mode
+    doc["thresholds"] = dict(params.intensity.thresholds)
+    return doc, params
+
+
+
+
+def same_analysis(a: dict, b: dict) -> bool:
+    """True when two stored parameter documents need the same analysis of the film."""
+    return analysis_key(params_to_dict(params_from_doc(a)[0])) == analysis_key(params_to_dict(params_from_doc(b)[0]))
 
 
 def analysis_key(doc: dict) -> dict:

@@ -20,7 +20,7 @@ import pytest
 from autohaptics.chair import VirtualChair
 from autohaptics.server.chair import DRIFT_SEEK_S
 from autohaptics.server.store import Store
-from autohaptics.server.timelines import Timelines
+from autohaptics.server.composer import Composer
 from browser_support import ServerError, media_clip, open_editor, start_server, stop_server, upload, wait_until
 
 pytestmark = pytest.mark.browser
@@ -76,7 +76,7 @@ def composed(data_dir, pid: str):
     """The composed timeline exactly as the server composes it (same files, same code)."""
     store = Store(data_dir)
     try:
-        return Timelines(store).compose(pid).timeline
+        return Composer(store).compose(pid).timeline
     finally:
         store.close()
 

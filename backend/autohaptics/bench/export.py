@@ -21,7 +21,7 @@ import psutil
 
 from autohaptics.bench.common import measure, table
 from autohaptics.errors import AutohapticsError
-from autohaptics.export import FORMATS, export_timeline, get_format
+from autohaptics.formats import FORMATS, export_timeline, get_format
 from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS, TEMP_HIGH_C, TEMP_LOW_C
 from autohaptics.timebase import n_ticks as ticks_for
 from autohaptics.timeline import Timeline

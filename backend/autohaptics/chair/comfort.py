@@ -22,6 +22,7 @@ from autohaptics.chair.protocol import N_FANS, Frame, Hello
 from autohaptics.errors import ParameterError
 from autohaptics.layout import ACTUATORS, DEVICE_TEMP_MAX_C, DEVICE_TEMP_MIN_C, TEMP_NEUTRAL_C, ZONES
 from autohaptics.timeline import Timeline
+from autohaptics.timeline.quantise import to_u8
 
 MUTABLE_ZONES = ZONES + ("heat", "fans")  # back, armrests, seat, heat, fans
 
@@ -82,12 +83,6 @@ class DeviceProfile:
 _ZONE_OF_MOTOR = tuple(a.zone for a in ACTUATORS)
 
 
-def quantize_u8(values: np.ndarray, scale: float = 1.0) -> bytes:
-    """floor(clip(v * scale, 0, 1) * 255 + 0.5) as bytes."""
-    v = np.clip(np.asarray(values, dtype=np.float64) * scale, 0.0, 1.0)
-    return np.floor(v * 255.0 + 0.5).astype(np.uint8).tobytes()
-
-
 def temperature_cc(temp_c: float, comfort: Comfort, profile: DeviceProfile) -> int:
     """Temperature target in centi-degrees after comfort scaling, muting and the device clamp."""
     neutral = profile.temp_neutral_c
@@ -106,10 +101,10 @@ def compose_frame(timeline: Timeline, tick: int, *, comfort: Comfort, profile: D
     vib = np.asarray(timeline.vibration[tick], dtype=np.float64)
     if comfort.mute:
         vib = vib * np.array([0.0 if z in comfort.mute else 1.0 for z in _ZONE_OF_MOTOR])
-    motors = quantize_u8(vib, comfort.intensity)
+    motors = to_u8(vib, comfort.intensity).tobytes()
     if "fans" in comfort.mute:
         fans = bytes(N_FANS)
     else:
-        fans = quantize_u8(np.asarray(timeline.fans[tick]).reshape(-1), comfort.intensity)
+        fans = to_u8(np.asarray(timeline.fans[tick]).reshape(-1), comfort.intensity).tobytes()
     return Frame(tick=int(tick), motors=motors, temp_cc=temperature_cc(timeline.temperature_c[tick], comfort, profile),
                  fans=fans)

@@ -14,7 +14,7 @@ def register(sub) -> None:
         description="Compare a timeline (TEST) against a reference (REF) of the same source: vibration MAE and "
                     "onset precision/recall/F1 (onsets matched within +-1 tick per actuator), temperature MAE (C), "
                     "fan-cell IoU over the ticks where either side blows, and the MAE of every feature curve both "
-                    "hold. Timelines of different lengths are compared on their common ticks.")
+                    "hold. Composer of different lengths are compared on their common ticks.")
     p.add_argument("ref", help="reference timeline JSON")
     p.add_argument("test", help="timeline JSON to compare against the reference")
     p.add_argument("--json", action="store_true", help="print the full report as JSON")

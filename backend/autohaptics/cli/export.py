@@ -6,9 +6,9 @@ import argparse
 import sys
 
 from autohaptics.errors import ParameterError
-from autohaptics.export import FORMATS, export_timeline, get_format, write_csv_sidecar
-from autohaptics.export._common import atomic_output
-from autohaptics.importers import csv_meta_path
+from autohaptics.formats import FORMATS, export_timeline, get_format, write_csv_sidecar
+from autohaptics.formats.common import atomic_output
+from autohaptics.formats.importing import csv_meta_path
 from autohaptics.timeline import Timeline
 
 

@@ -58,7 +58,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from autohaptics.heap import release_between_passes
+    from autohaptics.runner.heap import release_between_passes
     from autohaptics.pipeline import generate
 
     params, preset = params_from_args(args)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from autohaptics.errors import ParameterError
-from autohaptics.importers import csv_meta_path, import_timeline
+from autohaptics.formats.importing import csv_meta_path, import_timeline
 
 
 def register(sub) -> None:

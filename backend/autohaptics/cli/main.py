@@ -12,7 +12,7 @@ import sys
 
 from autohaptics import __version__
 from autohaptics.errors import AutohapticsError, CancelledError
-from autohaptics.heap import bound_heap
+from autohaptics.runner.heap import bound_heap
 
 EXIT_ERROR = 2
 EXIT_CANCELLED = 130

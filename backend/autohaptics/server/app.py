@@ -18,7 +18,7 @@ from autohaptics.server.jobs import JobRunner
 from autohaptics.server.routes import chair, jobs, projects, service, timeline
 from autohaptics.server.settings import Settings
 from autohaptics.server.store import Conflict, NotFound, Store
-from autohaptics.server.timelines import Timelines
+from autohaptics.server.composer import Composer
 from autohaptics.server.uploads import MediaRejected, UploadTooLarge
 
 log = logging.getLogger("autohaptics.server")
@@ -38,7 +38,7 @@ class FrontendFiles(StaticFiles):
 def create_app(settings: Settings | None = None) -> FastAPI:
     """The service for ``settings`` (default: :meth:`Settings.from_env`).
 
-    The store, the timelines service, the job runner and the chair service start with the application's lifespan
+    The store, the composer, the job runner and the chair service start with the application's lifespan
     (use ``with TestClient(app)`` in tests) and are reachable through the dependencies of
     :mod:`autohaptics.server.deps`.
     """
@@ -50,15 +50,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         interrupted = store.recover()
         if interrupted:
             log.warning("%d job(s) were interrupted by a server restart", len(interrupted))
-        timelines = Timelines(store)
-        moved = await anyio.to_thread.run_sync(timelines.migrate_imports)
-        if moved:
-            log.info("%d imported timeline(s) moved out of the edit list into imports/", moved)
-        runner = JobRunner(store, workers=settings.jobs, mp_context=settings.mp_context, timelines=timelines)
+        composer = Composer(store)
+        runner = JobRunner(store, workers=settings.jobs, mp_context=settings.mp_context, composer=composer)
         await anyio.to_thread.run_sync(runner.start)
-        chair_service = ChairService(store, timelines)
+        chair_service = ChairService(store, composer)
         chair_service.start()
-        app.state.store, app.state.timelines, app.state.runner = store, timelines, runner
+        app.state.store, app.state.composer, app.state.runner = store, composer, runner
         app.state.chair = chair_service
         try:
             yield

@@ -27,7 +27,6 @@ Temperature is clamped to the connected chair's safe range by :func:`autohaptics
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import math
 import threading
@@ -40,8 +39,9 @@ from autohaptics.chair import ChairLink, ChairPlayer, Comfort, list_ports, push
 from autohaptics.chair.comfort import MUTABLE_ZONES
 from autohaptics.chair.player import check_latency_offset_ms
 from autohaptics.errors import AutohapticsError, CancelledError, ParameterError
+from autohaptics.server.sse import Subscribers, Subscription
 from autohaptics.server.store import Conflict, NotFound, Store
-from autohaptics.server.timelines import Timelines
+from autohaptics.server.composer import Composer
 
 log = logging.getLogger("autohaptics.server.chair")
 
@@ -102,21 +102,12 @@ class _Push:
                 "progress": round(self.progress, 4), "error": self.error}
 
 
-@dataclass
-class Subscription:
-    """An SSE stream's view of the status: the current one, then a queue of later ones (None ends it)."""
-
-    initial: dict
-    queue: asyncio.Queue
-    close: Callable[[], None]
-
-
 class ChairService:
     """The application's chair (see the module docstring). Thread-safe."""
 
-    def __init__(self, store: Store, timelines: Timelines, *, link_options: dict | None = None):
+    def __init__(self, store: Store, composer: Composer, *, link_options: dict | None = None):
         self.store = store
-        self.timelines = timelines
+        self.composer = composer
         self._link_options = dict(link_options or {})
         self._lock = threading.RLock()  # short: the fields below; never held while composing or waiting
         self._commands = threading.Lock()  # one connect / disconnect / playback / push at a time
@@ -131,7 +122,7 @@ class ChairService:
         self._drift_s: float | None = None
         self._drift_seeks = 0
         self._settings = _stored_settings(store)
-        self._subscribers: list[tuple[asyncio.AbstractEventLoop, asyncio.Queue]] = []
+        self._subscribers = Subscribers(maxsize=QUEUE_SIZE)
         self._wake = threading.Event()
         self._closing = threading.Event()
         self._monitor: threading.Thread | None = None
@@ -150,10 +141,7 @@ class ChairService:
         if self._monitor is not None:
             self._monitor.join(5.0)
             self._monitor = None
-        with self._lock:
-            subscribers, self._subscribers = self._subscribers, []
-        for loop, q in subscribers:
-            _offer(loop, q, None)
+        self._subscribers.close_all()
 
     # ------------------------------------------------------------------- ports
     @staticmethod
@@ -274,7 +262,7 @@ class ChairService:
             self._drift_seeks += abs(drift) > DRIFT_SEEK_S
 
     def _load(self, player: ChairPlayer, project_id: str) -> None:
-        composed = self.timelines.compose(project_id)
+        composed = self.composer.compose(project_id)
         player.set_timeline(composed.timeline)
         with self._lock:
             self._project, self._revision = project_id, composed.revision
@@ -288,7 +276,7 @@ class ChairService:
         try:
             if self.store.revision(pid) == revision:
                 return
-            composed = self.timelines.compose(pid)
+            composed = self.composer.compose(pid)
         except NotFound as exc:  # the project (or its timeline) is gone: nothing left to play
             player.stop()
             with self._lock:
@@ -354,7 +342,7 @@ class ChairService:
                 raise Conflict("a push is already running; stop it first")
             if not link.connected:
                 raise Conflict(f"the chair on {link.port} is reconnecting; try again when it is back")
-            composed = self.timelines.compose(project_id)
+            composed = self.composer.compose(project_id)
             duration = composed.timeline.duration_s
             if not (math.isfinite(start_s) and math.isfinite(end_s)) or start_s < 0:
                 raise ParameterError(f"start_s and end_s must be finite seconds >= 0, got {start_s!r}, {end_s!r}")
@@ -432,19 +420,8 @@ class ChairService:
 
     # --------------------------------------------------------------- streaming
     def subscribe(self) -> Subscription:
-        """Register an SSE stream on the running event loop."""
-        loop = asyncio.get_running_loop()
-        q: asyncio.Queue = asyncio.Queue(maxsize=QUEUE_SIZE)
-        entry = (loop, q)
-        with self._lock:
-            self._subscribers.append(entry)
-
-        def close() -> None:
-            with self._lock:
-                if entry in self._subscribers:
-                    self._subscribers.remove(entry)
-
-        return Subscription(initial=self.status(), queue=q, close=close)
+        """A status stream on the running event loop: the current status, then every change."""
+        return self._subscribers.subscribe([("status", self.status())])
 
     def _run(self) -> None:
         last_sig, last_sent = None, 0.0
@@ -455,17 +432,14 @@ class ChairService:
                 return
             try:
                 self._follow_revision()
-                with self._lock:
-                    subscribers = list(self._subscribers)
-                if not subscribers:
+                if not self._subscribers:
                     continue
                 status = self.status()
                 sig = _signature(status)
                 now = time.monotonic()
                 if woken or sig != last_sig or now - last_sent >= STATUS_INTERVAL_S:
                     last_sig, last_sent = sig, now
-                    for loop, q in subscribers:
-                        _offer(loop, q, status)
+                    self._subscribers.publish(("status", status))
             except Exception:  # keep following; the next round tries again
                 log.exception("chair service monitor")
 
@@ -495,15 +469,3 @@ def _signature(status: dict) -> tuple:
             status["playback"]["state"], status["playback"]["project_id"], status["playback"]["revision"],
             chair.get("safe"), chair.get("stopped"), chair.get("crc_errors"), chair.get("length_errors"),
             push.get("state"), repr(status["settings"]))
-
-
-def _offer(loop: asyncio.AbstractEventLoop, q: asyncio.Queue, item: dict | None) -> None:
-    def put() -> None:
-        if q.full():
-            q.get_nowait()  # a slow client gets the newest status, not a backlog
-        q.put_nowait(item)
-
-    try:
-        loop.call_soon_threadsafe(put)
-    except RuntimeError:  # that stream's event loop is gone
-        pass

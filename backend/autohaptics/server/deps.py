@@ -10,7 +10,7 @@ from autohaptics.server.chair import ChairService
 from autohaptics.server.jobs import JobRunner
 from autohaptics.server.settings import Settings
 from autohaptics.server.store import Store
-from autohaptics.server.timelines import Timelines
+from autohaptics.server.composer import Composer
 
 
 def get_settings(request: Request) -> Settings:
@@ -25,8 +25,8 @@ def get_runner(request: Request) -> JobRunner:
     return request.app.state.runner
 
 
-def get_timelines(request: Request) -> Timelines:
-    return request.app.state.timelines
+def get_composer(request: Request) -> Composer:
+    return request.app.state.composer
 
 
 def get_chair(request: Request) -> ChairService:
@@ -36,5 +36,5 @@ def get_chair(request: Request) -> ChairService:
 SettingsDep = Annotated[Settings, Depends(get_settings)]
 StoreDep = Annotated[Store, Depends(get_store)]
 RunnerDep = Annotated[JobRunner, Depends(get_runner)]
-TimelinesDep = Annotated[Timelines, Depends(get_timelines)]
+ComposerDep = Annotated[Composer, Depends(get_composer)]
 ChairDep = Annotated[ChairService, Depends(get_chair)]

@@ -27,72 +27,28 @@ re-run.
 
 from __future__ import annotations
 
-import asyncio
 import logging
-import multiprocessing
-import os
 import queue as queue_mod
-import signal
 import threading
 from collections import deque
-from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import Future
 from concurrent.futures.process import BrokenProcessPool
-from multiprocessing.managers import SyncManager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from autohaptics.errors import AutohapticsError, CancelledError
 from autohaptics.progress import check_cancel
-from autohaptics.workers import start_worker
+from autohaptics.runner import Reporter, WorkerPool, queue_sender
+from autohaptics.server.sse import Subscribers, Subscription
 from autohaptics.server.store import GENERATED, INTERRUPTED, Conflict, NotFound, Store, now_iso
 
 log = logging.getLogger("autohaptics.server.jobs")
 
 TERMINAL = ("done", "failed", "cancelled")
-_PROGRESS_STEP = 0.01  # the worker reports at most every 1 % (or on a stage change)
 
 
 # ------------------------------------------------------------------- worker side
-class _Reporter:
-    """The pipeline's progress callback inside the worker: throttled messages on the Manager queue."""
-
-    def __init__(self, events, job_id: str):
-        self.events = events
-        self.job_id = job_id
-        self.stage = None
-        self.fraction = -1.0
-
-    def __call__(self, stage: str, fraction: float) -> None:
-        fraction = min(1.0, max(0.0, float(fraction)))
-        if stage == self.stage and fraction < 1.0 and fraction - self.fraction < _PROGRESS_STEP:
-            return
-        self.stage, self.fraction = stage, fraction
-        _send(self.events, ("progress", self.job_id, stage, fraction))
-
-
-def _send(events, message: tuple) -> None:
-    try:
-        events.put(message)
-    except Exception:  # the server is shutting down: progress no longer matters
-        pass
-
-
-def exit_with_parent(parent_pid: int) -> None:
-    """Initializer of the pool workers and the Manager: exit once the server process is gone (killed
-    hard), instead of lingering as orphans; ignore SIGINT and SIGTERM (Ctrl+C in a terminal and
-    process managers signal the whole process group), so the server's own shutdown cancels and
-    records the running jobs as interrupted."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    start_worker(parent_pid)
-
-
-def warm_up() -> None:
-    """Import the pipeline in a fresh worker, so the first job does not wait for it."""
-    import autohaptics.pipeline  # noqa: F401
-
-
 def run_job(spec: dict, events, cancel) -> dict:
     """Worker entry point: analyse the media, derive the timeline, write both into ``spec["work_dir"]``.
 
@@ -100,15 +56,17 @@ def run_job(spec: dict, events, cancel) -> dict:
     Raises CancelledError when ``cancel`` is set, MediaError / ParameterError for unusable input.
     """
     from autohaptics import pipeline
-    from autohaptics.heap import release_between_passes
-    from autohaptics.server.generated import save_npz
-    from autohaptics.server.timelines import derive_timeline, params_from_doc
+    from autohaptics.params import params_from_doc
+    from autohaptics.runner.heap import release_between_passes
+    from autohaptics.server.composer import derive_timeline
+    from autohaptics.timeline.npz import save_npz
 
+    reporter = Reporter(queue_sender(events), spec["job_id"])
     started = now_iso()
-    _send(events, ("started", spec["job_id"], started))
+    reporter.event("started", started)
     params, _ = params_from_doc(spec["params"])
-    analysis = pipeline.analyse(spec["media_path"], params, progress=_Reporter(events, spec["job_id"]),
-                                cancel=cancel, between_passes=release_between_passes)
+    analysis = pipeline.analyse(spec["media_path"], params, progress=reporter, cancel=cancel,
+                                between_passes=release_between_passes)
     check_cancel(cancel)
     work = Path(spec["work_dir"])
     if not work.is_dir():  # the project was deleted meanwhile
@@ -134,33 +92,22 @@ class _Live:
     stage: str = ""
     started_at: str | None = None
     cancel_requested: bool = False
-    subscribers: list = field(default_factory=list)  # [(loop, asyncio.Queue)]
-
-
-@dataclass
-class Subscription:
-    """What an SSE stream reads: events so far, then a queue of later ones (None when finished)."""
-
-    initial: list[tuple[str, dict]]
-    queue: asyncio.Queue | None
-    close: Any
+    subscribers: Subscribers = field(default_factory=Subscribers)
 
 
 class JobRunner:
     """Owns the process pool, the Manager, and the live state of queued and running jobs."""
 
-    def __init__(self, store: Store, *, workers: int = 1, mp_context: str = "spawn", timelines=None):
+    def __init__(self, store: Store, *, workers: int = 1, mp_context: str = "spawn", composer=None):
         self.store = store
         self.workers = int(workers)
-        self.ctx = multiprocessing.get_context(mp_context)
-        self.timelines = timelines
+        self.composer = composer
+        self.pool = WorkerPool(self.workers, mp_context=mp_context, ignore_term=True)
         self._lock = threading.RLock()
         self._live: dict[str, _Live] = {}
         self._pending: deque[tuple[_Live, dict]] = deque()  # waiting for a free worker
         self._in_pool = 0  # jobs handed to the pool and not finished
-        self._manager = None
-        self._events = None
-        self._pool: ProcessPoolExecutor | None = None
+        self._started = False
         self._finished: queue_mod.Queue = queue_mod.Queue()
         self._threads: list[threading.Thread] = []
         self._params_locks: dict[str, threading.Lock] = {}
@@ -168,21 +115,13 @@ class JobRunner:
 
     # ---------------------------------------------------------------- lifecycle
     def start(self) -> None:
-        self._manager = SyncManager(ctx=self.ctx)
-        self._manager.start(exit_with_parent, (os.getpid(),))
-        self._events = self._manager.Queue()
-        self._pool = self._new_pool()
+        self.pool.start()
+        self._started = True
         self._stopping = False
         for target, name in ((self._read_events, "job-events"), (self._finish_loop, "job-finisher")):
             t = threading.Thread(target=target, name=name, daemon=True)
             t.start()
             self._threads.append(t)
-
-    def _new_pool(self) -> ProcessPoolExecutor:
-        pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=self.ctx,
-                                   initializer=exit_with_parent, initargs=(os.getpid(),))
-        pool.submit(warm_up)
-        return pool
 
     def stop(self) -> None:
         """Cancel every job, stop the pool, the threads and the Manager; jobs that did not complete
@@ -199,13 +138,10 @@ class JobRunner:
                 job.cancel.set()
             except Exception:
                 pass
-        if self._pool is not None:
-            self._pool.shutdown(wait=True, cancel_futures=True)
+        if self._started:
+            self.pool.shutdown_workers()
         self._finished.put(None)
-        try:
-            self._events.put(None)
-        except Exception:
-            pass
+        self.pool.wake()
         for t in self._threads:
             t.join(timeout=60)
         self._threads.clear()
@@ -215,16 +151,16 @@ class JobRunner:
         for job in left:
             self._publish_final(job, self.store.finish_job(job.job_id, "failed", error=INTERRUPTED,
                                                            started_at=job.started_at))
-        if self._manager is not None:
-            self._manager.shutdown()
-        self._pool = None
+        if self._started:
+            self.pool.shutdown()
+            self._started = False
 
     # ------------------------------------------------------------------ actions
     def submit(self, project: dict, params: dict) -> dict:
         """Queue a generation job for ``project`` with stored parameters ``params``; Conflict when one runs."""
-        if self._pool is None or self._stopping:
+        if not self._started or self._stopping:
             raise Conflict("the job runner is not running")
-        cancel = self._manager.Event()
+        cancel = self.pool.cancel_event()
         job = self.store.create_job(project["id"], params)
         media_path = str(self.store.media_path(project))
         live = _Live(job_id=job["id"], project_id=project["id"], params=params, name=project["name"],
@@ -243,12 +179,7 @@ class JobRunner:
         Jobs wait here rather than in the pool's own queue, so a queued job is cancelled at once."""
         while self._pending and self._in_pool < self.workers and not self._stopping:
             live, spec = self._pending.popleft()
-            try:
-                live.future = self._pool.submit(run_job, spec, self._events, live.cancel)
-            except (BrokenProcessPool, RuntimeError):  # a worker died: the pool is unusable, replace it
-                self._pool.shutdown(wait=False, cancel_futures=True)
-                self._pool = self._new_pool()
-                live.future = self._pool.submit(run_job, spec, self._events, live.cancel)
+            live.future = self.pool.submit(run_job, spec, self.pool.events, live.cancel)
             self._in_pool += 1
             live.future.add_done_callback(lambda f, jid=live.job_id: self._finished.put((jid, f)))
 
@@ -305,52 +236,30 @@ class JobRunner:
 
     # ---------------------------------------------------------------- streaming
     def subscribe(self, job_id: str) -> Subscription:
-        """Register an SSE listener on the running event loop; NotFound for an unknown job."""
-        loop = asyncio.get_running_loop()
+        """A progress stream on the running event loop; NotFound for an unknown job."""
         with self._lock:
             live = self._live.get(job_id)
-            if live is None:
-                job = self.store.get_job(job_id)
-                events = [("progress", {"progress": job["progress"], "stage": job["stage"]})]
-                if job["status"] in TERMINAL:
-                    events.append((job["status"], job))
-                return Subscription(initial=events, queue=None, close=lambda: None)
-            q: asyncio.Queue = asyncio.Queue()
-            entry = (loop, q)
-            live.subscribers.append(entry)
-            initial = [("progress", {"progress": live.progress, "stage": live.stage})]
-
-        def close() -> None:
-            with self._lock:
-                if entry in live.subscribers:
-                    live.subscribers.remove(entry)
-
-        return Subscription(initial=initial, queue=q, close=close)
-
-    def _publish(self, live: _Live, name: str, data: dict) -> None:
-        for loop, q in list(live.subscribers):
-            try:
-                loop.call_soon_threadsafe(q.put_nowait, (name, data))
-            except RuntimeError:  # that client's event loop is gone
-                live.subscribers.remove((loop, q))
+            if live is not None:
+                return live.subscribers.subscribe([("progress", {"progress": live.progress, "stage": live.stage})])
+        job = self.store.get_job(job_id)
+        events = [("progress", {"progress": job["progress"], "stage": job["stage"]})]
+        if job["status"] in TERMINAL:
+            events.append((job["status"], job))
+        return Subscription(initial=events, queue=None, close=lambda: None)
 
     def _publish_final(self, live: _Live, job: dict | None) -> None:
         if job is None:
             job = {"id": live.job_id, "project_id": live.project_id, "status": "cancelled",
                    "progress": live.progress, "stage": live.stage, "error": None, "params": live.params,
                    "created_at": None, "started_at": live.started_at, "finished_at": now_iso()}
-        with self._lock:
-            self._publish(live, job["status"], job)
-            live.subscribers.clear()
+        live.subscribers.publish((job["status"], job))
+        live.subscribers.close_all()
 
     # ------------------------------------------------------------------ threads
     def _read_events(self) -> None:
         while True:
-            try:
-                msg = self._events.get()
-            except (EOFError, OSError, BrokenPipeError):
-                return
-            if msg is None:
+            msg = self.pool.get()
+            if msg is None:  # woken by stop(), or the Manager is gone
                 return
             try:
                 self._on_event(msg)
@@ -358,7 +267,7 @@ class JobRunner:
                 log.exception("job event %r", msg)
 
     def _on_event(self, msg: tuple) -> None:
-        kind, job_id = msg[0], msg[1]
+        job_id, kind = msg[0], msg[1]
         with self._lock:
             live = self._live.get(job_id)
             if live is None or live.status in TERMINAL:
@@ -371,8 +280,7 @@ class JobRunner:
             self.store.job_started(job_id, msg[2])
             return
         self.store.job_progress(job_id, live.progress, live.stage)
-        with self._lock:
-            self._publish(live, "progress", {"progress": live.progress, "stage": live.stage})
+        live.subscribers.publish(("progress", {"progress": live.progress, "stage": live.stage}))
 
     def _finish_loop(self) -> None:
         while True:
@@ -431,11 +339,12 @@ class JobRunner:
             current = self.store.get_project(live.project_id)["params"]
         except NotFound:
             return live.params
-        if current == live.params or self.timelines is None:
+        if current == live.params or self.composer is None:
             return live.params
         from autohaptics import pipeline
-        from autohaptics.server.generated import save_npz
-        from autohaptics.server.timelines import derive_timeline, params_from_doc
+        from autohaptics.params import params_from_doc
+        from autohaptics.server.composer import derive_timeline
+        from autohaptics.timeline.npz import save_npz
 
         work = self.store.job_work_dir(live.job_id)
         analysis = pipeline.Analysis.load(work / "analysis.npz")

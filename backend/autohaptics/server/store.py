@@ -38,7 +38,6 @@ from autohaptics.errors import AutohapticsError
 
 DB_NAME = "autohaptics.sqlite3"
 GENERATED = "generated.npz"
-LEGACY_GENERATED = "generated.json"
 ACTIVE_JOB_STATES = ("queued", "running")
 INTERRUPTED = "interrupted by a server restart"
 _ID = re.compile(r"^[0-9a-f]{32}$")
@@ -165,11 +164,7 @@ class Store:
         return self.project_dir(pid) / "analysis.npz"
 
     def generated_path(self, pid: str) -> Path:
-        """``generated.npz``; a project from before that format has ``legacy_generated_path`` instead."""
         return self.project_dir(pid) / GENERATED
-
-    def legacy_generated_path(self, pid: str) -> Path:
-        return self.project_dir(pid) / LEGACY_GENERATED
 
     def import_path(self, pid: str, ref: str) -> Path:
         return self.project_dir(pid) / "imports" / f"{check_id(ref, 'import')}.json"
@@ -280,7 +275,7 @@ class Store:
             stamp = now_iso()
             with self._tx() as db:
                 row = self._require(db, pid)
-                has_tl = (ndir / GENERATED).is_file() or (ndir / LEGACY_GENERATED).is_file()
+                has_tl = (ndir / GENERATED).is_file()
                 status = row["status"] if row["status"] != "running" else ("ready" if has_tl else "new")
                 db.execute(
                     "INSERT INTO projects (id, name, created_at, updated_at, status, media_file, media_type, source,"
@@ -360,7 +355,6 @@ class Store:
                     pdir = self.project_dir(pid)
                     for name in ("analysis.npz", GENERATED):
                         os.replace(work / name, pdir / name)
-                    (pdir / LEGACY_GENERATED).unlink(missing_ok=True)
                     db.execute("UPDATE projects SET revision=revision+1, has_timeline=1 WHERE id=?", (pid,))
                     if params is not None:
                         db.execute("UPDATE projects SET params=? WHERE id=?", (json.dumps(params), pid))
@@ -383,7 +377,6 @@ class Store:
             self._require(db, pid)
             path = self.generated_path(pid)
             os.replace(write_to, path)
-            self.legacy_generated_path(pid).unlink(missing_ok=True)
             st = path.stat()
             stamp = now_iso()
             db.execute("UPDATE projects SET revision=revision+1, has_timeline=1, params=?, updated_at=?,"
@@ -392,21 +385,6 @@ class Store:
             revision = int(db.execute("SELECT revision FROM projects WHERE id=?", (pid,)).fetchone()[0])
             return revision, (st.st_ino, st.st_mtime_ns, st.st_size)
 
-    def adopt_generated(self, pid: str, write_to: Path) -> tuple | None:
-        """A project from before the .npz format: put ``write_to`` (its generated.json converted) in
-        place of generated.json, unless a job or a re-derive wrote generated.npz meanwhile. The
-        revision does not change (same timeline). Returns the new file's identity, or None."""
-        with self._tx() as db:
-            self._require(db, pid)
-            path, legacy = self.generated_path(pid), self.legacy_generated_path(pid)
-            if path.exists() or not legacy.exists():
-                return None
-            os.replace(write_to, path)
-            legacy.unlink()
-            st = path.stat()
-            return st.st_ino, st.st_mtime_ns, st.st_size
-
-    # --------------------------------------------------------------------- edits
     def edits(self, pid: str) -> dict:
         """``{revision, cursor, ops}``: ops[:cursor] are applied, ops[cursor:] can be redone."""
         with self._lock:
@@ -454,24 +432,6 @@ class Store:
         row = db.execute("SELECT revision, cursor FROM projects WHERE id=?", (pid,)).fetchone()
         return {"revision": row["revision"], "cursor": row["cursor"]}
 
-    def embedded_imports(self) -> list[tuple[str, int, dict]]:
-        """(project id, seq, op) of every ``import`` op stored with its whole document (the form
-        before documents moved to ``imports/``)."""
-        rows = self._all("SELECT project_id, seq, op FROM edits WHERE op LIKE '{\"op\": \"import\"%' "
-                         "AND op LIKE '%\"timeline\"%'")
-        out = []
-        for r in rows:
-            op = json.loads(r["op"])
-            if op.get("op") == "import" and "timeline" in op:
-                out.append((r["project_id"], int(r["seq"]), op))
-        return out
-
-    def replace_op(self, pid: str, seq: int, op: dict) -> None:
-        """Rewrite one stored op in place (same meaning, other form: the revision does not change)."""
-        with self._tx() as db:
-            db.execute("UPDATE edits SET op=? WHERE project_id=? AND seq=?", (json.dumps(op), pid, int(seq)))
-
-    # ------------------------------------------------------------------ settings
     def get_setting(self, key: str) -> dict | None:
         """A service-wide settings document (JSON object), or None when never stored."""
         row = self._one("SELECT value FROM settings WHERE key=?", (key,))

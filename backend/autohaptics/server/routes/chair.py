@@ -4,19 +4,16 @@ settings (latency offset, comfort) and pushing a range. The work is done by
 
 from __future__ import annotations
 
-import asyncio
-import json
-
 from fastapi import APIRouter
 from fastapi.responses import StreamingResponse
 
 from autohaptics.server.deps import ChairDep
+from autohaptics.server.sse import event_stream
 from autohaptics.server.schemas import (
     ChairConnectIn, ChairPlaybackIn, ChairPushIn, ChairSettingsIn, ChairSettingsOut, ChairStatusOut, PortOut,
 )
 
 router = APIRouter(tags=["chair"])
-KEEP_ALIVE_S = 15.0
 _CONFLICT = {409: {"description": "no chair connected, the port failed, or a push is running"}}
 
 
@@ -69,31 +66,9 @@ def push(body: ChairPushIn, chair: ChairDep) -> dict:
     return chair.push(body.project_id, body.start_s, body.end_s)
 
 
-def _sse(event: str, data: dict) -> str:
-    return f"event: {event}\ndata: {json.dumps(data, separators=(',', ':'))}\n\n"
-
-
 @router.get("/api/chair/events", response_class=StreamingResponse,
             responses={200: {"content": {"text/event-stream": {}},
                              "description": "`status` events: the current status, then on every change and "
                                             "at least twice a second"}})
 async def events(chair: ChairDep) -> StreamingResponse:
-    sub = chair.subscribe()
-
-    async def stream():
-        try:
-            yield _sse("status", sub.initial)
-            while True:
-                try:
-                    data = await asyncio.wait_for(sub.queue.get(), timeout=KEEP_ALIVE_S)
-                except asyncio.TimeoutError:
-                    yield ": keep-alive\n\n"
-                    continue
-                if data is None:  # the service is closing
-                    return
-                yield _sse("status", data)
-        finally:
-            sub.close()
-
-    return StreamingResponse(stream(), media_type="text/event-stream",
-                             headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"})
+    return event_stream(chair.subscribe())

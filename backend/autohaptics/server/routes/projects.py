@@ -9,10 +9,10 @@ from fastapi import APIRouter, Query, Request, Response
 from fastapi.responses import FileResponse
 
 from autohaptics.errors import ParameterError
-from autohaptics.server.deps import RunnerDep, SettingsDep, StoreDep, TimelinesDep
+from autohaptics.server.deps import RunnerDep, SettingsDep, StoreDep, ComposerDep
 from autohaptics.server.schemas import ProjectOut, ProjectPatch, WaveformOut
 from autohaptics.server.store import new_id
-from autohaptics.server.timelines import resolve
+from autohaptics.params import resolve_doc
 from autohaptics.server.uploads import display_name, inspect_media, receive_upload
 from autohaptics.timebase import n_ticks
 
@@ -64,7 +64,7 @@ async def create_project(request: Request, store: StoreDep, settings: SettingsDe
         name = (display_name(fields["name"], basename=False, fallback="")
                 if fields.get("name", "").strip() else "") or display_name(upload.filename)
         params, _ = await to_thread.run_sync(
-            lambda: resolve(None, preset=fields.get("preset") or None, mode=fields.get("mode") or None))
+            lambda: resolve_doc(None, preset=fields.get("preset") or None, mode=fields.get("mode") or None))
         accepted = await to_thread.run_sync(lambda: inspect_media(dest, name=name))
         info = accepted.info
         project = await to_thread.run_sync(lambda: store.create_project(
@@ -120,8 +120,8 @@ def get_media(project_id: str, store: StoreDep) -> FileResponse:
 
 
 @router.get("/api/projects/{project_id}/waveform", response_model=WaveformOut)
-def get_waveform(project_id: str, timelines: TimelinesDep, settings: SettingsDep,
+def get_waveform(project_id: str, composer: ComposerDep, settings: SettingsDep,
                  points: int = Query(default=2000, ge=1)) -> dict:
     if points > settings.waveform_max_points:
         raise ParameterError(f"points must be at most {settings.waveform_max_points}, got {points}")
-    return timelines.waveform(project_id, points)
+    return composer.waveform(project_id, points)

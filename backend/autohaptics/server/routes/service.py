@@ -5,9 +5,9 @@ from __future__ import annotations
 from fastapi import APIRouter
 
 from autohaptics import __version__, fusion, intensity, layout
-from autohaptics.export import FORMATS
+from autohaptics.formats import FORMATS
 from autohaptics.params import DEFAULT_PRESET, PRESETS
-from autohaptics.server import edits
+from autohaptics.timeline import edit_ops as edits
 from autohaptics.server.deps import SettingsDep
 from autohaptics.server.schemas import ConfigOut, HealthOut
 from autohaptics.timebase import TICK_S

@@ -12,8 +12,8 @@ from anyio import to_thread
 from fastapi import APIRouter, Query, Request, Response
 
 from autohaptics.errors import ParameterError
-from autohaptics.export import export_timeline, get_format
-from autohaptics.server.deps import SettingsDep, StoreDep, TimelinesDep
+from autohaptics.formats import export_timeline, get_format
+from autohaptics.server.deps import SettingsDep, StoreDep, ComposerDep
 from autohaptics.server.schemas import EditIn, EditOut, EditsOut, HistoryOut, RevisionIn
 from autohaptics.server.uploads import display_name, receive_upload
 
@@ -34,15 +34,15 @@ _IMPORT_BODY = {
 
 @router.get("/api/projects/{project_id}/timeline", response_class=Response,
             responses={200: {"content": {"application/json": {}}, "description": "the composed timeline"}})
-def get_timeline(project_id: str, timelines: TimelinesDep,
+def get_timeline(project_id: str, composer: ComposerDep,
                  layer: Literal["composed", "generated"] = Query(default="composed")) -> Response:
-    return Response(timelines.timeline_json(project_id, layer=layer), media_type="application/json")
+    return Response(composer.timeline_json(project_id, layer=layer), media_type="application/json")
 
 
 @router.get("/api/projects/{project_id}/timeline.bin", response_class=Response,
             responses={200: {"content": {"application/octet-stream": {}}, "description": "binary timeline"},
                        304: {"description": "not modified (If-None-Match)"}})
-def get_timeline_bin(project_id: str, request: Request, timelines: TimelinesDep,
+def get_timeline_bin(project_id: str, request: Request, composer: ComposerDep,
                      layer: Literal["composed", "generated"] = Query(default="composed"),
                      blocks: str | None = Query(default=None, description="comma-separated block names, "
                                                 "e.g. vibration,temperature_c,features (default: all)")) -> Response:
@@ -50,7 +50,7 @@ def get_timeline_bin(project_id: str, request: Request, timelines: TimelinesDep,
     if names is not None and not names:
         raise ParameterError("blocks must name at least one block (or leave the parameter out for all)")
     gzipped = _accepts_gzip(request.headers.get("accept-encoding", ""))
-    data, tag = timelines.timeline_bin(project_id, layer=layer, blocks=names, gzipped=gzipped)
+    data, tag = composer.timeline_bin(project_id, layer=layer, blocks=names, gzipped=gzipped)
     etag = f'"{tag}{"-gz" if gzipped else ""}"'
     headers = {"ETag": etag, "Cache-Control": "no-cache", "Vary": "Accept-Encoding"}
     if etag in _etags(request.headers.get("if-none-match", "")):
@@ -81,26 +81,26 @@ def _etags(if_none_match: str) -> set[str]:
 
 
 @router.get("/api/projects/{project_id}/edits", response_model=EditsOut)
-def get_edits(project_id: str, timelines: TimelinesDep) -> dict:
-    return timelines.edits(project_id)
+def get_edits(project_id: str, composer: ComposerDep) -> dict:
+    return composer.edits(project_id)
 
 
 @router.post("/api/projects/{project_id}/edits", response_model=EditOut,
              responses={409: {"description": "stale base_revision, or no timeline yet"}})
-def post_edit(project_id: str, body: EditIn, timelines: TimelinesDep) -> dict:
-    return timelines.append(project_id, body.base_revision, body.op)
+def post_edit(project_id: str, body: EditIn, composer: ComposerDep) -> dict:
+    return composer.append(project_id, body.base_revision, body.op)
 
 
 @router.post("/api/projects/{project_id}/undo", response_model=HistoryOut,
              responses={409: {"description": "stale base_revision, or nothing to undo"}})
-def undo(project_id: str, body: RevisionIn, timelines: TimelinesDep) -> dict:
-    return timelines.undo(project_id, body.base_revision)
+def undo(project_id: str, body: RevisionIn, composer: ComposerDep) -> dict:
+    return composer.undo(project_id, body.base_revision)
 
 
 @router.post("/api/projects/{project_id}/redo", response_model=HistoryOut,
              responses={409: {"description": "stale base_revision, or nothing to redo"}})
-def redo(project_id: str, body: RevisionIn, timelines: TimelinesDep) -> dict:
-    return timelines.redo(project_id, body.base_revision)
+def redo(project_id: str, body: RevisionIn, composer: ComposerDep) -> dict:
+    return composer.redo(project_id, body.base_revision)
 
 
 def content_disposition(filename: str) -> str:
@@ -111,11 +111,11 @@ def content_disposition(filename: str) -> str:
 
 @router.get("/api/projects/{project_id}/export", response_class=Response,
             responses={200: {"description": "the composed timeline as a file (Content-Disposition attachment)"}})
-def export(project_id: str, store: StoreDep, timelines: TimelinesDep,
+def export(project_id: str, store: StoreDep, composer: ComposerDep,
            format: str = Query(default="json", description="json, csv, ahap, hjif or mpegv")) -> Response:
     spec = get_format(format)
     project = store.get_project(project_id)
-    composed = timelines.compose(project_id)
+    composed = composer.compose(project_id)
     buf = io.BytesIO()
     export_timeline(composed.document(), spec.name, buf)
     stem = PurePosixPath(project["name"]).stem or "timeline"
@@ -128,7 +128,7 @@ def export(project_id: str, store: StoreDep, timelines: TimelinesDep,
                         409: {"description": "stale base_revision, or no timeline yet"},
                         413: {"description": "file too large"}})
 async def import_file(project_id: str, request: Request, store: StoreDep, settings: SettingsDep,
-                      timelines: TimelinesDep) -> dict:
+                      composer: ComposerDep) -> dict:
     store.get_project(project_id)
     dest = store.new_upload_path()
     upload = await receive_upload(request.headers, request.stream(), dest, max_bytes=settings.max_import_bytes)
@@ -139,5 +139,5 @@ async def import_file(project_id: str, request: Request, store: StoreDep, settin
     base = upload.fields.get("base_revision", "").strip()
     if base and not re.fullmatch(r"\d+", base):
         raise ParameterError(f"form field 'base_revision' must be an integer, got {base!r}")
-    return await to_thread.run_sync(lambda: timelines.import_file(
+    return await to_thread.run_sync(lambda: composer.import_file(
         project_id, data, name=display_name(upload.filename), base_revision=int(base) if base else None))

@@ -14,7 +14,7 @@ from typing import IO
 
 import numpy as np
 
-from autohaptics.export._common import FAN_NAMES, VALUE_DECIMALS, ensure_valid
+from autohaptics.formats.common import FAN_NAMES, VALUE_DECIMALS, ensure_valid
 from autohaptics.layout import ACTUATOR_IDS, FAN_COLS, FAN_ROWS
 from autohaptics.timeline import Timeline, json_default
 

@@ -9,7 +9,7 @@ Layout::
                         markers (composed layer only)}
       12 + H   blocks, each starting at a multiple of 4 bytes, little-endian, at the header's offsets
 
-A ``u8`` block stores ``round(value / scale)`` with ``scale = 1/255`` (value = byte * scale); an
+A ``u8`` block stores ``floor(value / scale + 0.5)`` (:func:`~autohaptics.timeline.quantise.to_u8`) with ``scale = 1/255`` (value = byte * scale); an
 ``f32`` block stores the value itself (scale 1). Blocks: ``vibration`` u8 (n, 9),
 ``temperature_c`` f32 (n,), ``fans`` u8 (n, 9, 17), ``fan_activity`` u8 (n,) = fraction of the
 153 fans that are on, one block per feature: ``features.NAME`` u8 for the normalised features
@@ -27,11 +27,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.timeline import NORMALISED_FEATURES, Timeline
+from autohaptics.timeline.model import NORMALISED_FEATURES, Timeline
+from autohaptics.timeline.quantise import U8_SCALE, to_u8
 
 MAGIC = b"AHTL"
 VERSION = 1
-U8_SCALE = 1.0 / 255.0
 _PREFIX = struct.Struct("<4sII")
 _DTYPES = {"u8": np.dtype("<u1"), "f32": np.dtype("<f4")}
 
@@ -41,20 +41,6 @@ class Block:
     name: str
     dtype: str  # "u8" | "f32"
     data: np.ndarray  # already quantised to the block's dtype
-
-
-_CHUNK = 1 << 20  # values quantised at a time (float64 temporaries stay in the cache, not 88 MB)
-
-
-def _u8(values: np.ndarray) -> np.ndarray:
-    """round(clip(v, 0, 1) * 255) in float64, chunk by chunk."""
-    src = np.ascontiguousarray(values).reshape(-1)
-    out = np.empty(src.shape, np.uint8)
-    for a in range(0, src.size, _CHUNK):
-        chunk = np.clip(src[a:a + _CHUNK].astype(np.float64), 0.0, 1.0)
-        np.rint(chunk * 255.0, out=chunk)
-        out[a:a + _CHUNK] = chunk
-    return out.reshape(np.shape(values))
 
 
 def block_sources(tl: Timeline) -> list[tuple[str, str, np.ndarray]]:
@@ -70,9 +56,9 @@ def block_sources(tl: Timeline) -> list[tuple[str, str, np.ndarray]]:
 def quantise(name: str, dtype: str, source: np.ndarray) -> Block:
     if name == "fan_activity":
         fans = np.asarray(source)
-        return Block(name, "u8", _u8((fans > 0).reshape(fans.shape[0], -1).mean(axis=1)))
+        return Block(name, "u8", to_u8((fans > 0).reshape(fans.shape[0], -1).mean(axis=1)))
     if dtype == "u8":
-        return Block(name, "u8", _u8(source))
+        return Block(name, "u8", to_u8(source))
     return Block(name, "f32", np.asarray(source, dtype="<f4"))
 
 

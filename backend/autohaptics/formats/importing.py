@@ -1,4 +1,4 @@
-"""Importers: a timeline from our own files, the native JSON or the CSV of :mod:`autohaptics.export.csv`.
+"""Importers: a timeline from our own files, the native JSON or the CSV of :mod:`autohaptics.formats.csv`.
 
 - :func:`import_timeline` reads a file (format from the suffix, else sniffed); a CSV's metadata
   sidecar ``NAME.meta.json`` next to it is used when present.
@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.export.csv import CSV_COLUMNS, SIDECAR_FORMAT, TEMPERATURE_COLUMN, TIME_COLUMN
+from autohaptics.formats.csv import CSV_COLUMNS, SIDECAR_FORMAT, TEMPERATURE_COLUMN, TIME_COLUMN
 from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS, TEMP_HIGH_C, TEMP_LOW_C, layout_dict
 from autohaptics.timebase import TICK_S
 from autohaptics.timeline import Timeline, default_generator

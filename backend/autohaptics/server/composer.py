@@ -1,8 +1,6 @@
-"""A project's timelines: parameters, the generated timeline, re-deriving, composing with edits.
+"""A project's timelines on the server: the generated layer, re-deriving it, composing it with the edits.
 
-- :func:`resolve` merges requested parameters into a project's stored ones and validates them
-  through :func:`autohaptics.params.resolve_params` (ParameterError -> 400).
-- :class:`Timelines` loads the generated timeline (``generated.npz``) and the feature cache (kept
+- :class:`Composer` loads the generated timeline (``generated.npz``) and the feature cache (kept
   in memory while their files do not change), re-derives from the cache without decoding (the
   derived timeline stays in memory), composes ``apply_ops(generated, ops[:cursor])`` (kept per
   revision), and serves the binary form (kept per revision, layer and block list, gzipped on
@@ -28,47 +26,19 @@ from typing import Any
 import numpy as np
 
 from autohaptics import pipeline
-from autohaptics.params import GenerateParams, resolve_params
+from autohaptics.params import params_from_doc
 from autohaptics.errors import ParameterError
-from autohaptics.importers import parse_timeline
-from autohaptics.server import binary
-from autohaptics.server import edits as edit_ops
-from autohaptics.server.generated import load_generated, load_npz, save_npz
+from autohaptics.formats.importing import parse_timeline
+from autohaptics.timeline import edits as edit_ops
+from autohaptics.timeline import wire as binary
+from autohaptics.timeline.npz import load_npz, save_npz
 from autohaptics.server.store import Conflict, NotFound, Store, new_id
 from autohaptics.server.waveform import cached_peaks
 from autohaptics.timebase import TICK_S
 from autohaptics.timeline import Timeline
 
-log = logging.getLogger("autohaptics.server.timelines")
+log = logging.getLogger("autohaptics.server.composer")
 GZIP_LEVEL = 1  # the fans block is mostly zeros: level 1 already shrinks it ~10x, at ~100 MB/s
-
-DEFAULT_PARAMS = {"preset": "balanced", "mode": None, "thresholds": {}, "overrides": {}}
-
-
-def params_from_doc(doc: dict) -> tuple[GenerateParams, str]:
-    """(GenerateParams, preset) for stored parameters."""
-    overrides = dict(doc.get("overrides") or {})
-    if doc.get("mode"):
-        overrides["mode"] = doc["mode"]
-    return resolve_params(doc.get("preset") or "balanced", overrides, doc.get("thresholds") or {})
-
-
-def resolve(current: dict | None, *, preset: str | None = None, mode: str | None = None,
-            thresholds: dict | None = None, overrides: dict | None = None) -> tuple[dict, GenerateParams]:
-    """New stored parameters: each given field replaces the current one whole, the others stay."""
-    cur = {**DEFAULT_PARAMS, **(current or {})}
-    doc = {
-        "preset": preset if preset is not None else cur["preset"],
-        "mode": mode if mode is not None else cur["mode"],
-        "thresholds": dict(thresholds) if thresholds is not None else dict(cur["thresholds"]),
-        "overrides": dict(overrides) if overrides is not None else dict(cur["overrides"]),
-    }
-    params, preset_name = params_from_doc(doc)
-    doc["preset"] = preset_name
-    doc["mode"] = params.mode
-    doc["thresholds"] = dict(params.intensity.thresholds)
-    return doc, params
-
 
 def derive_timeline(analysis: pipeline.Analysis, doc: dict, *, name: str) -> Timeline:
     """The generated timeline for stored parameters ``doc`` from a feature cache (no decoding)."""
@@ -98,7 +68,7 @@ class Derived:
     needs_analysis: bool
 
 
-class Timelines:
+class Composer:
     """Loads, derives and composes timelines for the routes; caches by file identity and revision."""
 
     def __init__(self, store: Store, *, cache_size: int = 2):
@@ -142,27 +112,8 @@ class Timelines:
                 self._files.popitem(last=False)
 
     def generated(self, pid: str) -> Timeline | None:
-        """The generated timeline of ``pid``, or None before the first successful job. A project
-        from before the .npz format is converted once (its generated.json is replaced)."""
-        tl = self._cached(self.store.generated_path(pid), load_npz)
-        if tl is not None:
-            return tl
-        legacy = self.store.legacy_generated_path(pid)
-        tl = self._cached(legacy, load_generated)
-        if tl is not None:
-            self._adopt_legacy(pid, tl)
-        return tl
-
-    def _adopt_legacy(self, pid: str, tl: Timeline) -> None:
-        tmp = self.store.work_dir / f"adopt-{new_id()}.npz"
-        try:
-            save_npz(tl, tmp)
-            key = self.store.adopt_generated(pid, tmp)
-        finally:
-            tmp.unlink(missing_ok=True)
-        if key is not None:
-            self._remember(self.store.generated_path(pid), key, tl)
-            log.info("project %s: generated.json converted to generated.npz", pid)
+        """The generated timeline of ``pid``, or None before the first successful job."""
+        return self._cached(self.store.generated_path(pid), load_npz)
 
     def analysis(self, pid: str) -> pipeline.Analysis | None:
         return self._cached(self.store.analysis_path(pid), pipeline.Analysis.load)
@@ -354,26 +305,6 @@ class Timelines:
             raise Conflict(f"the timeline changed meanwhile (revision {current}, the request was "
                            f"based on {base_revision}); reload and try again")
         return self._append_import(pid, base_revision, tl, name=name)
-
-    def migrate_imports(self) -> int:
-        """Move the documents of ``import`` ops stored inline (before imports/) into files; the
-        ops keep a reference. Returns how many were moved."""
-        moved = 0
-        for pid, seq, op in self.store.embedded_imports():
-            try:
-                tl = Timeline.from_dict(op["timeline"])
-            except ParameterError as exc:
-                log.warning("project %s: stored import op %d is not a valid timeline (%s); left as it is",
-                            pid, seq, exc)
-                continue
-            ref = new_id()
-            path = self.store.import_path(pid, ref)
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tl.save(path)
-            self.store.replace_op(pid, seq, {"op": "import", "ref": ref, "name": "timeline",
-                                             "n_ticks": int(tl.n_ticks)})
-            moved += 1
-        return moved
 
     # --------------------------------------------------------------- documents
     def timeline_json(self, pid: str, *, layer: str = "composed") -> bytes:

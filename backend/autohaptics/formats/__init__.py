@@ -19,12 +19,12 @@ from pathlib import Path
 from typing import IO, Any
 
 from autohaptics.errors import ParameterError
-from autohaptics.export._common import atomic_output, ensure_valid
-from autohaptics.export.ahap import write_ahap_zip
-from autohaptics.export.csv import write_csv, write_csv_sidecar
-from autohaptics.export.hjif import write_hjif
-from autohaptics.export.mpegv import write_sem
-from autohaptics.export.native import write_json
+from autohaptics.formats.common import atomic_output, ensure_valid
+from autohaptics.formats.ahap import write_ahap_zip
+from autohaptics.formats.csv import write_csv, write_csv_sidecar
+from autohaptics.formats.hjif import write_hjif
+from autohaptics.formats.mpegv import write_sem
+from autohaptics.formats.native import write_json
 from autohaptics.timeline import Timeline
 
 

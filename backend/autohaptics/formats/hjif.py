@@ -35,7 +35,7 @@ from typing import IO
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.export._common import (
+from autohaptics.formats.common import (
     MS_PER_TICK,
     QUANTUM,
     breakpoints,

@@ -31,7 +31,7 @@ from typing import IO
 
 import numpy as np
 
-from autohaptics.export._common import (
+from autohaptics.formats.common import (
     breakpoints,
     ensure_valid,
     fmt_q,

@@ -24,7 +24,7 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 
-from autohaptics.export._common import MS_PER_TICK, QUANTUM, ensure_valid, quantise, timeline_title
+from autohaptics.formats.common import MS_PER_TICK, QUANTUM, ensure_valid, quantise, timeline_title
 from autohaptics.layout import ACTUATOR_IDS, FAN_COLS, FAN_ROWS, N_ACTUATORS
 from autohaptics.timeline import Timeline
 

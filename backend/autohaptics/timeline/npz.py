@@ -12,8 +12,6 @@ Members::
     temperature_c      float32 [shape=(n_ticks,)]
     fans               float32 [shape=(n_ticks, 9, 17)]
     feature.<name>     float32 [shape=(n_ticks,)], one per feature curve
-
-Projects from before this format hold ``generated.json``; :func:`load_generated` reads either.
 """
 
 from __future__ import annotations
@@ -26,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.timeline import Timeline, json_default
+from autohaptics.timeline.model import Timeline, json_default
 
 FORMAT = "autohaptics.generated-npz"
 VERSION = 1
@@ -74,10 +72,3 @@ def load_npz(path: str | os.PathLike) -> Timeline:
         return tl.validate()
     except ParameterError as exc:
         raise ParameterError(f"{path}: {exc}") from None
-
-
-def load_generated(path: Path) -> Timeline:
-    """``generated.npz``, or the JSON of a project from before the .npz format (same name, .json)."""
-    if path.suffix == ".json":
-        return Timeline.load(path)
-    return load_npz(path)
