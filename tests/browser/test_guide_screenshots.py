@@ -32,7 +32,8 @@ GUIDE_CLIP = "sintel_trailer_480x204_h264_aac.mp4"  # the film in the screenshot
 def _doc_entries(cls: type) -> tuple[str, dict[str, str], dict[str, str]]:
     """(summary, {field: meaning}, {field: note}) from a numpydoc-like ``name : meaning`` docstring.
 
-    ``a, b : meaning`` documents both; continuation lines are indented. A line that only lists
+    ``a, b : meaning`` documents both; continuation lines are indented; an inherited field is
+    documented in its base class's docstring. A line that only lists
     names (``x, y (w, h), z.``) documents nothing itself: those fields get a note (the text in
     parentheses) and take the meaning of a same-named field documented elsewhere."""
     names = {f.name for f in dataclasses.fields(cls)}
@@ -72,6 +73,10 @@ def _doc_entries(cls: type) -> tuple[str, dict[str, str], dict[str, str]]:
                 meanings[n] += " " + line.strip()
         elif line.strip():
             current = []
+    for base in cls.__mro__[1:]:  # fields a params class inherits are documented where declared
+        if dataclasses.is_dataclass(base):
+            for name, meaning in _doc_entries(base)[1].items():
+                meanings.setdefault(name, meaning)
     return summary, meanings, notes
 
 
