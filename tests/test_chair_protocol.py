@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from autohaptics.chair import protocol as P
+from autohaptics.chair.messages import STATUS_U32
 from autohaptics.chair.protocol import (
     MAX_ENCODED,
     ChairStatus,
@@ -160,7 +161,7 @@ hellos = st.builds(Hello, protocol_version=st.integers(0, 255),
                    watchdog_ms=st.integers(0, 0xFFFF), tick_ms=st.integers(0, 0xFFFF),
                    max_packet=st.integers(0, 0xFFFF),
                    name=st.text(st.characters(min_codepoint=1, max_codepoint=127), max_size=16))
-statuses = st.builds(ChairStatus, **{k: st.integers(0, 2**32 - 1) for k in P._STATUS_U32},
+statuses = st.builds(ChairStatus, **{k: st.integers(0, 2**32 - 1) for k in STATUS_U32},
                      last_seq=st.integers(0, 0xFFFF), flags=st.integers(0, 255), safe_reason=st.integers(0, 255),
                      temp_target_cc=st.integers(-0x8000, 0x7FFF), temp_setpoint_cc=st.integers(-0x8000, 0x7FFF))
 messages = st.one_of(frames, hellos, statuses, st.just(HelloRequest()), st.just(StatusRequest()), st.just(Stop()))

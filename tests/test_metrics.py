@@ -213,7 +213,7 @@ def test_cli_compare_errors_are_one_line_with_exit_code_2(tmp_path):
 
 # ------------------------------------------------------- bench accuracy helpers
 def test_bench_config_parsing():
-    from autohaptics.bench.accuracy import Config, parse_config
+    from autohaptics.bench.configs import Config, parse_config
 
     assert parse_config("dis:flow.method=dis,flow.proxy_width=320") == Config(
         "dis", "balanced", (("flow.method", "dis"), ("flow.proxy_width", "320")))
@@ -227,7 +227,7 @@ def test_bench_config_parsing():
 
 
 def test_pareto_front_known_answer():
-    from autohaptics.bench.accuracy import pareto_front
+    from autohaptics.bench.report import pareto_front
 
     pts = [(1.0, 0.5), (2.0, 0.2), (1.5, 0.6), (10.0, 0.0), (2.0, 0.3), (0.9, 0.9)]
     assert pareto_front(pts) == [5, 0, 1, 3]
@@ -253,7 +253,7 @@ def test_stage_figures_from_stats():
 
 
 def test_run_child_reports_the_childs_own_peak_memory():
-    from autohaptics.bench.accuracy import run_child
+    from autohaptics.bench.child import run_child
 
     small = run_child([sys.executable, "-c", "pass"])
     big = run_child([sys.executable, "-c", "import sys; b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096]); "

@@ -129,7 +129,7 @@ def two_hour_runs(two_hour_film, tmp_path_factory) -> dict:
     timeline path). On two cores side by side took 437 s, one after the other 393 + 208 s."""
     from concurrent.futures import ThreadPoolExecutor
 
-    from autohaptics.bench.accuracy import run_child
+    from autohaptics.bench.child import run_child
 
     d = tmp_path_factory.mktemp("two_hour_runs")
 

@@ -31,7 +31,7 @@ from autohaptics.errors import ParameterError
 from autohaptics.fusion import MODES, FusionParams, SaliencyParams
 from autohaptics.intensity import FEATURES, AudioFeatureParams, IntensityParams
 from autohaptics.media import DECODE_MODES
-from autohaptics.records import ANALYSIS, DERIVE, apply_overrides, params_to_dict, stage, stage_of
+from autohaptics.records import ANALYSIS, DERIVE, apply_overrides, params_to_dict, parse_assignments, stage, stage_of
 from autohaptics.temperature import ThermalParams
 
 TRACKS = ("vibration", "temperature", "fans")
@@ -216,6 +216,39 @@ def resolve_doc(current: dict | None, *, preset: str | None = None, mode: str | 
 def same_analysis(a: dict, b: dict) -> bool:
     """True when two stored parameter documents need the same analysis of the film."""
     return analysis_key(params_to_dict(params_from_doc(a)[0])) == analysis_key(params_to_dict(params_from_doc(b)[0]))
+
+
+# ------------------------------------------------------------------ the command line
+def add_generation_options(p) -> None:
+    """Options shared by every command that generates (generate, batch, bench)."""
+    p.add_argument("--mode", choices=MODES, default=None,
+                   help="vibration rendering (the thesis's study conditions); default from the params")
+    p.add_argument("--preset", choices=sorted(PRESETS), default="balanced",
+                   help="quality preset (default: balanced)")
+    p.add_argument("--threshold", action="append", metavar="NAME=VALUE", default=[],
+                   help="feature threshold after normalisation, 0..1: sharpness, booming, low_energy, "
+                        "loudness (repeatable)")
+    p.add_argument("--set", action="append", metavar="PARAM=VALUE", default=[], dest="overrides",
+                   help="override any parameter by its dotted name, e.g. audio.pa_per_unit=3.5566 "
+                        "or intensity.normaliser=percentile (repeatable)")
+    p.add_argument("--pa-per-unit", type=float, default=None,
+                   help="calibration, pascal per digital full-scale unit (film default 3.5566: "
+                        "0 dBFS rms = 105 dB SPL)")
+    p.add_argument("--allow-truncated", action="store_true",
+                   help="accept a damaged file that decodes shorter than declared")
+
+
+def params_from_args(args):
+    """(GenerateParams, preset name) from parsed generation options."""
+    overrides = parse_assignments(args.overrides)
+    if args.mode:
+        overrides["mode"] = args.mode
+    if args.pa_per_unit is not None:
+        overrides["audio.pa_per_unit"] = args.pa_per_unit
+    if getattr(args, "allow_truncated", False):
+        overrides["allow_truncated"] = True
+    thresholds = parse_assignments(args.threshold)
+    return resolve_params(args.preset, overrides, thresholds)
 
 
 def analysis_key(doc: dict) -> dict:

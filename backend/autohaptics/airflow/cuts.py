@@ -13,16 +13,10 @@ a gray frame) plus a 16 x 9 luma thumbnail. Two frames are in different shots wh
 
 :func:`cut_score` condenses this into one number in 0..1 (>= 0.5 means cut) for reports.
 
-Measured (tests/test_cuts.py, synthetic shots): hard cuts between different palettes, between
-shots of equal mean luma but different colour, and from or to black score 0.9-1.0; fades (0.5 to
-2 s, colour to colour and from or to black) stay below 0.4 at both spacings; textured pans up to
-2 frame widths/s stay below 0.35. Known limitation, kept on purpose: a cut between two shots of
-the SAME palette is missed (the Sintel trailer's cut at 14.0 s from the old man to Sintel, both
-dark and warm: histogram distance 0.17, layout correlation 0.49, score 0.33), because between
-ticks 0.1 s apart fast action decorrelates the layout just as much while keeping the palette
-(Sintel 30.0-31.1 s: correlation -0.04..0.5 at histogram distance <= 0.16) and a layout-only rule
-would chop action scenes into cuts (no airflow there). The cost of a miss: the flow of that one
-pair is computed across the cut.
+A cut between two shots of the SAME palette is missed on purpose: between ticks 0.1 s apart fast
+action decorrelates the layout as much while keeping the palette, and a layout-only rule would
+chop action scenes into cuts (docs/BENCHMARKS.md, "Cuts", has the figures). A miss costs the flow
+of one pair computed across the cut.
 """
 
 from __future__ import annotations

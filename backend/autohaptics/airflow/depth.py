@@ -2,47 +2,19 @@
 
 Backends:
 
-- ``"embedded"`` (default, no weights): a monocular CUE model, not a depth estimator. It blends
-  (a) the ground-plane prior: lower in the frame is nearer (true for most shots of people and
-  objects standing on the ground; wrong for ceilings, close-ups of faces, aerial shots);
-  (b) local detail: in-focus, high-contrast regions are usually the subject, which is usually
-  nearer than a defocused background (wrong for deep-focus shots and textured backgrounds);
-  (c) expansion, when the flow is given: positive divergence of the flow means the surface grows
-  on screen, i.e. comes toward the camera (the strongest cue for "rushing at the viewer"; it sees
-  only moving things and mistakes a zoom-in for approach).
-  It ranks regions; it does not measure distance.
+- ``"embedded"`` (default, no weights): a monocular cue model that ranks regions; it does not
+  measure distance. It blends (a) the ground-plane prior: lower in the frame is nearer; (b) local
+  detail: in-focus, high-contrast regions are usually the nearer subject; (c) with the flow,
+  expansion: positive divergence means a surface growing on screen, coming toward the camera.
+  The expansion cue is on an absolute scale: the divergence is a relative growth rate (1/s, the
+  same at any proxy size and frame rate) and the cue is ``min(1, rate / expansion_full)``; it is
+  grey-dilated by ``expansion_reach``, because an expanding object's divergence lies inside it
+  while its image motion peaks at its boundary.
+- ``"onnx"``: any monocular depth network exported to ONNX (e.g. a MiDaS-style model);
+  ``output_kind`` says whether it outputs depth (larger = farther) or disparity (larger = nearer).
 
-  Known limit (measured, kept): on real footage the expansion cue also fires where nothing
-  approaches. The trailing edge of a translating object stretches the flow along one direction,
-  which has positive divergence too. And the cue is a rate per frame interval, so at 60 fps DIS's
-  sub-pixel noise reads several per second. Over the moving frame pairs of three shared clips
-  (Sintel, BBB 1080p60, BBB opening), the median of the cue's frame mean is 0.91-1.00 with 640 px
-  flow and 0.32-0.81 with 160 px flow. "Near" is then most of the frame below the sky plus what
-  has detail, in every preset. A looming measure was tried (twice the smaller principal strain
-  rate, smoothed before the reach): it reads a translation as 0, and on the same clips its median
-  frame mean is 0.03-0.34. But then, where nothing approaches, only the lowest rows with detail
-  reach ``near_min`` (0.4 x position + 0.2 x detail), and fan-cell agreement between Sintel's two
-  encodes falls from 0.91 to 0.82 (0.89 with ``near_min`` 0.3). The cue weights would have to be
-  re-tuned against a depth ground truth first.
-
-  The expansion cue is on an ABSOLUTE scale (decision): the divergence is a relative growth rate
-  (1/s; the flow's px per frame over px, divided by the frame interval), the same at any proxy
-  size and frame rate; the cue is ``min(1, rate / expansion_full)``. For an object approaching at
-  constant speed the rate is 2 / (time to contact), so the default 0.5/s saturates at a contact
-  time of 4 s (measured divergences run low: DIS reads an expansion about 16 % short and the
-  smoothing spreads it). A min-max normalised divergence (the first version) stretched flow
-  noise to the full 0..1 range whenever nothing approached, so "near" cells were a coin toss
-  between two encodes of one film; identical frames gave a full-range random expansion map.
-  The rate map is grey-dilated by ``expansion_reach`` (0.05 frame widths) before smoothing: an
-  expanding object's divergence lies inside it while its image motion peaks at its boundary, so
-  without the dilation "strong motion AND near" was a thin band where the two fall-offs cross,
-  and the fans flickered between renders. Measured on a 5 s synthetic scene (a textured disc
-  growing from 8 % to 40 % of the frame width in 2 s, plus colour cuts and sounds) rendered at
-  320x180 @ 24 fps and 1280x720 @ 30 fps: fan-cell IoU 0.62 (first version with the 1/s scale)
-  -> 0.97; sample_scene 0.89 -> 0.91; Sintel's two encodes 0.858 -> 0.865.
-- ``"onnx"``: any monocular depth network exported to ONNX (e.g. a MiDaS-style model), loaded
-  from a user-supplied file; ``output_kind`` says whether it outputs depth (larger = farther) or
-  disparity / inverse depth (larger = nearer).
+The cues' known limits and the measurements behind these choices: docs/BENCHMARKS.md, "Why the
+stages are as they are".
 """
 
 from __future__ import annotations

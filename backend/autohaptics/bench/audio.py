@@ -1,29 +1,11 @@
 """``autohaptics bench audio``: compute time of the psychoacoustic audio features per second of
 48 kHz audio, per parameter and per loudness method, on one core; peak memory; where the time
-goes; and the ISO 532-1 / DIN 45692 conformance figures when ../shared/reference is present.
+goes; the compiled kernels against their pure-Python and scipy reference paths; and the ISO 532-1
+/ DIN 45692 conformance figures when ../shared/reference is present.
 
-Target (issue "Foundation and the audio path", item 5): loudness + sharpness + booming +
-low-frequency energy together <= 0.01 s of CPU per second of audio for the default method.
-Comparison figures on this machine class: a pure-Python ISO 532-1 reference takes 1.27 s and a
-compiled C implementation 0.028 s per second of audio for loudness alone.
-
-The numba decision (figures from this benchmark's "reference paths" and "where the time goes"
-tables, 2 shared cores, AMD EPYC, CPU seconds per second of audio):
-- ISO filter bank with scipy (``sosfilt`` per band + three ``lfilter`` smoothers, float64):
-  0.034 s/s; the same bank in the compiled kernel: 0.0065 s/s. scipy's float64 biquad runs at
-  ~5.9 ns per sample here, so even the multirate bank (0.0024 s/s compiled; ~400k band-samples
-  and ~280k decimator biquad-samples per second) would cost ~0.015 s/s through scipy: over the
-  whole 0.01 s/s budget before any other step.
-- Decay network (24 sub-steps, 21 bands; sequential and branching, not vectorisable in numpy):
-  pure Python (the same source without JIT) 0.70 s/s; compiled 0.0026 s/s ("iso"), 0.0003 s/s
-  ("fast", 2 sub-steps).
-- Slopes (sequential per 0.5 ms sample): pure Python 0.072 s/s; compiled 0.0012 s/s.
-- Result: all four features 0.0055 s/s with the default method; numpy/scipy alone (scipy bank,
-  per-sample Python loops over band vectors for the decay and the slopes) is estimated from the
-  rows above at ~0.1 s/s.
-So the kernels in ``autohaptics.intensity.kernels`` are compiled with numba, and
-``NUMBA_DISABLE_JIT=1`` runs the identical source as the pure reference path (timed on a short
-excerpt in the "reference paths" table).
+Target: loudness + sharpness + booming + low-frequency energy together <= 0.01 s of CPU per
+second of audio for the default method. Why the kernels are compiled with numba (the figures of
+this benchmark's "reference paths" table): docs/BENCHMARKS.md, "Why the stages are as they are".
 """
 
 from __future__ import annotations

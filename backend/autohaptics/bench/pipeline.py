@@ -16,7 +16,7 @@ from pathlib import Path
 
 from autohaptics import media
 from autohaptics.bench.common import measure, table
-from autohaptics.cli.generate import add_generation_options, params_from_args
+from autohaptics.params import add_generation_options, params_from_args
 
 
 def register(sub) -> None:

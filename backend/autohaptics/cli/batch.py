@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import sys
 
-from autohaptics.cli.generate import add_generation_options, params_from_args
+from autohaptics.params import add_generation_options, params_from_args
 from autohaptics.errors import ParameterError
 from autohaptics.progress import ProgressBar
 

@@ -10,15 +10,11 @@ Backends (the fusion that uses the map is fixed, the backend is a choice):
   feature attention network), loaded from a user-supplied file with onnxruntime; input size,
   normalisation and channel order are parameters.
 
-The spectral residual works on a fixed 64 x 64 luma image (decision, measured): OpenCV makes it
-from its input with a bilinear resize, which aliases (from a 320 px proxy it reads one pixel in
-five), and the salient shape downstream turns small differences of the map into a different
-actuator split: on the 1080p BBB clip the per-frame weights of a 128 px and a 320 px proxy
-differed by a mean 0.06 (up to 0.28). The pipeline therefore hands the backend the frame's luma
-area-averaged to 64 x 64 straight from the full-resolution plane, in the same read as the proxies
-(:meth:`autohaptics.media.Frame.rgb_and_gray`); a proxy alone is area-averaged down. The map is
-then the same for every proxy size, and the proxy width only sets the resolution the salient
-shape is cut at.
+The spectral residual works on a fixed 64 x 64 luma image, area-averaged from the full frame's luma
+in the same read as the proxies (:meth:`autohaptics.media.Frame.rgb_and_gray`), not resized by
+OpenCV from the proxy (a bilinear decimation aliases, and the salient shape turns small changes of
+the map into another actuator split): the map is then the same at every proxy size, and the proxy
+width only sets the resolution the salient shape is cut at.
 
 Optionally a motion cue (frame difference with the previous frame) is blended in. A flat frame
 (black, one colour) has no salient region: its map is all zeros.

@@ -1,51 +1,25 @@
 """Zwicker loudness, ISO 532-1:2017 (time-varying method, free or diffuse field), streaming.
 
-Recipe (one named private step each, ISO 532-1 clause 6 / Annex A):
+Recipe (ISO 532-1 clause 6 / Annex A): the third-octave filter bank (:mod:`.filterbank`: band
+mean squares every 0.5 ms), then core loudness, the non-linear decay, the upper slopes (N'(z) on
+z = 0.1 .. 24 Bark and the total N) and the temporal weighting (:mod:`.zwicker`).
 
-1. ``_filter_bank``: 28 third-octave band-pass filters (25 Hz .. 12.5 kHz), squaring and three
-   cascaded first-order smoothers, sampled every 0.5 ms (2 kHz) -> band mean squares, Pa^2.
-2. ``_core_loudness``: band levels re (20 uPa)^2, equal-loudness corrections of the bands
-   <= 250 Hz and their merge into three critical bands, ear transmission (A0), optional
-   diffuse-field correction (DDF), threshold in quiet (LTQ), third-octave-to-critical-band
-   adaptation (DCB) and Zwicker's power law -> core loudness of 21 critical bands, sone/Bark.
-   (Computed on intensities: every dB comparison of the standard is exact in that domain.)
-3. ``_nonlinear_decay``: the two-capacitor decay network (time constants 5, 15, 75 ms), run on
-   24 virtual sub-steps per 0.5 ms sample ("fast": 2) with the input interpolated linearly.
-4. ``_slopes``: the upper slopes (USL/RNS tables) -> specific loudness N'(z) on the 240-point
-   grid z = 0.1 .. 24 Bark and its area, the total loudness N, sone.
-5. ``_temporal_weighting``: 0.47 x (3.5 ms low-pass) + 0.53 x (70 ms low-pass) of N, again on a
-   24x interpolated rate -> N(t), sampled every 2 ms (the ISO output grid).
+Input: sound pressure in pascal at 48 kHz (the standard defines its filters at 48 kHz only;
+:func:`autohaptics.media.iter_audio` resamples). Output: the 2 ms grid, sample k at t = 0.002 k s
+(input sample 96 k): ceil(n / 96) values for n samples; N'(z, t) at the same instants, before the
+temporal weighting, as in ISO.
 
-Input: sound pressure in pascal at 48 kHz (ISO 532-1 defines its filters at 48 kHz only; resample
-other rates before, e.g. :func:`autohaptics.media.iter_audio` does). Output: the 2 ms grid,
-sample k at t = 0.002 k s, i.e. input sample 96 k; a signal of n samples gives ceil(n / 96)
-values. N'(z, t) is sampled at the same instants (before temporal weighting, as in ISO).
+Methods: ``"iso"`` (the reference preset): the standard's own filters at 48 kHz and 24 decay
+sub-steps, within the ISO tolerance on test signals 6-25. ``"fast"`` (default): a multirate filter
+bank with fitted 6th-order band filters and 2 decay sub-steps (median deviation from "iso" below
+0.5 %, measured by ``autohaptics bench audio``).
 
-Methods (:data:`LOUDNESS_METHODS`):
+Band levels up to 250 Hz above 120 dB (where the standard is undefined) are CLAMPED to 120 dB;
+pressures above :data:`MAX_PRESSURE_PA` and non-finite samples raise ParameterError.
 
-- ``"iso"`` (the ``reference`` preset): the standard's own filter coefficients (Table A.1/A.2),
-  every band at 48 kHz, every stage at 2 kHz with 24 virtual sub-steps. Passes the ISO 532-1
-  tolerance on test signals 6-25 (see tests/test_iso532_reference.py).
-- ``"fast"`` (default): each band filter runs at the lowest rate of a multirate chain
-  48 -> 24 -> 12 -> 6 -> 2 kHz that keeps at least 6 samples per period of its centre frequency
-  (12.5-5 kHz at 48 kHz, 4-2.5 kHz at 24, 2-1.25 kHz at 12, 1 kHz-400 Hz at 6, 315 Hz and below
-  at 2 kHz), behind elliptic anti-alias decimators (0.01 dB ripple, 90 dB stop band). The
-  bands below 48 kHz are 6th-order IIR filters fitted to the complex response of the ISO filter
-  (keeping its triple zero at DC; see ``_rediscretise``), and the decay network takes 2 virtual
-  sub-steps per 0.5 ms instead of 24 (its constants recomputed exactly for the longer step).
-  Everything else is identical. On ISO test signals 6-25 it also keeps 100 % of the 2 ms samples
-  in the 5 % band; its deviation from ``"iso"`` is measured by tests/test_loudness.py and printed
-  by ``autohaptics bench audio`` (median < 0.5 %, onsets up to ~0.2 ms later).
-
-Out-of-range input: ISO 532-1 Table A.3 is specified only up to 120 dB in the bands up to 250 Hz
-and the standard is undefined above. This implementation CLAMPS those band levels to 120 dB
-(it does not raise), so a louder low-frequency band reads as a 120 dB band. Sound pressure
-magnitudes above :data:`MAX_PRESSURE_PA` and non-finite samples raise ParameterError.
-
-Streaming: :func:`init_state` -> :func:`loudness_update` per chunk (returns the 2 ms samples that
-became complete and the new state) -> the concatenation equals :func:`loudness_zwtv` on the whole
-signal (same arithmetic in the same order). The state is an immutable record: an update never
-modifies the state passed in.
+Streaming: :func:`init_state`, then :func:`loudness_update` per chunk (the 2 ms samples that became
+complete, and a new immutable state); the concatenation equals :func:`loudness_zwtv` on the whole
+signal, bit for bit.
 """
 
 from __future__ import annotations

@@ -36,56 +36,25 @@ from dataclasses import dataclass
 from typing import Any
 
 from autohaptics.chair import ChairLink, ChairPlayer, Comfort, list_ports, push
-from autohaptics.chair.comfort import MUTABLE_ZONES
-from autohaptics.chair.player import check_latency_offset_ms
 from autohaptics.errors import AutohapticsError, CancelledError, ParameterError
+from autohaptics.server.chair_settings import (
+    SETTINGS_KEY,
+    diagnostics,
+    merge_settings,
+    settings_to_comfort,
+    signature,
+    stored_settings,
+)
 from autohaptics.server.sse import Subscribers, Subscription
 from autohaptics.server.store import Conflict, NotFound, Store
 from autohaptics.server.composer import Composer
 
 log = logging.getLogger("autohaptics.server.chair")
 
-SETTINGS_KEY = "chair"
 STATUS_INTERVAL_S = 0.5  # the SSE status cadence while nothing changes
 POLL_S = 0.1  # how often the monitor looks at the project's revision and the status
 DRIFT_SEEK_S = 0.15  # a reported position further than this from the chair's clock is a seek
 QUEUE_SIZE = 16  # status events kept for a slow SSE client (older ones are dropped)
-_DEFAULT_SETTINGS = {"latency_ms": 0.0, "comfort": {"scale": 1.0, "mute": {z: False for z in MUTABLE_ZONES}}}
-
-
-def settings_to_comfort(settings: dict) -> Comfort:
-    c = settings["comfort"]
-    return Comfort(intensity=c["scale"], mute=frozenset(z for z, muted in c["mute"].items() if muted))
-
-
-def merge_settings(current: dict, *, latency_ms: float | None = None, scale: float | None = None,
-                   mute: dict[str, bool] | None = None) -> dict:
-    """New chair settings: the given fields replace the current ones; checked (ParameterError)."""
-    latency = current["latency_ms"] if latency_ms is None else check_latency_offset_ms(latency_ms)
-    new_mute = dict(current["comfort"]["mute"])
-    for zone, muted in (mute or {}).items():
-        if zone not in MUTABLE_ZONES:
-            raise ParameterError(f"unknown comfort zone {zone!r}; zones are {', '.join(MUTABLE_ZONES)}")
-        new_mute[zone] = bool(muted)
-    doc = {"latency_ms": float(latency),
-           "comfort": {"scale": float(current["comfort"]["scale"] if scale is None else scale), "mute": new_mute}}
-    settings_to_comfort(doc)  # validates the scale
-    return doc
-
-
-def _stored_settings(store: Store) -> dict:
-    stored = store.get_setting(SETTINGS_KEY) or {}
-    doc = {"latency_ms": _DEFAULT_SETTINGS["latency_ms"],
-           "comfort": {"scale": 1.0, "mute": dict(_DEFAULT_SETTINGS["comfort"]["mute"])}}
-    try:
-        comfort = stored.get("comfort") or {}
-        return merge_settings(doc, latency_ms=stored.get("latency_ms"), scale=comfort.get("scale"),
-                              mute={z: v for z, v in (comfort.get("mute") or {}).items() if z in MUTABLE_ZONES})
-    except (ParameterError, AttributeError, TypeError):  # a damaged row: start from the defaults
-        log.warning("ignoring invalid stored chair settings %r", stored)
-        return doc
-
-
 @dataclass
 class _Push:
     project_id: str
@@ -121,7 +90,7 @@ class ChairService:
         self._stops = 0  # STOPs so far: a command that started before a STOP is dropped
         self._drift_s: float | None = None
         self._drift_seeks = 0
-        self._settings = _stored_settings(store)
+        self._settings = stored_settings(store)
         self._subscribers = Subscribers(maxsize=QUEUE_SIZE)
         self._wake = threading.Event()
         self._closing = threading.Event()
@@ -403,7 +372,7 @@ class ChairService:
             "frames_dropped": ls["frames_dropped"] if ls else 0,
             "last_tick": ls["last_tick_sent"] if ls else None,
             "reconnects": ls["reconnects"] if ls else 0,
-            "diagnostics": _diagnostics(ls),
+            "diagnostics": diagnostics(ls),
             "error": error or (ps.error if ps is not None else None),
             "playing": bool(ps is not None and ps.state == "playing") or pushing_now,
             "position_s": ps.position_s if ps is not None else 0.0,
@@ -435,37 +404,10 @@ class ChairService:
                 if not self._subscribers:
                     continue
                 status = self.status()
-                sig = _signature(status)
+                sig = signature(status)
                 now = time.monotonic()
                 if woken or sig != last_sig or now - last_sent >= STATUS_INTERVAL_S:
                     last_sig, last_sent = sig, now
                     self._subscribers.publish(("status", status))
             except Exception:  # keep following; the next round tries again
                 log.exception("chair service monitor")
-
-
-def _diagnostics(ls: dict | None) -> dict | None:
-    """The chair's own counters and state (its last STATUS) and the host side's, for the panel."""
-    if ls is None:
-        return None
-    chair = ls["chair"]
-    keys = ("crc_errors", "length_errors", "overflows", "version_errors", "type_errors", "stale_frames", "seq_gaps",
-            "late_frames", "watchdog_trips", "frames_ok", "safe", "stopped", "safe_reason", "temp_target_c",
-            "temp_setpoint_c")
-    return {
-        "chair": {k: chair[k] for k in keys} if chair else None,
-        "chair_status_age_s": ls["chair_status_age_s"],
-        "host_rx": ls["rx"],
-        "last_error": ls["last_error"],
-        "errors": ls["errors"],
-    }
-
-
-def _signature(status: dict) -> tuple:
-    """What makes a status "changed" for the SSE stream (counters and the position move all the time)."""
-    chair = (status["diagnostics"] or {}).get("chair") or {}
-    push = status["push"] or {}
-    return (status["connected"], status["state"], status["port"], status["error"], status["reconnects"],
-            status["playback"]["state"], status["playback"]["project_id"], status["playback"]["revision"],
-            chair.get("safe"), chair.get("stopped"), chair.get("crc_errors"), chair.get("length_errors"),
-            push.get("state"), repr(status["settings"]))

@@ -5,8 +5,7 @@ Layout of ``data_dir``::
     autohaptics.sqlite3          projects, jobs, edits, settings (service-wide, e.g. the chair's)
     projects/<id>/<uuid>.<ext>   the uploaded media (server-chosen name)
     projects/<id>/analysis.npz   the feature cache (pipeline.Analysis)
-    projects/<id>/generated.npz  the generated timeline (never edited; edits live in the database);
-                                 generated.json in projects from before (server/generated.py reads both)
+    projects/<id>/generated.npz  the generated timeline (never edited; edits live in the database)
     projects/<id>/imports/<ref>.json  the document of each ``import`` edit (the op keeps ``ref``)
     projects/<id>/waveform-<N>.json  cached audio peaks
     uploads/<uuid>.part          uploads in flight (removed on failure and on start)
@@ -25,92 +24,24 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import re
 import shutil
 import sqlite3
 import threading
-import uuid
 from collections.abc import Iterator
-from datetime import datetime, timezone
 from pathlib import Path
 
-from autohaptics.errors import AutohapticsError
-
-DB_NAME = "autohaptics.sqlite3"
-GENERATED = "generated.npz"
-ACTIVE_JOB_STATES = ("queued", "running")
-INTERRUPTED = "interrupted by a server restart"
-_ID = re.compile(r"^[0-9a-f]{32}$")
-
-_SCHEMA = """
-CREATE TABLE IF NOT EXISTS projects (
-    id TEXT PRIMARY KEY,
-    name TEXT NOT NULL,
-    created_at TEXT NOT NULL,
-    updated_at TEXT NOT NULL,
-    status TEXT NOT NULL,
-    media_file TEXT NOT NULL,
-    media_type TEXT NOT NULL,
-    source TEXT NOT NULL,
-    params TEXT NOT NULL,
-    view TEXT NOT NULL DEFAULT '{}',
-    revision INTEGER NOT NULL DEFAULT 0,
-    cursor INTEGER NOT NULL DEFAULT 0,
-    n_ticks INTEGER NOT NULL,
-    duration_s REAL NOT NULL,
-    has_timeline INTEGER NOT NULL DEFAULT 0,
-    job_id TEXT
-);
-CREATE TABLE IF NOT EXISTS jobs (
-    id TEXT PRIMARY KEY,
-    project_id TEXT NOT NULL,
-    status TEXT NOT NULL,
-    progress REAL NOT NULL DEFAULT 0,
-    stage TEXT NOT NULL DEFAULT '',
-    error TEXT,
-    params TEXT NOT NULL,
-    created_at TEXT NOT NULL,
-    started_at TEXT,
-    finished_at TEXT
-);
-CREATE INDEX IF NOT EXISTS jobs_project ON jobs (project_id);
-CREATE TABLE IF NOT EXISTS edits (
-    project_id TEXT NOT NULL,
-    seq INTEGER NOT NULL,
-    op TEXT NOT NULL,
-    created_at TEXT NOT NULL,
-    PRIMARY KEY (project_id, seq)
-);
-CREATE TABLE IF NOT EXISTS settings (
-    key TEXT PRIMARY KEY,
-    value TEXT NOT NULL,
-    updated_at TEXT NOT NULL
-);
-"""
-
-
-class NotFound(AutohapticsError):
-    """No project or job with that id."""
-
-
-class Conflict(AutohapticsError):
-    """The request conflicts with the current state (stale revision, a job already running)."""
-
-
-def now_iso() -> str:
-    return datetime.now(timezone.utc).isoformat(timespec="milliseconds").replace("+00:00", "Z")
-
-
-def new_id() -> str:
-    return uuid.uuid4().hex
-
-
-def check_id(value: str, what: str = "project") -> str:
-    """``value`` when it is a well-formed id, else NotFound (ids never reach the file system unchecked)."""
-    if not isinstance(value, str) or not _ID.match(value):
-        raise NotFound(f"no {what} with id {value!r}")
-    return value
-
+from autohaptics.server.db import (  # noqa: F401  the store's own errors and ids, where callers expect them
+    ACTIVE_JOB_STATES,
+    DB_NAME,
+    GENERATED,
+    INTERRUPTED,
+    SCHEMA,
+    Conflict,
+    NotFound,
+    check_id,
+    new_id,
+    now_iso,
+)
 
 class Store:
     """SQLite database plus the project folders under ``data_dir``."""
@@ -127,7 +58,7 @@ class Store:
         self._db.row_factory = sqlite3.Row
         self._db.execute("PRAGMA journal_mode=WAL")
         self._db.execute("PRAGMA synchronous=NORMAL")
-        self._db.executescript(_SCHEMA)
+        self._db.executescript(SCHEMA)
 
     def close(self) -> None:
         with self._lock:
