@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 
 from autohaptics.cli.main import main
+from shared_data import REPO
 
-REPO = Path(__file__).resolve().parents[1]
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -27,6 +27,7 @@ from autohaptics.formats.hjif import (
 )
 from autohaptics.layout import ACTUATOR_IDS, FAN_COLS, FAN_ROWS
 from autohaptics.timeline import Timeline
+from shared_data import REPO
 
 
 def _timeline(n: int = 1500, seed: int = 8) -> Timeline:
@@ -119,7 +120,7 @@ def test_body_part_bits_are_the_reference_table():
 
 def _documented_masks() -> dict[str, int]:
     """``body_part_mask`` per channel as docs/EXPORT.md's hjif table states it (hex and decimal agree)."""
-    doc = (Path(__file__).resolve().parents[1] / "docs" / "EXPORT.md").read_text(encoding="utf-8")
+    doc = (REPO / "docs" / "EXPORT.md").read_text(encoding="utf-8")
     rows = re.findall(r"^\| (A\d|temperature|fans) \(ids? [^)]*\) \|.*\| (0x[0-9A-F]{8}) \| (\d+) \|$",
                       doc, flags=re.M)
     out = {}
@@ -130,7 +131,7 @@ def _documented_masks() -> dict[str, int]:
 
 
 def _documented_bits() -> dict[str, int]:
-    doc = (Path(__file__).resolve().parents[1] / "docs" / "EXPORT.md").read_text(encoding="utf-8")
+    doc = (REPO / "docs" / "EXPORT.md").read_text(encoding="utf-8")
     rows = re.findall(r"^\| (\d+) \| (0x[0-9A-F]{8}) \| ([A-Z_]+) \|", doc, flags=re.M)
     for bit, hexa, _ in rows:
         assert int(hexa, 16) == 1 << int(bit)

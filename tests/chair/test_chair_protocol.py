@@ -30,8 +30,9 @@ from autohaptics.chair.protocol import (
     encode,
 )
 from autohaptics.errors import ParameterError
+from shared_data import REPO
 
-VECTORS = Path(__file__).resolve().parents[1] / "firmware" / "test" / "vectors.txt"
+VECTORS = REPO / "firmware" / "test" / "vectors.txt"
 
 
 def _load_vectors():

@@ -14,10 +14,11 @@ import pytest
 
 from autohaptics.chair.simulate import build_simulator
 from autohaptics.errors import DeviceError
+from shared_data import REPO
 
 pytestmark = pytest.mark.firmware
 
-FIRMWARE = Path(__file__).resolve().parents[1] / "firmware"
+FIRMWARE = REPO / "firmware"
 
 
 def _need(tool: str, package: str) -> str:
