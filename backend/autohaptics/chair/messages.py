@@ -122,21 +122,10 @@ class Hello:
         if len(raw) > NAME_LEN or b"\x00" in raw:
             raise ParameterError(f"device name {self.name!r} must be at most {NAME_LEN} ASCII bytes")
 
-    @property
-    def temp_min_c(self) -> float:
-        return self.temp_min_cc / 100.0
-
-    @property
-    def temp_max_c(self) -> float:
-        return self.temp_max_cc / 100.0
-
-    @property
-    def temp_neutral_c(self) -> float:
-        return self.temp_neutral_cc / 100.0
-
-    @property
-    def temp_rate_c_per_s(self) -> float:
-        return self.temp_rate_cc_per_s / 100.0
+    temp_min_c = property(lambda self: self.temp_min_cc / 100.0)
+    temp_max_c = property(lambda self: self.temp_max_cc / 100.0)
+    temp_neutral_c = property(lambda self: self.temp_neutral_cc / 100.0)
+    temp_rate_c_per_s = property(lambda self: self.temp_rate_cc_per_s / 100.0)
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -146,18 +135,26 @@ class Hello:
         return d
 
 
-@dataclass(frozen=True)
-class ChairStatus:
-    """Chair -> host: counters and state (the STATUS message)."""
+@dataclass
+class RxCounts:
+    """What a protocol parser counts, on either side of the link: packets taken, and those dropped
+    by cause (the C core's counters of the same names)."""
 
-    uptime_ms: int = 0
-    frames_ok: int = 0
     packets_ok: int = 0
     crc_errors: int = 0
     length_errors: int = 0
     overflows: int = 0
     version_errors: int = 0
     type_errors: int = 0
+
+
+@dataclass
+class ChairStatus(RxCounts):
+    """Chair -> host: counters and state (the STATUS message); the chair's own receive counters
+    are its :class:`RxCounts`."""
+
+    uptime_ms: int = 0
+    frames_ok: int = 0
     stale_frames: int = 0
     seq_gaps: int = 0
     late_frames: int = 0

@@ -44,6 +44,7 @@ from autohaptics.chair.messages import (  # noqa: F401  the messages are part of
     PROTOCOL_VERSION,
     ProtocolError,
     STATUS_U32,
+    RxCounts,
     Status,
     StatusRequest,
     Stop,
@@ -283,13 +284,8 @@ def decode(wire: bytes) -> Message:
 
 # --------------------------------------------------------------------------------- parser
 @dataclass
-class RxCounters:
-    packets_ok: int = 0
-    crc_errors: int = 0
-    length_errors: int = 0
-    overflows: int = 0
-    version_errors: int = 0
-    type_errors: int = 0
+class RxCounters(RxCounts):
+    """The host parser's counts (:class:`~autohaptics.chair.messages.RxCounts`)."""
 
     def count(self, status: Status) -> None:
         key = {Status.OK: "packets_ok", Status.CRC_ERROR: "crc_errors", Status.LENGTH_ERROR: "length_errors",

@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
+from autohaptics.cli.main import register_all
 
 
 def register(sub) -> None:
@@ -11,11 +10,4 @@ def register(sub) -> None:
                        description="Benchmarks print figures; targets are ratios measured in one run.")
     bench_sub = p.add_subparsers(dest="bench", metavar="NAME")
     bench_sub.required = True
-    import autohaptics.bench as pkg
-
-    for mod in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
-        if mod.name in ("common",) or mod.name.startswith("_"):
-            continue
-        module = importlib.import_module(f"autohaptics.bench.{mod.name}")
-        if hasattr(module, "register"):
-            module.register(bench_sub)
+    register_all(bench_sub, "autohaptics.bench")

@@ -25,16 +25,20 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"autohaptics {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    import autohaptics.cli as pkg
+    register_all(sub, "autohaptics.cli", skip=("main",))
+    return parser
 
+
+def register_all(sub, package: str, *, skip: tuple[str, ...] = ()) -> None:
+    """Call ``register(sub)`` of every module of ``package`` that has one (by name, ``skip`` and
+    private modules left out): each sub-command lives in its own module."""
+    pkg = importlib.import_module(package)
     for mod in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
-        if mod.name in ("main",) or mod.name.startswith("_"):
+        if mod.name in skip or mod.name.startswith("_"):
             continue
-        module = importlib.import_module(f"autohaptics.cli.{mod.name}")
-        register = getattr(module, "register", None)
+        register = getattr(importlib.import_module(f"{package}.{mod.name}"), "register", None)
         if register is not None:
             register(sub)
-    return parser
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import os
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -31,6 +30,7 @@ from autohaptics.formats.csv import CSV_COLUMNS, SIDECAR_FORMAT, TEMPERATURE_COL
 from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS, TEMP_HIGH_C, TEMP_LOW_C, layout_dict
 from autohaptics.timebase import TICK_S
 from autohaptics.timeline import Timeline, default_generator
+from autohaptics.timeline.model import read_json
 
 MAX_PROBLEMS = 20
 _BLOCK_ROWS = 2048
@@ -188,14 +188,7 @@ def read_csv(lines: Iterable[str], *, meta: dict | None = None, name: str = "CSV
 def read_csv_meta(path: str | os.PathLike) -> dict:
     """Load a CSV metadata sidecar (written by ``autohaptics export --format csv --meta``)."""
     path = Path(path)
-    try:
-        with open(path, encoding="utf-8") as fh:
-            doc = json.load(fh)
-    except FileNotFoundError:
-        raise ParameterError(f"{path}: no such file") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ParameterError(f"{path}: not a JSON sidecar ({exc})") from None
-    return _check_meta(doc, str(path))
+    return _check_meta(read_json(path, "JSON sidecar"), str(path))
 
 
 def csv_meta_path(csv_path: str | os.PathLike) -> Path:

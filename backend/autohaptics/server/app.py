@@ -81,14 +81,17 @@ def _detail(status: int, message: str, **extra) -> JSONResponse:
     return JSONResponse(status_code=status, content={"detail": message, **extra})
 
 
-def _add_error_handlers(app: FastAPI) -> None:
-    @app.exception_handler(NotFound)
-    async def not_found(request: Request, exc: NotFound):
-        return _detail(404, str(exc))
+# Every error the application raises on purpose, and its HTTP status (MediaRejected carries its own).
+_STATUS = ((NotFound, 404), (Conflict, 409), (DeviceError, 409), (UploadTooLarge, 413), (MediaError, 422))
 
-    @app.exception_handler(Conflict)
-    async def conflict(request: Request, exc: Conflict):
-        return _detail(409, str(exc))
+
+def _add_error_handlers(app: FastAPI) -> None:
+    for exc_type, status in _STATUS:
+        app.add_exception_handler(exc_type, lambda request, exc, status=status: _detail(status, str(exc)))
+
+    @app.exception_handler(MediaRejected)
+    async def rejected(request: Request, exc: MediaRejected):
+        return _detail(exc.status, str(exc))
 
     @app.exception_handler(ParameterError)
     async def bad_parameter(request: Request, exc: ParameterError):
@@ -97,22 +100,6 @@ def _add_error_handlers(app: FastAPI) -> None:
             return _detail(400, str(exc), problems=[
                 {"row": p.row, "column": p.column, "message": p.message} for p in problems])
         return _detail(400, str(exc))
-
-    @app.exception_handler(DeviceError)
-    async def device_error(request: Request, exc: DeviceError):
-        return _detail(409, str(exc))
-
-    @app.exception_handler(UploadTooLarge)
-    async def too_large(request: Request, exc: UploadTooLarge):
-        return _detail(413, str(exc))
-
-    @app.exception_handler(MediaRejected)
-    async def rejected(request: Request, exc: MediaRejected):
-        return _detail(exc.status, str(exc))
-
-    @app.exception_handler(MediaError)
-    async def media_error(request: Request, exc: MediaError):
-        return _detail(422, str(exc))
 
     @app.exception_handler(RequestValidationError)
     async def invalid_request(request: Request, exc: RequestValidationError):

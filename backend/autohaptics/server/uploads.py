@@ -249,3 +249,11 @@ def container_suffix(info: media.MediaInfo) -> tuple[str, str]:
 def _rename(message: str, path: Path, name: str) -> str:
     """Error messages name the file: show the client's name instead of the server's path."""
     return message.replace(str(path), name).replace(os.fspath(path.name), name)
+
+
+def multipart_body(file_description: str, **fields: dict) -> dict:
+    """The OpenAPI ``requestBody`` of a multipart upload route: a required ``file`` and the other
+    form ``fields`` (name -> JSON schema), for the route's ``openapi_extra``."""
+    properties = {"file": {"type": "string", "format": "binary", "description": file_description}, **fields}
+    return {"requestBody": {"required": True, "content": {"multipart/form-data": {"schema": {
+        "type": "object", "required": ["file"], "properties": properties}}}}}

@@ -215,13 +215,7 @@ class Timeline:
     def load(cls, path: str | os.PathLike) -> "Timeline":
         """Read and validate a timeline file; errors name the file."""
         path = Path(path)
-        try:
-            with open(path, encoding="utf-8") as fh:
-                doc = json.load(fh)
-        except FileNotFoundError:
-            raise ParameterError(f"{path}: no such file") from None
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise ParameterError(f"{path}: not a timeline JSON file ({exc})") from None
+        doc = read_json(path, "timeline JSON file")
         try:
             return cls.from_dict(doc)
         except ParameterError as exc:
@@ -324,3 +318,15 @@ def json_default(obj: Any) -> Any:
     if isinstance(obj, Path):
         return str(obj)
     raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
+
+
+def read_json(path: Path, what: str) -> Any:
+    """The JSON document in ``path``; ParameterError naming the file when it is missing or not
+    JSON (``what`` says what it should have been)."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return json.load(fh)
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: no such file") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ParameterError(f"{path}: not a {what} ({exc})") from None

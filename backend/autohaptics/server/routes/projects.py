@@ -13,26 +13,18 @@ from autohaptics.server.deps import RunnerDep, SettingsDep, StoreDep, ComposerDe
 from autohaptics.server.schemas import ProjectOut, ProjectPatch, WaveformOut
 from autohaptics.server.store import new_id
 from autohaptics.params import resolve_doc
-from autohaptics.server.uploads import display_name, inspect_media, receive_upload
+from autohaptics.server.uploads import display_name, inspect_media, multipart_body, receive_upload
 from autohaptics.timebase import n_ticks
 
 router = APIRouter(tags=["projects"])
 
 MAX_VIEW_BYTES = 64 * 1024
-_UPLOAD_BODY = {
-    "requestBody": {
-        "required": True,
-        "content": {"multipart/form-data": {"schema": {
-            "type": "object", "required": ["file"],
-            "properties": {
-                "file": {"type": "string", "format": "binary", "description": "the film (video or audio)"},
-                "name": {"type": "string", "description": "display name (default: the file's name)"},
-                "preset": {"type": "string", "description": "quality preset (default balanced)"},
-                "mode": {"type": "string", "description": "vibration mode (default from the preset)"},
-                "generate": {"type": "boolean", "default": True, "description": "start a generation job"},
-            }}}},
-    }
-}
+_UPLOAD_BODY = multipart_body(
+    "the film (video or audio)",
+    name={"type": "string", "description": "display name (default: the file's name)"},
+    preset={"type": "string", "description": "quality preset (default balanced)"},
+    mode={"type": "string", "description": "vibration mode (default from the preset)"},
+    generate={"type": "boolean", "default": True, "description": "start a generation job"})
 _TRUE, _FALSE = ("1", "true", "yes", "on"), ("0", "false", "no", "off")
 
 

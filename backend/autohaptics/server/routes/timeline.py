@@ -15,21 +15,13 @@ from autohaptics.errors import ParameterError
 from autohaptics.formats import export_timeline, get_format
 from autohaptics.server.deps import SettingsDep, StoreDep, ComposerDep
 from autohaptics.server.schemas import EditIn, EditOut, EditsOut, HistoryOut, RevisionIn
-from autohaptics.server.uploads import display_name, receive_upload
+from autohaptics.server.uploads import display_name, multipart_body, receive_upload
 
 router = APIRouter(tags=["timeline"])
 
-_IMPORT_BODY = {
-    "requestBody": {
-        "required": True,
-        "content": {"multipart/form-data": {"schema": {
-            "type": "object", "required": ["file"],
-            "properties": {
-                "file": {"type": "string", "format": "binary", "description": "our timeline JSON or CSV"},
-                "base_revision": {"type": "integer", "description": "refuse (409) unless this is the revision"},
-            }}}},
-    }
-}
+_IMPORT_BODY = multipart_body(
+    "our timeline JSON or CSV",
+    base_revision={"type": "integer", "description": "refuse (409) unless this is the revision"})
 
 
 @router.get("/api/projects/{project_id}/timeline", response_class=Response,
