@@ -4,7 +4,7 @@ changes nothing.
 Each case runs ``autohaptics generate CLIP --preset P --mode M`` and keeps its canonical form (the
 timeline JSON with the timing figures of ``stats`` left out; every other byte counts). The export
 goldens run ``autohaptics export`` in every format on the stored golden timelines, so they depend
-on the exporters only. ``tests/test_golden.py`` checks both.
+on the exporters only. ``tests/pipeline/test_golden.py`` checks both.
 
 Write them again (after a change that is MEANT to change outputs, said in its commit message)::
 

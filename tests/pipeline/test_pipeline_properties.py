@@ -10,9 +10,9 @@
 - time shift: input shifted by k ticks gives the output shifted by k ticks (timebase, intensity,
   derive on a shifted Analysis).
 
-Not repeated here: tests/test_audio_properties.py (features finite, silence, non-finite input,
-loudness vs gain, chunk lists), tests/test_intensity.py (normalise range, max rule) and
-tests/test_vision_properties.py (per-stage ranges for any frame, redder never colder, slew limit,
+Not repeated here: tests/intensity/test_audio_properties.py (features finite, silence, non-finite input,
+loudness vs gain, chunk lists), tests/intensity/test_intensity.py (normalise range, max rule) and
+tests/pipeline/test_vision_properties.py (per-stage ranges for any frame, redder never colder, slew limit,
 per-stage shifts).
 """
 
@@ -217,7 +217,7 @@ def test_temperature_is_finite_and_in_range_for_any_colour(rgb, params):
 @SETTINGS
 @given(c=colour, more=st.floats(0.0, 255.0), aware=st.booleans())
 def test_a_greener_colour_is_never_warmer(c, more, aware):
-    # (a redder one never colder: tests/test_vision_properties.py)
+    # (a redder one never colder: tests/pipeline/test_vision_properties.py)
     params = T.ThermalParams(neutral_aware=aware)
     greener = c.copy()
     greener[1] = min(255.0, c[1] + more)

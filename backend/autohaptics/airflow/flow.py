@@ -71,7 +71,7 @@ def _dis(preset: str, h: int, w: int):
     """One DIS object per preset AND frame size: OpenCV's DIS keeps buffers across calls, and a
     call at another size changes later results (up to 0.06 px on a 160x68 pair; on the Sintel
     trailer analysed after other sizes, per-tick motion moved by up to 0.19 frame widths/s).
-    Per size, results depend on the inputs only (tests/test_airflow.py)."""
+    Per size, results depend on the inputs only (tests/airflow/test_airflow.py)."""
     return cv2.DISOpticalFlow_create(DIS_PRESETS[preset])
 
 
