@@ -1,7 +1,9 @@
 """Golden outputs: what the CLI writes for the shared clips, kept to prove that a restructuring
 changes nothing.
 
-Each case runs ``autohaptics generate CLIP --preset P --mode M`` and keeps its canonical form (the
+Each case runs ``autohaptics generate CLIP --preset P --mode M`` with every stage on the thesis's
+own rule (``--set`` each of ``params.THESIS_RULES``: the goldens were written before the defaults
+moved away from the thesis, and these rules must go on reproducing them) and keeps its canonical form (the
 timeline JSON with the timing figures of ``stats`` left out; every other byte counts). The export
 goldens run ``autohaptics export`` in every format on the stored golden timelines, so they depend
 on the exporters only. ``tests/pipeline/test_golden.py`` checks both.
@@ -78,10 +80,30 @@ def canonical(doc: dict) -> bytes:
     return json.dumps(doc, sort_keys=True, separators=(",", ":")).encode("utf-8")
 
 
+def _restrict(actual, golden):
+    """``actual`` with the dict keys that ``golden`` lacks left out, at every depth."""
+    if isinstance(actual, dict) and isinstance(golden, dict):
+        return {k: _restrict(v, golden[k]) for k, v in actual.items() if k in golden}
+    return actual
+
+
+def as_written(actual: bytes, golden: bytes) -> bytes:
+    """The canonical ``actual`` without the parameters and statistics added since ``golden`` was
+    written (``generator.params`` and ``stats`` restricted to the golden's keys); every other field
+    and every track stays, so a changed output still differs."""
+    a, g = json.loads(actual), json.loads(golden)
+    a["generator"]["params"] = _restrict(a["generator"]["params"], g["generator"]["params"])
+    a["stats"] = _restrict(a["stats"], g["stats"])
+    return json.dumps(a, sort_keys=True, separators=(",", ":")).encode("utf-8")
+
+
 def generate(clip: str, preset: str, mode: str, workdir: Path) -> bytes:
     """The canonical timeline that ``autohaptics generate`` writes for this case now."""
     out = workdir / f"{case_name(clip, preset, mode)}.json"
-    _cli(["generate", str(MEDIA / clip), "-o", str(out), "--preset", preset, "--mode", mode, "--quiet"])
+    from autohaptics.params import THESIS_RULES
+
+    thesis = [a for k, v in THESIS_RULES.items() for a in ("--set", f"{k}={v}")]
+    _cli(["generate", str(MEDIA / clip), "-o", str(out), "--preset", preset, "--mode", mode, "--quiet", *thesis])
     return canonical(json.loads(out.read_text(encoding="utf-8")))
 
 

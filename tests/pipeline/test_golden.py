@@ -48,7 +48,7 @@ def test_generate_matches_golden(case, tmp_path):
     clip, preset, mode = case
     need(MEDIA / clip, f"shared clip {clip}")
     expected = goldens.load_golden(*case)
-    actual = goldens.generate(clip, preset, mode, tmp_path)
+    actual = goldens.as_written(goldens.generate(clip, preset, mode, tmp_path), expected)
     if _same_environment():
         assert actual == expected, (f"{goldens.case_name(*case)}: the output changed; if that is meant, "
                                     "write the goldens again (tests/goldens.py) and say why in the commit")
