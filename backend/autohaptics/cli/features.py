@@ -1,5 +1,7 @@
-"""``autohaptics features AUDIO_OR_VIDEO -o OUT.json``: the four psychoacoustic audio features
-(physical units) of a file's first audio track, with their time axes and the parameters used."""
+"""Decode the first audio track (mono mix at 48 kHz), calibrate it to pascal and write the per-frame audio
+features as JSON: loudness (ISO 532-1, sone), sharpness (DIN 45692, acum), booming index and low-frequency
+energy (Pa^2) on the 20 ms grid.
+"""
 
 from __future__ import annotations
 
@@ -26,11 +28,7 @@ _LONG_INPUT_S = 20.0  # inputs longer than this get a progress bar on a terminal
 
 
 def register(sub) -> None:
-    p = sub.add_parser(
-        "features", help="compute loudness, sharpness, booming and low-frequency energy of a file",
-        description="Decode the first audio track (mono mix at 48 kHz), calibrate it to pascal and write "
-                    "the per-frame audio features as JSON: loudness (ISO 532-1, sone), sharpness (DIN 45692, "
-                    "acum), booming index and low-frequency energy (Pa^2) on the 20 ms grid.")
+    p = sub.add_parser("features", help="compute loudness, sharpness, booming and low-frequency energy of a file", description=__doc__)
     p.add_argument("input", metavar="AUDIO_OR_VIDEO", help="any media file with an audio stream")
     p.add_argument("-o", "--output", required=True, metavar="OUT.json", help="output file, or '-' for stdout")
     d = af.AudioFeatureParams()

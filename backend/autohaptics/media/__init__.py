@@ -7,17 +7,8 @@ analysis signal), :mod:`.video` (decoded frames, all or the reference ones only)
 
 from autohaptics.media.audio import iter_audio, read_audio
 from autohaptics.media.frames import Frame
-from autohaptics.media.probe import (
-    AudioInfo,
-    AudioReport,
-    MediaInfo,
-    VideoInfo,
-    check_complete,
-    check_truncation,
-    open_container,
-    probe,
-    source_block,
-)
+from autohaptics.media.probe import (AudioInfo, AudioReport, MediaInfo, VideoInfo, check_complete, check_truncation,
+                                     open_container, probe, source_block)
 from autohaptics.media.video import DECODE_MODES, SPARSE_MIN_FPS, decode_all, iter_video
 
 __all__ = ["AudioInfo", "AudioReport", "DECODE_MODES", "Frame", "MediaInfo", "SPARSE_MIN_FPS", "VideoInfo",
