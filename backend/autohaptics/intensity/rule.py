@@ -40,7 +40,7 @@ LEVEL_FEATURES = ("booming", "low_energy", "loudness")  # what sets the "events"
 
 @dataclass(frozen=True)
 class IntensityParams:
-    """How the features become a vibration intensity (module docstring).
+    """How the audio features become a vibration intensity: the rule, its thresholds, gate and density.
 
     rule : "events" (default: novelty against the recent baseline) or "thesis" (the thesis's
         rule on the normalised features; ``params.THESIS_RULES``).
