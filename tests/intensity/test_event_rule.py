@@ -87,15 +87,17 @@ def test_density_works_with_the_thesis_rule_too(tmp_path):
     assert abs((chair > 0).mean() - 0.25) <= 0.03
 
 
-def test_rule_and_density_are_validated():
-    with pytest.raises(ParameterError, match="intensity.rule"):
-        it.IntensityParams(rule="loud")
-    with pytest.raises(ParameterError, match="density"):
-        it.IntensityParams(density=1.5)
-    with pytest.raises(ParameterError, match="density"):
-        resolve_params("balanced", {"intensity.density": "nan"})
-    with pytest.raises(ParameterError, match="baseline_s"):
-        it.IntensityParams(baseline_s=0.0)
+@pytest.mark.parametrize("override, value, message", [
+    ("intensity.rule", "loud", "intensity.rule"), ("intensity.density", 1.5, "density"),
+    ("intensity.density", "nan", "density"), ("intensity.baseline_s", 0.0, "baseline_s"),
+])
+def test_rule_and_density_are_validated(override, value, message):
+    with pytest.raises(ParameterError, match=message):
+        resolve_params("balanced", {override: value})
+
+
+def test_no_density_is_the_default_and_can_be_asked_for():
+    assert resolve_params("balanced")[0].intensity.density is None
     assert resolve_params("balanced", {"intensity.density": "none"})[0].intensity.density is None
 
 
