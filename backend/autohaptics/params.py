@@ -123,7 +123,10 @@ class GenerateParams(Record):
 
 # The dotted overrides that make every stage follow the thesis's own rule where the default
 # differs from it (ALGORITHM.md; docs/GUIDE.md says what each default does instead).
-THESIS_RULES: dict[str, Any] = {}
+THESIS_RULES: dict[str, Any] = {
+    "intensity.rule": "thesis",  # the default follows events: each feature against its recent baseline
+    "intensity.loudness_gate": 0.05,  # the default gate, 0.2, is 23 phon below the film's loudest moment
+}
 
 PRESETS: dict[str, dict[str, Any]] = {
     "reference": {

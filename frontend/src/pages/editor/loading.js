@@ -114,6 +114,7 @@ export class TimelineLoader {
     page.timeline.invalidate();
     page.media.refresh();
     page.edits.updateToolbar();
+    page.params.showShare(data);
   }
 
   /**
