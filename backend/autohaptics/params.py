@@ -133,7 +133,7 @@ class GenerateParams:
 
 # The dotted overrides that make every stage follow the thesis's own rule where the default
 # differs from it (ALGORITHM.md; docs/GUIDE.md says what each default does instead).
-THESIS_RULES: dict[str, Any] = {"flow.repeat_wait_s": 0.0}
+THESIS_RULES: dict[str, Any] = {"flow.repeat_wait_s": 0.0, "airflow.near_sigma_ticks": 0.0}
 
 PRESETS: dict[str, dict[str, Any]] = {
     "reference": {
