@@ -42,8 +42,9 @@ class FlowParams:
         1280; 0 = always ``proxy_width``). Module docstring, "Decisions".
     repeat_wait_s : a flow pair's successor frame that repeats its first frame (static, see
         ``airflow.static_level``) is passed over for the next decoded frame while it lies less than
-        this after the first frame, s, 0..1 (default 0.06: frame-rate conversion by repeated
-        frames, 3:2 pulldown to 60 fps, animation on twos; 0 = always the next frame, the thesis).
+        this after the first frame, s, 0..1 (default 0.1, one tick: frame-rate conversion by repeated
+        frames, 3:2 pulldown to 60 fps, animation on twos, also where the decoder skips the
+        non-reference frames between; 0 = always the next frame, the thesis).
     """
 
     STAGE: ClassVar[str] = ANALYSIS
@@ -52,7 +53,7 @@ class FlowParams:
     proxy_width: int = 160
     dis_preset: str = "medium"
     proxy_fraction: float = 0.125
-    repeat_wait_s: float = 0.06
+    repeat_wait_s: float = 0.1
 
     def __post_init__(self):
         if self.method not in FLOW_METHODS:
