@@ -126,6 +126,8 @@ class GenerateParams(Record):
 THESIS_RULES: dict[str, Any] = {
     "intensity.rule": "thesis",  # the default follows events: each feature against its recent baseline
     "intensity.loudness_gate": 0.05,  # the default gate, 0.2, is 23 phon below the film's loudest moment
+    "flow.repeat_wait_s": 0.0,  # the default waits for the next distinct frame (repeats give no motion)
+    "airflow.near_sigma_ticks": 0.0,  # the default smooths nearness over neighbouring ticks of the shot
 }
 
 PRESETS: dict[str, dict[str, Any]] = {
