@@ -1,0 +1,70 @@
+"""The editor walked as a designer (issue 18): dialogs answer Enter and Escape, values keep their
+precision through copy and paste, the temperature lane shows what the chair plays."""
+
+from __future__ import annotations
+
+import csv
+import io
+
+import pytest
+
+from browser_support import open_editor, state, wait_revision_above
+
+pytestmark = pytest.mark.browser
+
+
+def select_time(pg, t0_s: float, t1_s: float) -> None:
+    """Select [t0_s, t1_s) on every actuator (drag over the heat map)."""
+    r = pg.evaluate("() => window.autohaptics.laneRect('actuators')")
+    y = r["y"] + r["height"] / 2
+    pg.mouse.move(pg.evaluate("(t) => window.autohaptics.clientXOf(t)", t0_s), y)
+    pg.mouse.down()
+    pg.mouse.move(pg.evaluate("(t) => window.autohaptics.clientXOf(t)", t1_s), y, steps=4)
+    pg.mouse.up()
+
+
+def test_enter_submits_and_escape_cancels_every_dialog(page, api, project_copy):
+    pid = project_copy["id"]
+    open_editor(page, pid)
+    # Add marker: the focus starts in the label, Enter adds it.
+    page.click("[data-testid=marker-add]")
+    assert page.evaluate("() => document.activeElement.dataset.testid") == "dialog-input"
+    page.keyboard.type("Door slam")
+    s0 = state(page)
+    page.keyboard.press("Enter")
+    s1 = wait_revision_above(page, s0["revision"])
+    assert [m["label"] for m in s1["markers"]] == ["Door slam"]
+    # Escape cancels: nothing is sent.
+    page.click("[data-testid=marker-add]")
+    page.keyboard.type("Not this one")
+    page.keyboard.press("Escape")
+    page.wait_for_selector("dialog[open]", state="detached")
+    assert state(page)["revision"] == s1["revision"]
+    # Regenerate: focus in the first field, Escape cancels, Enter in a threshold starts the job.
+    page.click("[data-testid=regenerate]")
+    page.wait_for_selector("[data-testid=regenerate-dialog][open]")
+    assert page.evaluate("() => document.activeElement.dataset.testid") == "regen-preset"
+    page.keyboard.press("Escape")
+    page.wait_for_selector("dialog[open]", state="detached")
+    assert api.get(f"/api/projects/{pid}").json()["status"] == "ready"
+    page.click("[data-testid=regenerate]")
+    page.fill("[data-testid=regen-threshold-loudness]", "0.7")
+    page.focus("[data-testid=regen-threshold-loudness]")
+    page.keyboard.press("Enter")
+    page.wait_for_selector("dialog[open]", state="detached")
+    page.wait_for_function(f"() => fetch('/api/projects/{pid}').then(r => r.json())"
+                           ".then(p => p.params.thresholds.loudness === 0.7)")
+    # Rename on the projects page: Enter renames, Escape keeps the name.
+    page.goto("/#/")
+    row = page.locator(f"[data-testid=project-row][data-id='{pid}']")
+    row.locator("[data-testid=project-rename]").click()
+    page.keyboard.press("Control+A")
+    page.keyboard.type("Renamed by Enter")
+    page.keyboard.press("Enter")
+    page.wait_for_function(f"() => fetch('/api/projects/{pid}').then(r => r.json())"
+                           ".then(p => p.name === 'Renamed by Enter')")
+    row.locator("[data-testid=project-rename]").click()
+    page.keyboard.type("Not this name")
+    page.keyboard.press("Escape")
+    page.wait_for_selector("dialog[open]", state="detached")
+    assert api.get(f"/api/projects/{pid}").json()["name"] == "Renamed by Enter"
