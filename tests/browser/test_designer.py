@@ -68,3 +68,30 @@ def test_enter_submits_and_escape_cancels_every_dialog(page, api, project_copy):
     page.keyboard.press("Escape")
     page.wait_for_selector("dialog[open]", state="detached")
     assert api.get(f"/api/projects/{pid}").json()["name"] == "Renamed by Enter"
+
+
+def test_the_temperature_lane_shows_what_the_chair_plays(page, api, project_copy):
+    pid = project_copy["id"]
+    rev = api.get(f"/api/projects/{pid}").json()["revision"]
+    r = api.post(f"/api/projects/{pid}/edits", json={"base_revision": rev, "op": {
+        "op": "set", "lanes": ["temperature"], "t0": 100, "t1": 200, "value": 45.0}})
+    assert r.status_code == 200, r.text
+    open_editor(page, pid)
+    page.wait_for_function("() => { const s = window.autohaptics.state(); return s.played && s.played.revision === s.revision; }")
+    played = state(page)["played"]
+    assert (played["minC"], played["maxC"]) == (18.0, 40.0)
+    ticks = page.evaluate("() => Array.from({length: 300}, (_, k) => window.autohaptics.valuesAt(k))")
+    target = [v["temperature_c"] for v in ticks]
+    chair = [v["played_c"] for v in ticks]
+    assert target[150] == pytest.approx(45.0)
+    assert chair[199] == pytest.approx(40.0, abs=1e-3), "the chair plays its own maximum, not the 45 C target"
+    assert max(chair) <= 40.0 + 1e-3
+    assert max(abs(a - b) for a, b in zip(chair, chair[1:])) <= 0.1 + 1e-3, "at most 1 C/s"
+    # The chair's limit is drawn: its label colour is on the lane.
+    lit = page.evaluate("""() => {
+        const c = document.querySelector('canvas[data-lane="temperature"]');
+        const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+        let n = 0;
+        for (let i = 0; i < d.length; i += 4) if (d[i] === 0xfb && d[i + 1] === 0x92 && d[i + 2] === 0x3c) n++;
+        return n; }""")
+    assert lit > 20

@@ -261,6 +261,16 @@ def _lane_view(tl: Timeline, lane: str, a: int, b: int) -> np.ndarray:
     return tl.vibration[a:b, ACTUATOR_IDS.index(lane)]
 
 
+def lane_values(tl: Timeline, lanes: list[str], t0: int, t1: int) -> dict[str, list]:
+    """Per-tick values of lanes over [t0, t1) at full precision, in the shape ``paste`` takes (what
+    the editor's Copy holds): vibration 0..1 and temperature C as (m,), fans as (m, 9, 17)."""
+    for lane in lanes:
+        _lane("copy", "lanes", lane)
+    if not 0 <= t0 < t1 <= tl.n_ticks:
+        raise ParameterError(f"the range must satisfy 0 <= t0 < t1 <= {tl.n_ticks} ticks, got {t0}..{t1}")
+    return {lane: _lane_view(tl, lane, t0, t1).tolist() for lane in dict.fromkeys(lanes)}
+
+
 def clamp(tl: Timeline, lane: str, values: np.ndarray) -> np.ndarray:
     if lane == "temperature":
         lo, hi = tl.temp_range

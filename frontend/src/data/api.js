@@ -166,6 +166,16 @@ export class Api {
     return `/api/projects/${enc(id)}/timeline.bin?layer=${layer}${blocks ? `&blocks=${blocks}` : ""}`;
   }
 
+  /**
+   * The composed temperature as the chair plays it (clamped, slew-limited) with the device's limits.
+   * @param {string} id
+   * @returns {Promise<{revision: number, tick_s: number, min_c: number, max_c: number, neutral_c: number,
+   *   rate_c_per_s: number, values: number[]}>}
+   */
+  chairTemperature(id) {
+    return this.request("GET", `/api/projects/${enc(id)}/timeline/chair-temperature`);
+  }
+
   /** @param {string} id @returns {Promise<EditList>} */
   edits(id) {
     return this.request("GET", `/api/projects/${enc(id)}/edits`);
