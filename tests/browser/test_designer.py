@@ -14,7 +14,7 @@ pytestmark = pytest.mark.browser
 
 
 def select_time(pg, t0_s: float, t1_s: float) -> None:
-    """Select [t0_s, t1_s) on every actuator (drag over the heat map)."""
+    """Select [t0_s, t1_s) on A5 (drag over the middle row of the heat map)."""
     r = pg.evaluate("() => window.autohaptics.laneRect('actuators')")
     y = r["y"] + r["height"] / 2
     pg.mouse.move(pg.evaluate("(t) => window.autohaptics.clientXOf(t)", t0_s), y)
@@ -95,3 +95,26 @@ def test_the_temperature_lane_shows_what_the_chair_plays(page, api, project_copy
         for (let i = 0; i < d.length; i += 4) if (d[i] === 0xfb && d[i + 1] === 0x92 && d[i + 2] === 0x3c) n++;
         return n; }""")
     assert lit > 20
+
+
+def test_a_pasted_half_is_a_half_in_the_csv(page, api, project_copy):
+    pid = project_copy["id"]
+    open_editor(page, pid)
+    select_time(page, 20.05, 20.95)  # ticks 200..209
+    page.fill("[data-testid=edit-value]", "0.5")
+    s0 = state(page)
+    page.click("[data-testid=edit-set]")
+    s1 = wait_revision_above(page, s0["revision"])
+    page.locator("[data-testid=timeline]").focus()
+    page.keyboard.press("Control+c")
+    page.wait_for_function("() => !document.querySelector('[data-testid=edit-paste]').disabled")
+    page.keyboard.press("Home")
+    page.wait_for_function("() => window.autohaptics.state().currentTime === 0")
+    page.keyboard.press("Control+v")
+    wait_revision_above(page, s1["revision"])
+    paste = api.get(f"/api/projects/{pid}/edits").json()["ops"][-1]
+    assert paste["op"] == "paste" and paste["t0"] == 0
+    assert paste["values"] == {"A5": [0.5] * 10}
+    rows = list(csv.DictReader(io.StringIO(api.get(f"/api/projects/{pid}/export?format=csv").text)))
+    assert [float(rows[k]["A5"]) for k in range(10)] == [0.5] * 10
+    assert rows[0]["A5"] in ("0.5", "0.5000")

@@ -84,12 +84,12 @@ export class Clipboard {
   }
 
   /**
-   * @param {import("./timeline-data.js").TimelineData} data
-   * @param {Selection} sel
+   * Hold values copied at full precision (GET /timeline/values: the same numbers the server composes).
+   * @param {Record<string, any[]>} values per-lane values of one range
+   * @param {number} length ticks
    */
-  copy(data, sel) {
-    const values = data.slice(sel.lanes, sel.t0, sel.t1);
-    this.content = { values, length: sel.t1 - sel.t0 };
+  take(values, length) {
+    this.content = { values, length };
     return this.content;
   }
 

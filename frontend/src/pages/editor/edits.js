@@ -138,15 +138,18 @@ export class EditActions {
     if (this.page.session) await this.page.session.redo();
   }
 
-  copy() {
-    const { timeline, data } = this.page;
+  /** Copy the selection's values at full precision (from the server; the lanes hold 1/255 steps). */
+  async copy() {
+    const { timeline, data, api, projectId } = this.page;
     const sel = timeline.selection;
     if (!sel || !data) return;
+    const t1 = Math.min(sel.t1, data.nTicks);
     let c;
     try {
-      c = this.clipboard.copy(data, sel);
+      const got = await api.laneValues(projectId, sel.lanes, sel.t0, t1);
+      c = this.clipboard.take(got.values, t1 - sel.t0);
     } catch (err) {
-      toast(errorText(err), "warn");
+      toast(`Could not copy: ${errorText(err)}`, "warn");
       return;
     }
     toast(`Copied ${c.length} ticks of ${sel.lanes.join(", ")}.`);
