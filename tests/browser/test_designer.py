@@ -8,14 +8,14 @@ import io
 
 import pytest
 
-from browser_support import open_editor, state, wait_revision_above
+from browser_support import lane_rect, open_editor, state, wait_job, wait_revision_above
 
 pytestmark = pytest.mark.browser
 
 
 def select_time(pg, t0_s: float, t1_s: float) -> None:
     """Select [t0_s, t1_s) on A5 (drag over the middle row of the heat map)."""
-    r = pg.evaluate("() => window.autohaptics.laneRect('actuators')")
+    r = lane_rect(pg, "actuators")
     y = r["y"] + r["height"] / 2
     pg.mouse.move(pg.evaluate("(t) => window.autohaptics.clientXOf(t)", t0_s), y)
     pg.mouse.down()
@@ -118,3 +118,74 @@ def test_a_pasted_half_is_a_half_in_the_csv(page, api, project_copy):
     rows = list(csv.DictReader(io.StringIO(api.get(f"/api/projects/{pid}/export?format=csv").text)))
     assert [float(rows[k]["A5"]) for k in range(10)] == [0.5] * 10
     assert rows[0]["A5"] in ("0.5", "0.5000")
+
+
+def overlay_cell_xy(pg, row: int, col: int) -> tuple[float, float]:
+    """Client coordinates of the middle of one fan cell on the overlay (the picture inside the video)."""
+    return tuple(pg.evaluate(
+        """([row, col]) => {
+            const c = document.querySelector('[data-testid=fan-overlay]');
+            const v = document.querySelector('[data-testid=video]');
+            const b = c.getBoundingClientRect();
+            const s = Math.min(b.width / v.videoWidth, b.height / v.videoHeight);
+            const pw = v.videoWidth * s, ph = v.videoHeight * s;
+            const x0 = b.x + (b.width - pw) / 2, y0 = b.y + (b.height - ph) / 2;
+            return [x0 + (col + 0.5) * pw / 17, y0 + (row + 0.5) * ph / 9];
+        }""", [row, col]))
+
+
+def fan_column(rows: list[dict], row: int, col: int) -> list[float]:
+    return [float(r[f"fan_r{row}_c{col}"]) for r in rows]
+
+
+def test_a_fan_region_edit_survives_reload_regeneration_and_export(page, api, project_copy):
+    pid = project_copy["id"]
+    open_editor(page, pid)
+    before = list(csv.DictReader(io.StringIO(api.get(f"/api/projects/{pid}/export?format=csv").text)))
+    r = lane_rect(page, "fans")
+    y = r["y"] + r["height"] / 2
+    page.mouse.move(page.evaluate("(t) => window.autohaptics.clientXOf(t)", 5.05), y)
+    page.mouse.down()
+    page.mouse.move(page.evaluate("(t) => window.autohaptics.clientXOf(t)", 7.95), y, steps=4)
+    page.mouse.up()
+    assert state(page)["selection"] == {"t0": 50, "t1": 80, "lanes": ["fans"]}
+    page.click("[data-testid=toggle-fan-overlay]")
+    page.wait_for_function("() => document.querySelector('[data-testid=video]').videoWidth > 0")
+    # A rectangle of rows 1..2 x columns 3..5, then one more cell painted with Ctrl.
+    page.mouse.move(*overlay_cell_xy(page, 1, 3))
+    page.mouse.down()
+    page.mouse.move(*overlay_cell_xy(page, 2, 5), steps=4)
+    page.mouse.up()
+    page.keyboard.down("Control")
+    page.mouse.move(*overlay_cell_xy(page, 7, 16))
+    page.mouse.down()
+    page.mouse.up()
+    page.keyboard.up("Control")
+    assert "7 fans picked" in page.text_content("[data-testid=selection-info]")
+    page.fill("[data-testid=edit-value]", "0.8")
+    s0 = state(page)
+    page.click("[data-testid=edit-set]")
+    wait_revision_above(page, s0["revision"])
+    op = api.get(f"/api/projects/{pid}/edits").json()["ops"][-1]
+    picked = [[1, 3], [1, 4], [1, 5], [2, 3], [2, 4], [2, 5], [7, 16]]
+    assert op == {"op": "set", "lanes": ["fans"], "t0": 50, "t1": 80, "value": 0.8, "cells": picked}
+
+    def check() -> None:
+        rows = list(csv.DictReader(io.StringIO(api.get(f"/api/projects/{pid}/export?format=csv").text)))
+        for row, col in picked:
+            assert fan_column(rows, row, col)[50:80] == [0.8] * 30
+        for row, col in ((0, 0), (1, 2), (3, 4), (8, 16)):  # outside the region: as generated
+            assert fan_column(rows, row, col) == fan_column(before, row, col)
+
+    check()
+    page.reload()
+    open_editor(page, pid)
+    grid = page.evaluate("() => window.autohaptics.valuesAt(60).fan_grid")
+    assert grid[1 * 17 + 4] == pytest.approx(0.8, abs=1 / 255) and grid[7 * 17 + 16] == pytest.approx(0.8, abs=1 / 255)
+    rev = api.get(f"/api/projects/{pid}").json()["revision"]
+    r = api.put(f"/api/projects/{pid}/params", json={"thresholds": {"loudness": 0.5}})
+    assert r.status_code in (200, 202), r.text
+    if r.json().get("job"):
+        assert wait_job(api, r.json()["job"]["id"])["status"] == "done"
+    assert api.get(f"/api/projects/{pid}").json()["revision"] > rev
+    check()

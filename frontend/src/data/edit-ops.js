@@ -38,6 +38,19 @@ export function fadeOp(sel, kind) {
 }
 
 /**
+ * A range op limited to a region of the fan grid (`cells`), when one is picked and the op edits the fans.
+ * @param {Record<string, any>} op
+ * @param {Array<[number, number]>} cells [row, col]
+ */
+export function inRegion(op, cells) {
+  if (!cells.length || !op.lanes.includes("fans")) return op;
+  if (op.lanes.length > 1) {
+    throw new Error("A fan region applies to the Fans lane alone: edit only Fans, or clear the region (Escape on the fan grid).");
+  }
+  return { ...op, cells: cells.map(([r, c]) => [r, c]) };
+}
+
+/**
  * `temp_points` over the span of the points: temperature is piecewise linear through them.
  * @param {Array<[number, number]>} points [tick, C]
  */

@@ -85,7 +85,7 @@ export class EditToolbar {
 
   /**
    * @param {{tool: string, selection: import("../core/timeline.js").Selection|null, lanes: string[],
-   *   tickS: number, canPaste: boolean, points: number, markerSelected: boolean, ready: boolean}} s
+   *   tickS: number, canPaste: boolean, points: number, markerSelected: boolean, ready: boolean, cells?: number}} s
    */
   update(s) {
     for (const [name, b] of Object.entries(this.tools)) b.setAttribute("aria-pressed", String(name === s.tool));
@@ -105,7 +105,8 @@ export class EditToolbar {
     this.markerDelete.disabled = !s.markerSelected;
     if (s.selection) {
       const { t0, t1 } = s.selection;
-      this.info.textContent = `${formatTime(t0 * s.tickS)} – ${formatTime(t1 * s.tickS)} (${t1 - t0} ticks) on ${s.lanes.join(", ")}`;
+      const region = s.cells && s.lanes.includes("fans") ? ` (${s.cells} fans picked on the grid)` : "";
+      this.info.textContent = `${formatTime(t0 * s.tickS)} – ${formatTime(t1 * s.tickS)} (${t1 - t0} ticks) on ${s.lanes.join(", ")}${region}`;
     } else {
       this.info.textContent = s.tool === "points" ? "Click the Temperature lane to place points" : "Drag on the lanes to select a range";
     }

@@ -4,7 +4,7 @@
  * through the edit session (autosave); the composed timeline is reloaded when the server took it.
  */
 
-import { Clipboard, clearOp, fadeOp, scaleOp, setOp, tempPointsOp } from "../../data/edit-ops.js";
+import { Clipboard, clearOp, fadeOp, inRegion, scaleOp, setOp, tempPointsOp } from "../../data/edit-ops.js";
 import { errorText } from "../../data/http.js";
 import { EditToolbar } from "../../panels/toolbar.js";
 import { toast } from "../../panels/widgets.js";
@@ -20,6 +20,14 @@ export class EditActions {
     this.points = [];
     /** @type {EditToolbar|null} */
     this.toolbar = null;
+    /** @type {Array<[number, number]>} fans picked on the fan grid: range ops on Fans change only these */
+    this.region = [];
+  }
+
+  /** The fan grid's picked region changed. @param {Array<[number, number]>} cells */
+  takeRegion(cells) {
+    this.region = cells;
+    this.updateToolbar();
   }
 
   buildToolbar() {
@@ -56,6 +64,7 @@ export class EditActions {
       points: this.points.length,
       markerSelected: !!page.markers.selected,
       ready: !!page.data,
+      cells: this.region.length,
     });
   }
 
@@ -87,7 +96,7 @@ export class EditActions {
     }
     let op;
     try {
-      op = build(sel);
+      op = inRegion(build(sel), this.region);
     } catch (err) {
       toast(errorText(err), "warn");
       return Promise.resolve(false);
