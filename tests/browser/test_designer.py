@@ -189,3 +189,69 @@ def test_a_fan_region_edit_survives_reload_regeneration_and_export(page, api, pr
         assert wait_job(api, r.json()["job"]["id"])["status"] == "done"
     assert api.get(f"/api/projects/{pid}").json()["revision"] > rev
     check()
+
+
+CONTROLS_CLIPPED = """() => {
+    // Every control of the header, the side column, the transport and the toolbar, scrolled into
+    // view inside its own scroll area, must lie inside the viewport and inside that area.
+    const out = [];
+    const scroller = (el) => {
+        for (let p = el.parentElement; p; p = p.parentElement) {
+            const o = getComputedStyle(p).overflowY;
+            if ((o === 'auto' || o === 'scroll') && p.scrollHeight > p.clientHeight + 1) return p;
+        }
+        return null;
+    };
+    const sel = '.topbar button, .side button, .side input, .side select, .transport button, .toolbar button, .toolbar input';
+    for (const el of document.querySelectorAll(sel)) {
+        if (el.closest('[hidden]') || el.offsetParent === null || el.classList.contains('visually-hidden')) continue;
+        el.scrollIntoView({block: 'nearest', inline: 'nearest'});
+        const r = el.getBoundingClientRect();
+        const box = scroller(el);
+        const area = box ? box.getBoundingClientRect() : {top: 0, left: 0, bottom: innerHeight, right: innerWidth};
+        const inside = (b) => r.top >= b.top - 1 && r.left >= b.left - 1 && r.bottom <= b.bottom + 1 && r.right <= b.right + 1;
+        if (!inside(area) || !inside({top: 0, left: 0, bottom: innerHeight, right: innerWidth})) {
+            out.push(`${el.dataset.testid || el.textContent.trim() || el.tagName} at ${Math.round(r.top)}..${Math.round(r.bottom)}`);
+        }
+    }
+    for (const panel of document.querySelectorAll('.side .panel')) {
+        if (panel.scrollHeight > panel.clientHeight + 1) out.push(`panel ${panel.textContent.slice(0, 20)} scrolls on its own`);
+    }
+    return out;
+}"""
+
+
+@pytest.mark.parametrize("width, height", [(1366, 768), (1440, 900), (1920, 1080)])
+def test_no_panel_is_clipped_and_the_ruler_stays(page, project_copy, width, height):
+    page.set_viewport_size({"width": width, "height": height})
+    open_editor(page, project_copy["id"])
+    assert page.evaluate(CONTROLS_CLIPPED) == []
+    for name in ("sharpness", "booming", "low_energy", "loudness"):
+        assert page.is_visible(f"[data-testid=threshold-{name}]")
+    host = page.locator(".timeline-host")
+    host.evaluate("(el) => { el.scrollTop = el.scrollHeight; }")
+    ruler = page.locator("[data-testid=ruler]").bounding_box()
+    top = host.bounding_box()["y"]
+    assert top - 1 <= ruler["y"] <= top + 2, "the ruler stays at the top of the scrolled lanes"
+    for lane in ("fans", "markers"):
+        r = lane_rect(page, lane)
+        assert 0 <= r["y"] and r["y"] + r["height"] <= height, f"{lane} lane reachable"
+
+
+def test_a_threshold_drag_with_shift_is_ten_times_finer(page, project_copy):
+    open_editor(page, project_copy["id"])
+    s0 = state(page)
+    thr0 = s0["thresholds"]["booming"]
+    r = lane_rect(page, "feature-booming")
+    y0 = r["y"] + r["height"] - 3 - thr0 * (r["height"] - 6)
+    x = r["x"] + r["width"] * 0.4
+    page.mouse.move(x, y0)
+    page.keyboard.down("Shift")
+    page.mouse.down()
+    page.mouse.move(x, y0 + 15, steps=5)
+    page.mouse.up()
+    page.keyboard.up("Shift")
+    s1 = wait_revision_above(page, s0["revision"])
+    moved = thr0 - s1["thresholds"]["booming"]
+    full = 15 / (r["height"] - 6)  # what 15 px move without Shift
+    assert moved == pytest.approx(full / 10, abs=0.002)
