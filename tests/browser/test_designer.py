@@ -105,12 +105,11 @@ def test_a_pasted_half_is_a_half_in_the_csv(page, api, project_copy):
     s0 = state(page)
     page.click("[data-testid=edit-set]")
     s1 = wait_revision_above(page, s0["revision"])
-    page.locator("[data-testid=timeline]").focus()
-    page.keyboard.press("Control+c")
+    page.click("[data-testid=edit-copy]")  # the toolbar's Copy and Paste this time (test_tools uses the keys)
     page.wait_for_function("() => !document.querySelector('[data-testid=edit-paste]').disabled")
-    page.keyboard.press("Home")
-    page.wait_for_function("() => window.autohaptics.state().currentTime === 0")
-    page.keyboard.press("Control+v")
+    page.evaluate("() => { document.querySelector('[data-testid=video]').currentTime = 0; }")
+    page.wait_for_function("() => window.autohaptics.state().playheadS === 0")
+    page.click("[data-testid=edit-paste]")
     wait_revision_above(page, s1["revision"])
     paste = api.get(f"/api/projects/{pid}/edits").json()["ops"][-1]
     assert paste["op"] == "paste" and paste["t0"] == 0
