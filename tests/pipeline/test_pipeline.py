@@ -6,7 +6,7 @@ import pytest
 from autohaptics import testing as synth
 from autohaptics.errors import MediaError, ParameterError
 from autohaptics.layout import ACTUATOR_IDS
-from autohaptics.params import GenerateParams, resolve_params
+from autohaptics.params import THESIS_RULES, GenerateParams, resolve_params
 from autohaptics.pipeline import Analysis, analyse, derive, generate
 from autohaptics.pipeline import reusable as analysis_compatible
 from autohaptics.records import apply_overrides
@@ -67,7 +67,10 @@ def test_random_mode_is_seeded(av_analysis):
 
 
 def test_lower_thresholds_borrow_saliency_and_ask_for_a_new_analysis(av_analysis):
-    params, _ = resolve_params(thresholds={"loudness": 0.05, "sharpness": 0.05, "booming": 0.05, "low_energy": 0.05})
+    # the thesis's vibration rule: with it, thresholds this low wake ticks without saliency
+    rule = {key: value for key, value in THESIS_RULES.items() if key.startswith("intensity.")}
+    params, _ = resolve_params(overrides=rule,
+                               thresholds={"loudness": 0.05, "sharpness": 0.05, "booming": 0.05, "low_energy": 0.05})
     assert analysis_compatible(av_analysis, params)  # thresholds are derive-time
     for key, value in (("airflow.cell_rel", 0.3), ("airflow.cell_sigma_ticks", 0.0), ("airflow.threshold", 0.1)):
         assert analysis_compatible(av_analysis, resolve_params(overrides={key: value})[0]), key  # the fan rule too

@@ -33,7 +33,7 @@ from autohaptics import intensity as I
 from autohaptics import temperature as T
 from autohaptics import timebase as tb
 from autohaptics.layout import ACTUATOR_IDS, FAN_COLS, FAN_ROWS, N_ACTUATORS
-from autohaptics.params import GenerateParams, resolve_params
+from autohaptics.params import THESIS_RULES, GenerateParams, resolve_params
 from autohaptics.pipeline import Analysis, derive
 from autohaptics.timeline import NORMALISED_FEATURES, Timeline
 from autohaptics.pipeline.video import VideoAnalysis
@@ -449,8 +449,8 @@ def _shifted(a: Analysis, k: int) -> Analysis:
                     params={}, audio=audio, video=video)
 
 
-def _params(mode: str, th: dict | None = None, manual_threshold: bool = False) -> GenerateParams:
-    overrides = {"mode": mode}
+def _params(mode: str, th: dict | None = None, manual_threshold: bool = False, thesis: bool = False) -> GenerateParams:
+    overrides = {"mode": mode, **(THESIS_RULES if thesis else {})}
     if manual_threshold:
         overrides["airflow.threshold"] = 0.05
     return resolve_params("balanced", overrides, th)[0]
@@ -479,8 +479,9 @@ def test_derive_output_is_finite_and_in_range_in_every_mode(a, mode, th, normali
 @given(a=analyses(), k=st.integers(1, 15), mode=st.sampled_from(["multimodal", "audio", "visual"]))
 def test_derive_on_a_shifted_analysis_shifts_the_timeline(a, k, mode):
     # max normaliser and a manual airflow threshold: both ignore k silent, motionless ticks in front
-    # (the percentile normaliser and the adaptive threshold look at the whole clip's distribution)
-    params = _params(mode, manual_threshold=True)
+    # (the percentile normaliser and the adaptive threshold look at the whole clip's distribution);
+    # the thesis's vibration rule, since the default judges each tick against the seconds before it
+    params = _params(mode, manual_threshold=True, thesis=True)
     base, shifted = derive(a, params), derive(_shifted(a, k), params)
     assert shifted.n_ticks == base.n_ticks + k
     np.testing.assert_array_equal(shifted.vibration[k:], base.vibration)

@@ -216,7 +216,7 @@ def test_resolution_and_frame_rate_invariance(invariance_pair):
     print("320x180@24 vs 1280x720@30:", r)
     # not vacuous: both vibrate, change temperature and blow
     for tl in (small, large):
-        assert active(tl).size >= 20
+        assert active(tl).size >= 15
         assert np.ptp(tl.temperature_c) > 10.0
         assert tl.fans.any(axis=(1, 2)).sum() >= 5
     assert r["vibration_mae"] <= 0.02
