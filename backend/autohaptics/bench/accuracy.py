@@ -248,7 +248,7 @@ def run(args) -> int:
         if not p.is_file():
             raise ParameterError(f"{p}: no such file")
         if args.loop > 1:
-            from autohaptics.bench.pipeline import looped_clip
+            from autohaptics.bench.clips import looped_clip
 
             p = looped_clip(p, args.loop, out)
         clips.append(p)

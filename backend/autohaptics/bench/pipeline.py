@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 from autohaptics import media
+from autohaptics.bench.clips import looped_clip
 from autohaptics.bench.common import measure, table
 from autohaptics.params import add_generation_options, params_from_args
 
@@ -27,55 +28,6 @@ def register(sub) -> None:
     p.add_argument("--out", default="out/bench", help="folder for the looped clip and the JSON figures")
     add_generation_options(p)
     p.set_defaults(func=run)
-
-
-def looped_clip(src: str | Path, times: int, out_dir: Path) -> Path:
-    """Write ``src`` played ``times`` times in a row (x264 veryfast + AAC), reusing an existing file."""
-    import av
-    import numpy as np
-
-    src = Path(src)
-    out = out_dir / f"{src.stem}_x{times}.mp4"
-    if out.exists():
-        return out
-    out_dir.mkdir(parents=True, exist_ok=True)
-    info = media.probe(src)
-    tmp = out.with_suffix(".part.mp4")
-    with av.open(str(tmp), "w") as dst:
-        vs = as_ = None
-        if info.video is not None:
-            vs = dst.add_stream("libx264", rate=round(info.video.fps))
-            vs.width, vs.height, vs.pix_fmt = info.video.width, info.video.height, "yuv420p"
-            vs.options = {"preset": "veryfast", "crf": "20"}
-        if info.audio is not None:
-            layout = {1: "mono", 2: "stereo", 6: "5.1"}.get(info.audio.channels, "stereo")
-            as_ = dst.add_stream("aac", rate=info.audio.sample_rate, layout=layout)
-        v_n = a_n = 0
-        for _ in range(times):
-            with av.open(str(src)) as s:
-                streams = [x for x in (s.streams.video[:1] + s.streams.audio[:1])]
-                for frame in s.decode(*streams):
-                    if isinstance(frame, av.VideoFrame) and vs is not None:
-                        f = av.VideoFrame.from_ndarray(frame.to_ndarray(format="yuv420p"), format="yuv420p")
-                        f.pts = v_n
-                        v_n += 1
-                        dst.mux(vs.encode(f))
-                    elif isinstance(frame, av.AudioFrame) and as_ is not None:
-                        arr = frame.to_ndarray()
-                        if not frame.format.is_planar:
-                            arr = arr.reshape(-1, frame.layout.nb_channels).T
-                        arr = np.ascontiguousarray(arr[: as_.layout.nb_channels].astype(np.float32))
-                        f = av.AudioFrame.from_ndarray(arr, format="fltp", layout=as_.layout.name)
-                        f.sample_rate = info.audio.sample_rate
-                        f.pts = a_n
-                        a_n += f.samples
-                        dst.mux(as_.encode(f))
-        if vs is not None:
-            dst.mux(vs.encode(None))
-        if as_ is not None:
-            dst.mux(as_.encode(None))
-    tmp.replace(out)
-    return out
 
 
 def run(args) -> int:

@@ -8,14 +8,18 @@ from __future__ import annotations
 
 import sys
 
-from autohaptics.params import add_generation_options, params_from_args
 from autohaptics.errors import ParameterError
 from autohaptics.progress import ProgressBar
 
+COMMAND = "batch"
+HELP = "generate timelines for many films (folders, files or glob patterns)"
+
 
 def register(sub) -> None:
+    from autohaptics.params import add_generation_options
+
     p = sub.add_parser(
-        "batch", help="generate timelines for many films (folders, files or glob patterns)",
+        COMMAND, help=HELP,
         description="Generate OUTDIR/<name>.timeline.json for every film. Films already done with the same "
                     "source (SHA-256) and the same parameters are skipped; a failing film does not stop the "
                     "others. Exit status 0: all done, 1: some failed, 2: usage error.")
@@ -35,6 +39,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from autohaptics.batch import run_batch
+    from autohaptics.params import params_from_args
 
     if args.scheduler is not None and args.jobs is not None:
         raise ParameterError("--jobs is for local runs; with --scheduler the cluster's workers set the parallelism")

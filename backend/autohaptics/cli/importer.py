@@ -5,12 +5,14 @@ from __future__ import annotations
 import argparse
 
 from autohaptics.errors import ParameterError
-from autohaptics.formats.importing import csv_meta_path, import_timeline
+
+COMMAND = "import"
+HELP = "read a timeline CSV (or JSON), validate it and write the timeline JSON"
 
 
 def register(sub) -> None:
     p = sub.add_parser(
-        "import", help="read a timeline CSV (or JSON), validate it and write the timeline JSON",
+        COMMAND, help=HELP,
         description="Read a timeline CSV as written by 'autohaptics export --format csv' (or a "
                     "timeline JSON), check every row and column, and write the timeline JSON. "
                     "Problems are reported by row and column.")
@@ -25,6 +27,8 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from autohaptics.formats.importing import csv_meta_path, import_timeline
+
     if args.meta and args.no_meta:
         raise ParameterError("--meta and --no-meta exclude each other")
     meta = None if args.no_meta else (args.meta or "auto")

@@ -5,8 +5,6 @@ analysis signal), :mod:`.video` (decoded frames, all or the reference ones only)
 (a frame's small proxies, made only when a stage asks).
 """
 
-from autohaptics.media.audio import iter_audio, read_audio
-from autohaptics.media.frames import Frame
 from autohaptics.media.probe import (
     AudioInfo,
     AudioReport,
@@ -18,7 +16,20 @@ from autohaptics.media.probe import (
     probe,
     source_block,
 )
-from autohaptics.media.video import DECODE_MODES, SPARSE_MIN_FPS, decode_all, iter_video
+
+# Imported when first used: the video side brings OpenCV (~0.15 s), which the audio pass and
+# `autohaptics features` never need.
+_LAZY = {"iter_audio": "audio", "read_audio": "audio", "Frame": "frames", "DECODE_MODES": "video",
+         "SPARSE_MIN_FPS": "video", "decode_all": "video", "iter_video": "video"}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["AudioInfo", "AudioReport", "DECODE_MODES", "Frame", "MediaInfo", "SPARSE_MIN_FPS", "VideoInfo",
            "check_complete", "check_truncation", "decode_all", "iter_audio", "iter_video", "open_container", "probe",
