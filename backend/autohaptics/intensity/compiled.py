@@ -50,13 +50,11 @@ def load() -> types.ModuleType:
     if os.environ.get("NUMBA_DISABLE_JIT", "0") not in ("", "0"):
         return _jit_kernels()
     name = module_name()
-    folder = cache_dir(KERNELS_DIR)
-    found = sorted(folder.glob(f"{name}.*"))
-    if not found:
-        try:
-            found = [_build(name, folder)]
-        except Exception:  # no C compiler, numba's compiler unavailable: the JIT path computes the same
-            return _jit_kernels()
+    try:
+        folder = cache_dir(KERNELS_DIR)
+        found = sorted(folder.glob(f"{name}.*")) or [_build(name, folder)]
+    except Exception:  # no cache folder, no C compiler: the JIT path computes the same
+        return _jit_kernels()
     spec = importlib.util.spec_from_file_location(name, found[0])
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
