@@ -1,9 +1,8 @@
 """Error metrics between two timelines of the same source (a reference and a test run).
 
-Every metric is a pure function of arrays on the 100 ms tick grid; :func:`compare_timelines`
-gathers them into one JSON-serialisable report. ``ref`` is the reference, ``test`` the run
-under test; where the two differ in length only the common ticks ``0 .. min(n_ref, n_test) - 1``
-are compared and the difference is reported.
+Every metric is a pure function of arrays on the 100 ms tick grid; :func:`compare_timelines` gathers them into
+one JSON-serialisable report. ``ref`` is the reference, ``test`` the run under test; where the two differ in
+length only the common ticks ``0 .. min(n_ref, n_test) - 1`` are compared and the difference is reported.
 
 - vibration: mean absolute error over ticks x actuators (0..1), per actuator too, of the chair's
   strongest actuator per tick (``chair_mae``: the timing and level, without the spatial spread), and onset
@@ -19,8 +18,10 @@ are compared and the difference is reported.
   fan on, the IoU of the two sets of on-cells, averaged over those ticks (``iou``) and pooled
   (sum of intersections / sum of unions, ``iou_pooled``); 1 when neither side blows at all.
   Split into WHETHER and WHERE: precision/recall/F1 of the ticks that blow at all
-  (``ticks_f1``...), and the mean IoU over the ticks where both blow (``iou_both_on``). Also the
-  mean absolute error of the fan levels over all ticks and cells.
+  (``ticks_f1``...), and the mean IoU over the ticks where both blow (``iou_both_on``). The same
+  IoUs with a one-cell tolerance (``iou_tolerant``...: an on-cell counts as matched when the other
+  side has an on-cell within one cell, 8-neighbourhood; a person cannot tell two neighbouring
+  cells apart). Also the mean absolute error of the fan levels over all ticks and cells.
 - features: mean absolute error of every per-tick curve present in both.
 """
 
@@ -151,40 +152,74 @@ def onset_scores(ref: np.ndarray, test: np.ndarray, *, tolerance: int = ONSET_TO
 
 
 # -------------------------------------------------------------------------- fans
-def fan_iou(ref: np.ndarray, test: np.ndarray, *, on_level: float = 0.0) -> dict:
-    """IoU of the on-cells of two fan tracks over the ticks where either side has a fan on.
+FAN_TOLERANCE_CELLS = 1
+
+
+def _near(on: np.ndarray, cells: int) -> np.ndarray:
+    """Cells within ``cells`` cells (8-neighbourhood, Chebyshev distance) of an on-cell, per tick.
+    on : bool [shape=(n, rows, cols)] -> bool, same shape."""
+    out = on.copy()
+    rows, cols = on.shape[1:]
+    for dy in range(-cells, cells + 1):
+        for dx in range(-cells, cells + 1):
+            if dy or dx:
+                src = on[:, max(0, dy):rows + min(0, dy), max(0, dx):cols + min(0, dx)]
+                out[:, max(0, -dy):rows + min(0, -dy), max(0, -dx):cols + min(0, -dx)] |= src
+    return out
+
+
+def _iou_scores(inter: np.ndarray, union: np.ndarray, both: np.ndarray) -> tuple[float, float, float]:
+    """(mean per-tick IoU over the ticks where either side blows, pooled IoU, mean IoU where both
+    blow), each 1.0 when there is no such tick."""
+    active = union > 0
+    if not active.any():
+        return 1.0, 1.0, 1.0
+    iou = float((inter[active] / union[active]).mean())
+    pooled = float(inter[active].sum() / union[active].sum())
+    where = float((inter[both] / union[both]).mean()) if both.any() else 1.0
+    return iou, pooled, where
+
+
+def fan_iou(ref: np.ndarray, test: np.ndarray, *, on_level: float = 0.0,
+            tolerance: int = FAN_TOLERANCE_CELLS) -> dict:
+    """IoU of the on-cells of two fan tracks over the ticks where either side has a fan on,
+    exact and with a tolerance of ``tolerance`` cells.
 
     ref, test : fans [shape=(n_ref, 9, 17)] and [shape=(n_test, 9, 17)], 0..1; a cell is on above
     ``on_level``. Returns {"iou" (mean of the per-tick IoU), "iou_pooled" (sum of intersections /
     sum of unions), "ticks" (ticks where either side blows), "ref_ticks_on", "test_ticks_on",
     "ticks_precision" / "ticks_recall" / "ticks_f1" (agreement on which ticks blow at all),
-    "ticks_both_on", "iou_both_on" (mean IoU where both blow)}; IoUs are 1.0 when nothing blows.
+    "ticks_both_on", "iou_both_on" (mean IoU where both blow), and "iou_tolerant",
+    "iou_tolerant_pooled", "iou_tolerant_both_on", "tolerance_cells"}; IoUs are 1.0 when nothing blows.
+    Tolerant: an on-cell of one side is matched when the other side has an on-cell within
+    ``tolerance`` cells (8-neighbourhood); the IoU is the matched share of the union's cells
+    (with ``tolerance`` 0 the exact IoU). Why: a person cannot tell which of two neighbouring cells
+    of the grid blows on them.
     """
+    if isinstance(tolerance, bool) or not isinstance(tolerance, (int, np.integer)) or not 0 <= tolerance <= FAN_COLS:
+        raise ParameterError(f"fan tolerance must be a whole number of cells in 0..{FAN_COLS}, got {tolerance!r}")
     a, b = _pair(ref, test, "fans", (FAN_ROWS, FAN_COLS))
-    on_a = (a > on_level).reshape(a.shape[0], -1)
-    on_b = (b > on_level).reshape(b.shape[0], -1)
-    inter = (on_a & on_b).sum(axis=1)
-    union = (on_a | on_b).sum(axis=1)
-    active = union > 0
-    if not active.any():
-        iou = pooled = 1.0
-    else:
-        iou = float((inter[active] / union[active]).mean())
-        pooled = float(inter[active].sum() / union[active].sum())
-    tick_a, tick_b = on_a.any(axis=1), on_b.any(axis=1)
+    on_a, on_b = a > on_level, b > on_level
+    union = (on_a | on_b).reshape(a.shape[0], -1).sum(axis=1)
+    inter = (on_a & on_b).reshape(a.shape[0], -1).sum(axis=1)
+    matched = (on_a & _near(on_b, int(tolerance))) | (on_b & _near(on_a, int(tolerance)))
+    tick_a, tick_b = on_a.reshape(a.shape[0], -1).any(axis=1), on_b.reshape(b.shape[0], -1).any(axis=1)
     both = tick_a & tick_b
+    iou, pooled, where = _iou_scores(inter, union, both)
+    tol, tol_pooled, tol_where = _iou_scores(matched.reshape(a.shape[0], -1).sum(axis=1), union, both)
     whether = prf(int(both.sum()), int(tick_a.sum()), int(tick_b.sum()))
-    where = float((inter[both] / union[both]).mean()) if both.any() else 1.0
-    return {"iou": iou, "iou_pooled": pooled, "ticks": int(active.sum()),
+    return {"iou": iou, "iou_pooled": pooled, "ticks": int((union > 0).sum()),
             "ref_ticks_on": int(tick_a.sum()), "test_ticks_on": int(tick_b.sum()),
             "ticks_precision": whether["precision"], "ticks_recall": whether["recall"], "ticks_f1": whether["f1"],
-            "ticks_both_on": int(both.sum()), "iou_both_on": where}
+            "ticks_both_on": int(both.sum()), "iou_both_on": where, "iou_tolerant": tol,
+            "iou_tolerant_pooled": tol_pooled, "iou_tolerant_both_on": tol_where, "tolerance_cells": int(tolerance)}
 
 
 # ------------------------------------------------------------------------ report
 def compare_tracks(ref_vibration: np.ndarray, test_vibration: np.ndarray, ref_temperature: np.ndarray,
                    test_temperature: np.ndarray, ref_fans: np.ndarray, test_fans: np.ndarray, *,
-                   tolerance: int = ONSET_TOLERANCE_TICKS, on_level: float = 0.0) -> dict:
+                   tolerance: int = ONSET_TOLERANCE_TICKS, on_level: float = 0.0,
+                   fan_tolerance: int = FAN_TOLERANCE_CELLS) -> dict:
     """The track metrics (module docstring) from bare arrays.
 
     vibration [shape=(n, 9)] 0..1, temperature [shape=(n,)] C, fans [shape=(n, 9, 17)] 0..1, per side.
@@ -202,7 +237,7 @@ def compare_tracks(ref_vibration: np.ndarray, test_vibration: np.ndarray, ref_te
                                                                          vb.max(axis=1, initial=0.0),
                                                                          tolerance=tolerance))},
         "temperature": {"mae_c": mae(ta, tb), "max_abs_c": max_abs_error(ta, tb)},
-        "fans": {**fan_iou(fa, fb, on_level=on_level), "mae": mae(fa, fb)},
+        "fans": {**fan_iou(fa, fb, on_level=on_level, tolerance=fan_tolerance), "mae": mae(fa, fb)},
     }
 
 
@@ -224,7 +259,7 @@ def compare_features(ref: dict[str, np.ndarray], test: dict[str, np.ndarray]) ->
 
 
 def compare_timelines(ref: Any, test: Any, *, tolerance: int = ONSET_TOLERANCE_TICKS,
-                      on_level: float = 0.0) -> dict:
+                      on_level: float = 0.0, fan_tolerance: int = FAN_TOLERANCE_CELLS) -> dict:
     """Every metric between two :class:`autohaptics.timeline.Timeline` s (module docstring).
 
     Returns {"n_ticks": common_length(...), "same_source": bool | None, "vibration": {...},
@@ -236,7 +271,8 @@ def compare_timelines(ref: Any, test: Any, *, tolerance: int = ONSET_TOLERANCE_T
     report = {"n_ticks": common_length(ref.n_ticks, test.n_ticks),
               "same_source": None if not (sha_a and sha_b) else sha_a == sha_b}
     report.update(compare_tracks(ref.vibration, test.vibration, ref.temperature_c, test.temperature_c,
-                                 ref.fans, test.fans, tolerance=tolerance, on_level=on_level))
+                                 ref.fans, test.fans, tolerance=tolerance, on_level=on_level,
+                                 fan_tolerance=fan_tolerance))
     report["features"] = compare_features(ref.features, test.features)
     report["features_only_in"] = {"ref": sorted(set(ref.features) - set(test.features)),
                                   "test": sorted(set(test.features) - set(ref.features))}
@@ -254,6 +290,7 @@ def headline(report: dict) -> dict:
         "chair_mae": report["vibration"]["chair_mae"],
         "temperature_mae_c": report["temperature"]["mae_c"],
         "fan_iou": report["fans"]["iou"],
+        "fan_iou_tolerant": report["fans"]["iou_tolerant"],
         "fan_ticks_f1": report["fans"]["ticks_f1"],
         "fan_iou_both_on": report["fans"]["iou_both_on"],
         "tick_difference": report["n_ticks"]["difference"],
@@ -275,7 +312,8 @@ def format_report(report: dict) -> str:
         f"recall {v['chair_onsets']['recall']:.3f} ({v['chair_onsets']['matched']} matched of "
         f"{v['chair_onsets']['ref_onsets']} ref / {v['chair_onsets']['test_onsets']} test)",
         f"temperature: MAE {t['mae_c']:.3f} C, max {t['max_abs_c']:.3f} C",
-        f"fans: IoU {f['iou']:.3f} (pooled {f['iou_pooled']:.3f}) over {f['ticks']} ticks "
+        f"fans: IoU {f['iou']:.3f} (pooled {f['iou_pooled']:.3f}), within {f['tolerance_cells']} cell "
+        f"{f['iou_tolerant']:.3f} (pooled {f['iou_tolerant_pooled']:.3f}) over {f['ticks']} ticks "
         f"(ref on {f['ref_ticks_on']}, test on {f['test_ticks_on']}), level MAE {f['mae']:.4f}; "
         f"which ticks blow: F1 {f['ticks_f1']:.3f}; which cells where both blow ({f['ticks_both_on']} ticks): "
         f"IoU {f['iou_both_on']:.3f}",

@@ -33,7 +33,8 @@ from autohaptics.errors import ParameterError
 from autohaptics.fusion import MODES, FusionParams, SaliencyParams
 from autohaptics.intensity import FEATURES, AudioFeatureParams, IntensityParams
 from autohaptics.media import DECODE_MODES
-from autohaptics.records import ANALYSIS, DERIVE, apply_overrides, params_to_dict, parse_assignments, stage, stage_of
+from autohaptics.records import (ANALYSIS, DERIVE, Record, apply_overrides, param, params_to_dict,
+                                 parse_assignments, stage, stage_of)
 from autohaptics.temperature import ThermalParams
 
 TRACKS = ("vibration", "temperature", "fans")
@@ -41,7 +42,7 @@ ANALYSIS_MODES = ("tick", "every")
 
 
 @dataclass(frozen=True)
-class VideoParams:
+class VideoParams(Record):
     """Which frames the video pass analyses. Proxy sizes are the stages' own parameters: the gray
     proxy (static check, flow, in-pair cuts) is ``flow.width_for(picture width)`` wide (at least
     ``flow.proxy_width``; recorded as ``stats["flow"]["proxy_width"]``), the RGB proxy (colour,
@@ -68,29 +69,22 @@ class VideoParams:
     """
 
     STAGE: ClassVar[str] = ANALYSIS
+    GROUP: ClassVar[str] = "video"
 
-    analysis: str = "tick"
+    analysis: str = param("tick", choices=ANALYSIS_MODES)
     skip: bool = True
-    prefetch: int = 8
-    decode: str = "nonref"
-    stride: int = 1
+    prefetch: int = param(8, 0, 256, unit="frames", whole=True)
+    decode: str = param("nonref", choices=DECODE_MODES)
+    stride: int = param(1, 1, 10, unit="ticks", whole=True)
 
-    def __post_init__(self):
-        if self.decode not in DECODE_MODES:
-            raise ParameterError(f"video.decode must be one of {DECODE_MODES}, got {self.decode!r}")
-        if not (0 <= int(self.prefetch) <= 256):
-            raise ParameterError(f"video.prefetch must lie in 0..256 frames, got {self.prefetch!r}")
-        if self.analysis not in ANALYSIS_MODES:
-            raise ParameterError(f"video.analysis must be one of {ANALYSIS_MODES}, got {self.analysis!r}")
-        if isinstance(self.stride, bool) or not isinstance(self.stride, int) or not (1 <= self.stride <= 10):
-            raise ParameterError(f"video.stride must be a whole number of ticks in 1..10, got {self.stride!r}")
+    def check(self) -> None:
         if self.stride > 1 and self.analysis != "tick":
             raise ParameterError(f"video.stride={self.stride} needs video.analysis='tick' "
                                  f"(the 'every' analysis reads every frame), got {self.analysis!r}")
 
 
 @dataclass(frozen=True)
-class GenerateParams:
+class GenerateParams(Record):
     """Every parameter that shapes a timeline (recorded in ``generator.params``).
 
     mode : vibration rendering, the thesis's study conditions (table 4.1): "multimodal" (audio
@@ -105,10 +99,10 @@ class GenerateParams:
 
     STAGE: ClassVar[str] = ANALYSIS
 
-    mode: str = field(default="multimodal", metadata=stage(DERIVE))
+    mode: str = param("multimodal", choices=MODES, stage=DERIVE)
     tracks: tuple[str, ...] = TRACKS
     seed: int = field(default=0, metadata=stage(DERIVE))
-    lfe_gain_db: float = 10.0
+    lfe_gain_db: float = param(10.0, -40.0, 20.0, unit="dB")
     allow_truncated: bool = False
     audio: AudioFeatureParams = field(default_factory=AudioFeatureParams)
     intensity: IntensityParams = field(default_factory=IntensityParams)
@@ -121,19 +115,20 @@ class GenerateParams:
     cuts: CutParams = field(default_factory=CutParams)
     depth: DepthParams = field(default_factory=DepthParams)
 
-    def __post_init__(self):
-        if self.mode not in MODES:
-            raise ParameterError(f"mode must be one of {MODES}, got {self.mode!r}")
+    def check(self) -> None:
         bad = [t for t in self.tracks if t not in TRACKS]
         if bad:
             raise ParameterError(f"unknown track(s) {bad}; choose from {list(TRACKS)}")
-        if not (-40.0 <= float(self.lfe_gain_db) <= 20.0):
-            raise ParameterError(f"lfe_gain_db must lie in -40..20 dB, got {self.lfe_gain_db!r}")
 
 
 # The dotted overrides that make every stage follow the thesis's own rule where the default
 # differs from it (ALGORITHM.md; docs/GUIDE.md says what each default does instead).
-THESIS_RULES: dict[str, Any] = {}
+THESIS_RULES: dict[str, Any] = {
+    "intensity.rule": "thesis",  # the default follows events: each feature against its recent baseline
+    "intensity.loudness_gate": 0.05,  # the default gate, 0.2, is 23 phon below the film's loudest moment
+    "flow.repeat_wait_s": 0.0,  # the default waits for the next distinct frame (repeats give no motion)
+    "airflow.near_sigma_ticks": 0.0,  # the default smooths nearness over neighbouring ticks of the shot
+}
 
 PRESETS: dict[str, dict[str, Any]] = {
     "reference": {

@@ -27,6 +27,57 @@ def stage(name: str) -> dict:
     return {"stage": name}
 
 
+def param(default: Any, lo: float | None = None, hi: float | None = None, *, unit: str = "",
+          gt: float | None = None, choices: tuple | None = None, whole: bool = False,
+          stage: str | None = None) -> Any:
+    """A record field with its default and what it accepts, checked by :class:`Record`: a number in
+    ``lo..hi`` (inclusive, either may be open) or above ``gt``, in ``unit`` for the message; a
+    whole number if ``whole``; one of ``choices``; None always passes (optional fields)."""
+    meta: dict[str, Any] = {"lo": lo, "hi": hi, "gt": gt, "unit": unit, "choices": choices, "whole": whole}
+    if stage is not None:
+        meta["stage"] = stage
+    return dataclasses.field(default=default, metadata=meta)
+
+
+def _bound_error(group: str, f: dataclasses.Field, value: Any) -> str | None:
+    m = f.metadata
+    name, unit = f"{group}.{f.name}" if group else f.name, (" " + m["unit"]) if m.get("unit") else ""
+    if m.get("choices") is not None:
+        return None if value in m["choices"] else f"{name} must be one of {tuple(m['choices'])}, got {value!r}"
+    if all(m.get(k) is None for k in ("lo", "hi", "gt")) and not m.get("whole"):
+        return None
+    numeric = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if m.get("whole") and not isinstance(value, int) or not numeric or not math.isfinite(value):
+        kind = "a whole number" if m.get("whole") else "a finite number"
+        return f"{name} must be {kind}{unit and ' of' + unit}, got {value!r}"
+    lo, hi, gt = m.get("lo"), m.get("hi"), m.get("gt")
+    if gt is not None and not value > gt:
+        return f"{name} must be above {gt:g}{unit}, got {value!r}"
+    if (lo is not None and value < lo) or (hi is not None and value > hi):
+        span = f"{'' if lo is None else f'{lo:g}'}..{'' if hi is None else f'{hi:g}'}"
+        return f"{name} must lie in {span}{unit}, got {value!r}"
+    return None
+
+
+class Record:
+    """Base of a stage's frozen parameter dataclass: after construction every field declared with
+    :func:`param` is checked (a ParameterError naming ``GROUP.field``), then :meth:`check` runs the
+    record's own rules that tie fields together."""
+
+    GROUP: typing.ClassVar[str] = ""
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            error = None if value is None else _bound_error(self.GROUP, f, value)
+            if error:
+                raise ParameterError(error)
+        self.check()
+
+    def check(self) -> None:
+        """Rules across fields (none by default)."""
+
+
 def stage_of(record: Any, name: str) -> str:
     """ANALYSIS or DERIVE: what a change of ``record``'s field ``name`` needs."""
     f = {f.name: f for f in dataclasses.fields(record)}[name]

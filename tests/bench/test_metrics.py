@@ -111,9 +111,32 @@ def test_fan_iou_known_answer():
     assert (r["ticks_precision"], r["ticks_recall"], r["ticks_f1"]) == (1.0, 0.5, pytest.approx(2 / 3))
     assert M.fan_iou(np.zeros((3, 9, 17)), np.zeros((3, 9, 17))) == {
         "iou": 1.0, "iou_pooled": 1.0, "ticks": 0, "ref_ticks_on": 0, "test_ticks_on": 0, "ticks_precision": 1.0,
-        "ticks_recall": 1.0, "ticks_f1": 1.0, "ticks_both_on": 0, "iou_both_on": 1.0}
+        "ticks_recall": 1.0, "ticks_f1": 1.0, "ticks_both_on": 0, "iou_both_on": 1.0, "iou_tolerant": 1.0,
+        "iou_tolerant_pooled": 1.0, "iou_tolerant_both_on": 1.0, "tolerance_cells": 1}
     # a level threshold: cells at 0.5 no longer count as on
     assert M.fan_iou(a, b, on_level=0.6)["ticks"] == 2
+
+
+def test_tolerant_fan_iou_matches_cells_within_one_cell_in_eight_directions():
+    a, b = np.zeros((5, 9, 17)), np.zeros((5, 9, 17))
+    a[0, 4, 8] = b[0, 5, 9] = 1.0  # diagonal neighbours: exact IoU 0, tolerant 1
+    a[1, 0, 0:4] = 0.5  # tick 1: ref cols 0-3, test cols 2-7 of row 0
+    b[1, 0, 2:8] = 0.5  # union: cols 0..7; matched: ref cols 1..3, test cols 2..4
+    a[2, 2, 2] = b[2, 2, 4] = 1.0  # two cells apart: unmatched at tolerance 1, matched at 2
+    a[3, 8, 16] = 1.0  # only ref blows: nothing to match
+    r = M.fan_iou(a, b)
+    assert r["tolerance_cells"] == 1 and r["ticks"] == 4
+    per_tick = [1.0, 4 / 8, 0.0, 0.0]  # tick 1: cols 1..4 of the union's 0..7 matched
+    assert r["iou_tolerant"] == pytest.approx(np.mean(per_tick))
+    assert r["iou_tolerant_pooled"] == pytest.approx((2 + 4 + 0 + 0) / (2 + 8 + 2 + 1))
+    assert r["iou_tolerant_both_on"] == pytest.approx(np.mean(per_tick[:3]))
+    assert r["iou"] == pytest.approx((0 + 2 / 8 + 0 + 0) / 4)
+    assert M.fan_iou(a, b, tolerance=2)["iou_tolerant"] == pytest.approx(np.mean([1.0, 6 / 8, 1.0, 0.0]))
+    exact = M.fan_iou(a, b, tolerance=0)
+    assert exact["iou_tolerant"] == exact["iou"] and exact["iou_tolerant_pooled"] == exact["iou_pooled"]
+    for bad in (-1, 18, 1.5, True):
+        with pytest.raises(ParameterError, match="tolerance"):
+            M.fan_iou(a, b, tolerance=bad)
 
 
 # ------------------------------------------------------------------------ report
@@ -154,7 +177,7 @@ def test_identical_timelines_have_zero_error():
     h = M.headline(r)
     assert h == {"vibration_mae": 0.0, "onset_f1": 1.0, "onset_precision": 1.0, "onset_recall": 1.0,
                  "chair_onset_f1": 1.0, "chair_mae": 0.0, "temperature_mae_c": 0.0, "fan_iou": 1.0,
-                 "fan_ticks_f1": 1.0, "fan_iou_both_on": 1.0, "tick_difference": 0}
+                 "fan_iou_tolerant": 1.0, "fan_ticks_f1": 1.0, "fan_iou_both_on": 1.0, "tick_difference": 0}
 
 
 def test_chair_onsets_ignore_which_actuator_carries_the_event():

@@ -332,6 +332,38 @@ def test_guide_screenshots_of_the_workflow(page, api, tmp_path):
     assert values_at(page, 330)["vibration"][:2] == [1.0, 1.0]
     _shot(page, "guide_edit", clip=_union(page, "[data-testid=tool-select]", "[data-testid=lane-actuators]"))
 
+    # 4b. Fans by region: pick cells on the fan grid over the picture, Set them over a range.
+    fans = lane_rect(page, "fans")
+    page.mouse.move(page.evaluate("() => window.autohaptics.clientXOf(40.0)"), fans["y"] + fans["height"] / 2)
+    page.mouse.down()
+    page.mouse.move(page.evaluate("() => window.autohaptics.clientXOf(44.0)"), fans["y"] + fans["height"] / 2, steps=4)
+    page.mouse.up()
+    page.click("[data-testid=toggle-fan-overlay]")
+    page.evaluate("() => { document.querySelector('[data-testid=video]').currentTime = 42.0; }")
+    page.wait_for_function("() => document.querySelector('[data-testid=video]').videoWidth > 0")
+    box = page.locator("[data-testid=fan-overlay]").bounding_box()
+    vw, vh = page.evaluate("() => { const v = document.querySelector('[data-testid=video]'); return [v.videoWidth, v.videoHeight]; }")
+    scale = min(box["width"] / vw, box["height"] / vh)
+    x0, y0 = box["x"] + (box["width"] - vw * scale) / 2, box["y"] + (box["height"] - vh * scale) / 2
+    cell = lambda r, c: (x0 + (c + 0.5) * vw * scale / 17, y0 + (r + 0.5) * vh * scale / 9)  # noqa: E731
+    page.mouse.move(*cell(2, 4))
+    page.mouse.down()
+    page.mouse.move(*cell(5, 9), steps=4)
+    page.mouse.up()
+    page.fill("[data-testid=edit-value]", "0.9")
+    page.click("[data-testid=edit-set]")
+    s2 = wait_revision_above(page, s2["revision"])
+    assert api.get(f"/api/projects/{pid}/edits").json()["ops"][-1]["cells"][0] == [2, 4]
+    page.wait_for_function("() => { const v = document.querySelector('[data-testid=video]');"
+                           " return !v.seeking && v.readyState >= 2; }")
+    _shot(page, "guide_fans", clip=_union(page, "[data-testid=video]", "[data-testid=selection-info]"))
+    page.click("[data-testid=toggle-fan-overlay]")
+
+    # 4c. The temperature lane: the chair's curve (clamped, slew-limited) over the target.
+    page.wait_for_function("() => { const s = window.autohaptics.state(); return s.played && s.played.revision === s.revision; }")
+    lane_rect(page, "temperature")
+    _shot(page, "guide_temperature", clip=_union(page, "[data-testid=lane-temperature]", pad=2))
+
     # 5. Regenerate with other settings (the edits are kept on top).
     page.click("[data-testid=regenerate]")
     dialog = page.locator("[data-testid=regenerate-dialog]")

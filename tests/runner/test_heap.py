@@ -21,7 +21,7 @@ _PROBE = textwrap.dedent("""
             return int(fh.read().split()[1]) * 4096 / 2**20
     # What fragments the heap without a fixed threshold: a large block freed (the threshold rises
     # to its size), then many mid-size temporaries, one of which outlives the rest.
-    np.ones(8 << 20 // 8)
+    np.ones((8 << 20) // 8)
     keep = []
     for i in range(40):
         a = np.ones((3 << 20) // 8)

@@ -230,3 +230,25 @@ def test_npz_round_trip_and_errors(tmp_path):
         generated_file.load_npz(tmp_path / "bad.npz")
     with pytest.raises(Exception, match="missing.npz: no such file"):
         generated_file.load_npz(tmp_path / "missing.npz")
+
+
+# ------------------------------------------------------------------- chair temperature
+def test_the_chair_temperature_is_the_target_clamped_and_slew_limited(client, project):
+    pid = project["id"]
+    edit(client, pid, {"op": "set", "lanes": ["temperature"], "t0": 0, "t1": 100, "value": 45.0})
+    edit(client, pid, {"op": "set", "lanes": ["temperature"], "t0": 100, "t1": N_TICKS, "value": 20.0})
+    target = np.asarray(client.get(f"/api/projects/{pid}/timeline").json()["tracks"]["temperature_c"])
+    r = client.get(f"/api/projects/{pid}/timeline/chair-temperature")
+    assert r.status_code == 200, r.text
+    body = r.json()
+    played = np.asarray(body["values"])
+    assert (body["min_c"], body["max_c"], body["neutral_c"], body["rate_c_per_s"]) == (18.0, 40.0, 33.0, 1.0)
+    assert body["revision"] == client.get(f"/api/projects/{pid}").json()["revision"]
+    assert target[:100].min() == 45.0 and played.shape == target.shape
+    step = body["rate_c_per_s"] * body["tick_s"]
+    # From neutral, 0.1 C a tick up to the device's 40 C (not the target's 45), then down to 20 C.
+    assert played[0] == pytest.approx(33.0 + step)
+    assert np.abs(np.diff(played)).max() <= step + 1e-9
+    assert played[69:100] == pytest.approx(40.0) and played.max() <= 40.0
+    assert played[-1] == pytest.approx(40.0 - (N_TICKS - 100) * step)
+    assert client.get("/api/projects/nope/timeline/chair-temperature").status_code == 404

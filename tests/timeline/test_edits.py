@@ -281,3 +281,36 @@ def test_any_sequence_of_valid_ops_gives_a_valid_timeline(ops):
     # normalising is idempotent: stored ops recompose identically
     again, _ = apply_ops(gen, [validate_op(op) for op in ops])
     np.testing.assert_array_equal(again.vibration, tl.vibration)
+
+
+def test_range_ops_on_a_region_of_fan_cells_leave_the_other_fans_alone():
+    gen = base()
+    cells = [[0, 0], [4, 8], [4, 9], [8, 16]]
+    mask = np.zeros((FAN_ROWS, FAN_COLS), dtype=bool)
+    for r, c in cells:
+        mask[r, c] = True
+    for op, inside in (({"op": "set", "value": 0.9}, 0.9), ({"op": "scale", "factor": 0.5}, 0.25),
+                       ({"op": "clear"}, 0.0)):
+        tl, _ = apply_ops(gen, [{**op, "lanes": ["fans"], "t0": 2, "t1": 5, "cells": cells[::-1]}])
+        np.testing.assert_allclose(tl.fans[2:5][:, mask], inside)
+        np.testing.assert_allclose(tl.fans[2:5][:, ~mask], 0.5)
+        np.testing.assert_allclose(tl.fans[:2], 0.5)
+        np.testing.assert_allclose(tl.fans[5:], 0.5)
+        np.testing.assert_allclose(tl.vibration, gen.vibration)
+    tl, _ = apply_ops(gen, [{"op": "fade_in", "lanes": ["fans"], "t0": 0, "t1": N, "cells": [[4, 8]]}])
+    np.testing.assert_allclose(tl.fans[:, 4, 8], 0.5 * np.arange(N) / (N - 1))
+    assert tl.fans[:, 4, 7].tolist() == [0.5] * N
+    assert validate_op({"op": "clear", "lanes": ["fans"], "t0": 0, "t1": 1, "cells": [[1, 2], [0, 3], [1, 2]]})[
+        "cells"] == [[0, 3], [1, 2]]
+
+
+@pytest.mark.parametrize("op, message", [
+    ({"op": "set", "lanes": ["fans", "A1"], "t0": 0, "t1": 2, "value": 1, "cells": [[0, 0]]}, "must be"),
+    ({"op": "set", "lanes": ["fans"], "t0": 0, "t1": 2, "value": 1, "cells": []}, "non-empty list"),
+    ({"op": "set", "lanes": ["fans"], "t0": 0, "t1": 2, "value": 1, "cells": [[9, 0]]}, "row 0..8"),
+    ({"op": "set", "lanes": ["fans"], "t0": 0, "t1": 2, "value": 1, "cells": [[0, 1.5]]}, "each cell"),
+    ({"op": "paste", "t0": 0, "values": {"fans": [[[0] * 17] * 9]}, "cells": [[0, 0]]}, "unknown field 'cells'"),
+])
+def test_a_bad_fan_region_is_refused_in_one_sentence(op, message):
+    with pytest.raises(ParameterError, match=message):
+        validate_op(op)

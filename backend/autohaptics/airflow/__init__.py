@@ -13,6 +13,7 @@ from autohaptics.airflow.fans import (
     grid_means,
     motion_threshold,
     smoothed_cell_motion,
+    smoothed_nearness,
     sustained_motion,
 )
 from autohaptics.airflow.flow import (
@@ -28,4 +29,4 @@ from autohaptics.airflow.flow import (
 
 __all__ = ["AirflowParams", "DIS_PRESETS", "FLOW_METHODS", "FlowParams", "cell_motion", "fan_levels", "fan_track",
            "grid_means", "is_fade", "is_static", "motion_magnitude", "motion_score", "motion_threshold", "optical_flow",
-           "smoothed_cell_motion", "sustained_motion"]
+           "smoothed_cell_motion", "smoothed_nearness", "sustained_motion"]

@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.records import ANALYSIS
+from autohaptics.records import ANALYSIS, Record, param
 
 _BINS = 32  # luma bins of a gray frame
 _RGB_BINS = 16  # bins per channel of an RGB frame
@@ -37,7 +37,7 @@ _THUMB_N = _THUMB[0] * _THUMB[1]
 
 
 @dataclass(frozen=True)
-class CutParams:
+class CutParams(Record):
     """hist_threshold : histogram distance (0..1) from which the colours count as changed (0.25).
     corr_threshold : thumbnail correlation (-1..1) up to which the layout counts as changed (0.5).
     flat_std : thumbnail standard deviation (grey levels) below which a frame is flat (4).
@@ -45,19 +45,12 @@ class CutParams:
     """
 
     STAGE: ClassVar[str] = ANALYSIS
+    GROUP: ClassVar[str] = "cuts"
 
-    hist_threshold: float = 0.25
-    corr_threshold: float = 0.5
-    flat_std: float = 4.0
-    flat_jump: float = 40.0
-
-    def __post_init__(self):
-        if not (0.0 < float(self.hist_threshold) <= 1.0):
-            raise ParameterError(f"cuts.hist_threshold must lie in (0, 1], got {self.hist_threshold!r}")
-        if not (-1.0 <= float(self.corr_threshold) <= 1.0):
-            raise ParameterError(f"cuts.corr_threshold must lie in -1..1, got {self.corr_threshold!r}")
-        if not (0.0 <= float(self.flat_std) and 0.0 < float(self.flat_jump) <= 255.0):
-            raise ParameterError("cuts.flat_std must be >= 0 and cuts.flat_jump in (0, 255]")
+    hist_threshold: float = param(0.25, hi=1.0, gt=0.0)
+    corr_threshold: float = param(0.5, -1.0, 1.0)
+    flat_std: float = param(4.0, 0.0, 255.0, unit="grey levels")
+    flat_jump: float = param(40.0, hi=255.0, gt=0.0, unit="grey levels")
 
 
 def frame_signature(frame: np.ndarray) -> np.ndarray:

@@ -27,7 +27,7 @@ import cv2
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.records import ANALYSIS
+from autohaptics.records import ANALYSIS, param
 from autohaptics.fusion.onnx import OnnxFields
 
 BACKENDS = ("embedded", "onnx")
@@ -51,33 +51,22 @@ class DepthParams(OnnxFields):
     """
 
     STAGE: ClassVar[str] = ANALYSIS
+    GROUP: ClassVar[str] = "depth"
 
-    backend: str = "embedded"
-    proxy_width: int = 128
-    w_position: float = 0.4
-    w_detail: float = 0.2
-    w_expansion: float = 0.4
-    expansion_full: float = 0.5
-    expansion_reach: float = 0.05
+    backend: str = param("embedded", choices=BACKENDS)
+    proxy_width: int = param(128, 8, 4096, unit="px", whole=True)
+    w_position: float = param(0.4, 0.0)
+    w_detail: float = param(0.2, 0.0)
+    w_expansion: float = param(0.4, 0.0)
+    expansion_full: float = param(0.5, hi=1e6, gt=0.0, unit="1/s")
+    expansion_reach: float = param(0.05, 0.0, 0.5, unit="frame widths")
     onnx_input_size: tuple[int, int] = (256, 256)
-    output_kind: str = "disparity"
+    output_kind: str = param("disparity", choices=("depth", "disparity"))
 
-    def __post_init__(self):
-        if self.backend not in BACKENDS:
-            raise ParameterError(f"depth.backend must be one of {BACKENDS}, got {self.backend!r}")
-        if self.output_kind not in ("depth", "disparity"):
-            raise ParameterError(f"depth.output_kind must be depth or disparity, got {self.output_kind!r}")
-        if min(self.w_position, self.w_detail, self.w_expansion) < 0:
-            raise ParameterError("depth cue weights must be >= 0")
+    def check(self) -> None:
         if self.backend == "embedded" and self.w_position + self.w_detail + self.w_expansion <= 0:
             raise ParameterError("the embedded depth backend needs at least one positive cue weight")
-        self.check_onnx("depth", self.backend == "onnx")
-        if not (0.0 < float(self.expansion_full) < 1e6):
-            raise ParameterError(f"depth.expansion_full must be a positive rate (1/s), got {self.expansion_full!r}")
-        if not (0.0 <= float(self.expansion_reach) <= 0.5):
-            raise ParameterError(f"depth.expansion_reach must lie in 0..0.5 frame widths, got {self.expansion_reach!r}")
-        if not (8 <= int(self.proxy_width) <= 4096):
-            raise ParameterError(f"depth.proxy_width must lie in 8..4096 px, got {self.proxy_width!r}")
+        self.check_onnx(self.backend == "onnx")
 
 
 def make_depth_backend(params: DepthParams) -> DepthBackend | None:

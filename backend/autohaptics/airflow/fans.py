@@ -32,21 +32,22 @@ class AirflowParams:
         (default 0.3; module docstring).
     cell_rel : a cell is "strong motion" at this fraction of the tick's strongest cell or more.
     near_min : a cell is "near" at this nearness or more (0..1, 1 = nearest).
-    static_level, static_fraction : a frame pair is static when fewer than ``static_fraction`` of
-        the proxy's pixels changed by more than ``static_level`` grey levels (noise tolerant, yet a
-        small moving object is seen).
+    static_level, static_fraction : a frame pair is static when fewer than ``static_fraction`` of the proxy's
+        pixels changed by more than ``static_level`` grey levels (noise tolerant, yet a small moving object is seen).
     fill_enclosed : a near cell enclosed by "on" cells blows too (the still centre of an object
         expanding toward the camera; see the module docstring).
     flat_std : a frame whose luma standard deviation is below this (grey levels) is flat; a pair
         of flat frames has no motion (:func:`is_fade`).
-    fade_min_step : a pair whose mean brightness moved by at least this (grey levels) and that
-        differs in nothing else than a global brightness/contrast change is a fade: no motion
-        (:func:`is_fade`).
+    fade_min_step : a pair whose mean brightness moved by at least this (grey levels) and that differs in
+        nothing else than a global brightness/contrast change is a fade: no motion (:func:`is_fade`).
     cell_sigma_ticks : a blowing tick's cells are judged on their motion averaged over the
         neighbouring ticks of its shot with Gaussian weights of this standard deviation (ticks;
         default 2, 0 = the tick alone; :func:`smoothed_cell_motion`).
     cell_sigma_cells : that motion is also blurred over neighbouring cells with this standard
         deviation (cells; default 0.5, 0 = the cell alone).
+    near_sigma_ticks : a blowing tick's nearness is the Gaussian-weighted mean (this standard
+        deviation, ticks) over the neighbouring ticks of its shot where depth ran (default 2; 0 = the
+        tick's own, the thesis; :func:`smoothed_nearness`).
     """
 
     STAGE: ClassVar[str] = DERIVE
@@ -63,6 +64,7 @@ class AirflowParams:
     fade_min_step: float = field(default=1.0, metadata=stage(ANALYSIS))
     cell_sigma_ticks: float = 2.0
     cell_sigma_cells: float = 0.5
+    near_sigma_ticks: float = 2.0
 
     def __post_init__(self):
         if self.threshold is not None and not (math.isfinite(self.threshold) and self.threshold >= 0):
@@ -73,7 +75,8 @@ class AirflowParams:
             v = float(getattr(self, name))
             if not (math.isfinite(v) and 0.0 <= v <= 255.0):
                 raise ParameterError(f"airflow.{name} must lie in 0..255 grey levels, got {getattr(self, name)!r}")
-        for name, top in (("cell_sigma_ticks", 50.0), ("cell_sigma_cells", float(FAN_COLS))):
+        for name, top in (("cell_sigma_ticks", 50.0), ("cell_sigma_cells", float(FAN_COLS)),
+                          ("near_sigma_ticks", 50.0)):
             v = float(getattr(self, name))
             if not (math.isfinite(v) and 0.0 <= v <= top):
                 raise ParameterError(f"airflow.{name} must lie in 0..{top:g}, got {getattr(self, name)!r}")
@@ -143,6 +146,38 @@ def smoothed_cell_motion(cell_motion_: np.ndarray, shot: np.ndarray, ticks: np.n
     if sx > 0 and out.size:
         out = _blur_axis(_blur_axis(out, 1, sx), 2, sx)
     return np.clip(out, 0.0, None).astype(np.float32)
+
+
+def smoothed_nearness(nearness: np.ndarray, shot: np.ndarray, depth_mask: np.ndarray, ticks: np.ndarray, *,
+                      params: AirflowParams = AirflowParams()) -> np.ndarray:
+    """The nearness the fan rule judges ``ticks`` on, 0..1: float32 [shape=(len(ticks), 9, 17)].
+
+    nearness : [shape=(n, 9, 17)] 0..1; shot : int [shape=(n,)] as in :func:`smoothed_cell_motion`;
+    depth_mask : bool [shape=(n,)], the ticks where depth ran. Each tick's nearness is the
+    Gaussian-weighted mean (``near_sigma_ticks``) over the ticks of its shot where depth ran, the
+    weights renormalised over those ticks; the tick's own always counts. Why: nearness is judged
+    on one frame per tick, and the embedded cues (detail, expansion) move with the encoding and
+    the flow's noise, so a hard ``near_min`` on one frame flips cells between encodes of one film.
+    """
+    near = np.asarray(nearness)
+    ticks = np.asarray(ticks, dtype=np.int64)
+    n = near.shape[0]
+    if near.ndim != 3 or np.shape(shot) != (n,) or np.shape(depth_mask) != (n,):
+        raise ParameterError(f"smoothed_nearness needs (n, rows, cols) nearness and (n,) shots and depth mask, "
+                             f"got {near.shape}, {np.shape(shot)} and {np.shape(depth_mask)}")
+    shot, depth_mask = np.asarray(shot), np.asarray(depth_mask, bool)
+    offsets, gauss = _gaussian(float(params.near_sigma_ticks))
+    total = np.zeros((ticks.size,) + near.shape[1:], np.float64)
+    weight = np.zeros(ticks.size, np.float64)
+    own = shot[ticks] if ticks.size else np.zeros(0, shot.dtype)
+    for d, g in zip(offsets, gauss):
+        src = np.clip(ticks + d, 0, n - 1)
+        ok = ((ticks + d) >= 0) & ((ticks + d) < n) & (shot[src] == own) & (shot[src] >= 0) & depth_mask[src]
+        if d == 0:
+            ok = np.ones(ticks.size, bool)
+        total += np.where(ok, g, 0.0)[:, None, None] * np.nan_to_num(near[src].astype(np.float64))
+        weight += np.where(ok, g, 0.0)
+    return np.clip(total / np.maximum(weight, 1e-12)[:, None, None], 0.0, 1.0).astype(np.float32)
 
 
 def _gaussian(sigma: float) -> tuple[np.ndarray, np.ndarray]:
@@ -250,8 +285,10 @@ def fan_track(motion: np.ndarray, cell_motion_: np.ndarray, nearness: np.ndarray
     for start in range(0, ticks.size, _FAN_CHUNK):
         part = ticks[start:start + _FAN_CHUNK]
         cells = smoothed_cell_motion(cell_motion_, shot, part, params=params)
-        for k, c in zip(part, cells):
-            fans[k] = fan_levels(c, nearness[k].astype(np.float32), params=params)
+        near = smoothed_nearness(nearness, shot, depth_mask, part, params=params) \
+            if params.near_sigma_ticks > 0 else nearness[part].astype(np.float32)
+        for k, c, nk in zip(part, cells, near):
+            fans[k] = fan_levels(c, nk, params=params)
     stats = {"threshold_fw_per_s": float(threshold), "ticks_on": int(on.sum()), "ticks_at_cuts": int(cut.sum()),
              "spikes_ignored": int(((motion > threshold) & valid & ~(sustained > threshold)).sum())}
     return fans, stats

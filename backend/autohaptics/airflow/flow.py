@@ -40,6 +40,11 @@ class FlowParams:
     proxy_fraction : the proxy is at least this fraction of the picture's width as shown, in
         multiples of 16 px, 0..1 (default 1/8: 240 px at 1920, 480 at 3840, ``proxy_width`` up to
         1280; 0 = always ``proxy_width``). Module docstring, "Decisions".
+    repeat_wait_s : a flow pair's successor frame that repeats its first frame (static, see
+        ``airflow.static_level``) is passed over for the next decoded frame while it lies less than
+        this after the first frame, s, 0..1 (default 0.1, one tick: frame-rate conversion by repeated
+        frames, 3:2 pulldown to 60 fps, animation on twos, also where the decoder skips the
+        non-reference frames between; 0 = always the next frame, the thesis).
     """
 
     STAGE: ClassVar[str] = ANALYSIS
@@ -48,6 +53,7 @@ class FlowParams:
     proxy_width: int = 160
     dis_preset: str = "medium"
     proxy_fraction: float = 0.125
+    repeat_wait_s: float = 0.1
 
     def __post_init__(self):
         if self.method not in FLOW_METHODS:
@@ -56,8 +62,9 @@ class FlowParams:
             raise ParameterError(f"flow.dis_preset must be one of {sorted(DIS_PRESETS)}, got {self.dis_preset!r}")
         if not (8 <= int(self.proxy_width) <= 7680):
             raise ParameterError(f"flow.proxy_width must lie in 8..7680 px, got {self.proxy_width!r}")
-        if not (0.0 <= float(self.proxy_fraction) <= 1.0):  # NaN fails too
-            raise ParameterError(f"flow.proxy_fraction must lie in 0..1, got {self.proxy_fraction!r}")
+        for name in ("proxy_fraction", "repeat_wait_s"):
+            if not (0.0 <= float(getattr(self, name)) <= 1.0):  # NaN fails too
+                raise ParameterError(f"flow.{name} must lie in 0..1, got {getattr(self, name)!r}")
 
     def width_for(self, picture_width: int) -> int:
         """The gray proxy's width for a picture ``picture_width`` px wide as shown, px:

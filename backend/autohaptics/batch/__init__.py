@@ -20,17 +20,8 @@
 - One overall progress callback ``progress(stage, fraction)``: films weighted by file size.
 """
 
-from autohaptics.batch.films import (
-    MANIFEST_NAME,
-    MEDIA_SUFFIXES,
-    BatchReport,
-    FilmResult,
-    collect_inputs,
-    load_manifest,
-    output_names,
-    params_digest,
-    save_manifest,
-)
+from autohaptics.batch.films import (MANIFEST_NAME, MEDIA_SUFFIXES, BatchReport, FilmResult, collect_inputs,
+                                     load_manifest, output_names, params_digest, save_manifest)
 from autohaptics.batch.run import run_batch
 from autohaptics.batch.work import process_film
 

@@ -9,7 +9,7 @@ from autohaptics.errors import ParameterError
 REFERENCE = "reference"
 DEFAULT_CONFIGS = ("reference", "balanced", "fast")
 NOSKIP = "balanced-noskip"
-TARGETS = {"x_decode": 1.25, "vibration_mae": 0.02, "onset_f1": 0.97, "temperature_mae_c": 0.3, "fan_iou": 0.9,
+TARGETS = {"x_decode": 1.25, "vibration_mae": 0.02, "onset_f1": 0.97, "temperature_mae_c": 0.3, "fan_iou_tolerant": 0.9,
            "fast_speedup": 2.0}  # fast >= 2 x faster than balanced: wall time, stage seconds, wall - decode
 SKIP_STAGES = ("saliency", "flow", "depth")
 

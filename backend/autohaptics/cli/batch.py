@@ -1,7 +1,6 @@
-"""``autohaptics batch FOLDER_OR_GLOB... -o OUTDIR``: a timeline per film, one overall progress bar.
-
-Exit status: 0 when every film has an up-to-date timeline, 1 when some failed (each listed on
-stderr with a one-line reason), 2 for usage errors (from the command-line entry point).
+"""Generate OUTDIR/<name>.timeline.json for every film. Films already done with the same source (SHA-256) and the
+same parameters are skipped; a failing film does not stop the others. Exit status 0: all done, 1: some failed,
+2: usage error (each failed film is listed on stderr with a one-line reason).
 """
 
 from __future__ import annotations
@@ -18,11 +17,7 @@ HELP = "generate timelines for many films (folders, files or glob patterns)"
 def register(sub) -> None:
     from autohaptics.params import add_generation_options
 
-    p = sub.add_parser(
-        COMMAND, help=HELP,
-        description="Generate OUTDIR/<name>.timeline.json for every film. Films already done with the same "
-                    "source (SHA-256) and the same parameters are skipped; a failing film does not stop the "
-                    "others. Exit status 0: all done, 1: some failed, 2: usage error.")
+    p = sub.add_parser(COMMAND, help=HELP, description=__doc__)
     p.add_argument("inputs", nargs="+", metavar="FOLDER_OR_GLOB",
                    help="a folder (its media files), a file, or a quoted glob pattern ('films/**/*.mkv')")
     p.add_argument("-o", "--output-dir", required=True, metavar="OUTDIR",

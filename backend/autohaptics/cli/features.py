@@ -1,5 +1,7 @@
-"""``autohaptics features AUDIO_OR_VIDEO -o OUT.json``: the four psychoacoustic audio features
-(physical units) of a file's first audio track, with their time axes and the parameters used."""
+"""Decode the first audio track (mono mix at 48 kHz), calibrate it to pascal and write the per-frame audio
+features as JSON: loudness (ISO 532-1, sone), sharpness (DIN 45692, acum), booming index and low-frequency
+energy (Pa^2) on the 20 ms grid.
+"""
 
 from __future__ import annotations
 
@@ -33,11 +35,7 @@ def register(sub) -> None:
     from autohaptics.intensity import features as af
     from autohaptics.intensity.loudness import LOUDNESS_METHODS
 
-    p = sub.add_parser(
-        COMMAND, help=HELP,
-        description="Decode the first audio track (mono mix at 48 kHz), calibrate it to pascal and write "
-                    "the per-frame audio features as JSON: loudness (ISO 532-1, sone), sharpness (DIN 45692, "
-                    "acum), booming index and low-frequency energy (Pa^2) on the 20 ms grid.")
+    p = sub.add_parser(COMMAND, help=HELP, description=__doc__)
     p.add_argument("input", metavar="AUDIO_OR_VIDEO", help="any media file with an audio stream")
     p.add_argument("-o", "--output", required=True, metavar="OUT.json", help="output file, or '-' for stdout")
     d = af.AudioFeatureParams()

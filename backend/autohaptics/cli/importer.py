@@ -1,4 +1,6 @@
-"""``autohaptics import FILE -o TIMELINE.json``: validate a timeline CSV or JSON and save it."""
+"""Read a timeline CSV as written by 'autohaptics export --format csv' (or a timeline JSON), check every row and
+column, and write the timeline JSON. Problems are reported by row and column.
+"""
 
 from __future__ import annotations
 
@@ -11,11 +13,7 @@ HELP = "read a timeline CSV (or JSON), validate it and write the timeline JSON"
 
 
 def register(sub) -> None:
-    p = sub.add_parser(
-        COMMAND, help=HELP,
-        description="Read a timeline CSV as written by 'autohaptics export --format csv' (or a "
-                    "timeline JSON), check every row and column, and write the timeline JSON. "
-                    "Problems are reported by row and column.")
+    p = sub.add_parser(COMMAND, help=HELP, description=__doc__)
     p.add_argument("file", help="the CSV or JSON file to import")
     p.add_argument("-o", "--output", required=True, help="the timeline JSON to write")
     p.add_argument("-f", "--format", choices=["csv", "json"], default=None,

@@ -14,12 +14,13 @@ import cv2
 import numpy as np
 
 from autohaptics.errors import ParameterError
+from autohaptics.records import Record, param
 
 CHANNEL_ORDERS = ("rgb", "bgr")
 
 
 @dataclass(frozen=True)
-class OnnxFields:
+class OnnxFields(Record):
     """The ONNX model of a stage whose backend is "onnx".
 
     onnx_model : path of the ONNX file.
@@ -32,14 +33,12 @@ class OnnxFields:
     onnx_input_size: tuple[int, int] = (224, 224)
     onnx_mean: tuple[float, float, float] = (0.485, 0.456, 0.406)
     onnx_std: tuple[float, float, float] = (0.229, 0.224, 0.225)
-    onnx_channel_order: str = "rgb"
+    onnx_channel_order: str = param("rgb", choices=CHANNEL_ORDERS)
 
-    def check_onnx(self, group: str, wanted: bool) -> None:
-        """ParameterError naming ``group`` for a bad channel order, or no model where one is ``wanted``."""
-        if self.onnx_channel_order not in CHANNEL_ORDERS:
-            raise ParameterError(f"{group}.onnx_channel_order must be rgb or bgr, got {self.onnx_channel_order!r}")
+    def check_onnx(self, wanted: bool) -> None:
+        """ParameterError when no model is given where one is ``wanted``."""
         if wanted and not self.onnx_model:
-            raise ParameterError(f"{group}.backend 'onnx' needs {group}.onnx_model (path of an .onnx file)")
+            raise ParameterError(f"{self.GROUP}.backend 'onnx' needs {self.GROUP}.onnx_model (path of an .onnx file)")
 
     def onnx_map_model(self, what: str) -> "OnnxMapModel":
         """The model these fields describe, loaded once (``what`` names it in errors)."""

@@ -30,7 +30,7 @@ import cv2
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.records import ANALYSIS
+from autohaptics.records import ANALYSIS, param
 from autohaptics.imaging import as_rgb
 from autohaptics.fusion.onnx import OnnxFields
 
@@ -54,23 +54,16 @@ class SaliencyParams(OnnxFields):
     """
 
     STAGE: ClassVar[str] = ANALYSIS
+    GROUP: ClassVar[str] = "saliency"
 
-    backend: str = "spectral"
-    proxy_width: int = 256
-    motion_weight: float = 0.0
-    blur: float = 0.02
-    flat_std: float = 2.0
+    backend: str = param("spectral", choices=BACKENDS)
+    proxy_width: int = param(256, 8, 4096, unit="px", whole=True)
+    motion_weight: float = param(0.0, 0.0, 1.0)
+    blur: float = param(0.02, 0.0, 0.5)
+    flat_std: float = param(2.0, 0.0, 255.0)
 
-    def __post_init__(self):
-        if self.backend not in BACKENDS:
-            raise ParameterError(f"saliency.backend must be one of {BACKENDS}, got {self.backend!r}")
-        if not (8 <= int(self.proxy_width) <= 4096):
-            raise ParameterError(f"saliency.proxy_width must lie in 8..4096 px, got {self.proxy_width!r}")
-        if not (0.0 <= float(self.motion_weight) <= 1.0):
-            raise ParameterError(f"saliency.motion_weight must lie in 0..1, got {self.motion_weight!r}")
-        if not (0.0 <= float(self.blur) <= 0.5):
-            raise ParameterError(f"saliency.blur must lie in 0..0.5, got {self.blur!r}")
-        self.check_onnx("saliency", self.backend == "onnx")
+    def check(self) -> None:
+        self.check_onnx(self.backend == "onnx")
 
 
 def make_saliency_backend(params: SaliencyParams) -> SaliencyBackend:

@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.records import ANALYSIS
+from autohaptics.records import ANALYSIS, Record, param
 from autohaptics.layout import ACTUATOR_IDS, CENTRE_ACTUATOR, N_ACTUATORS, TRIANGLES, vertex_xy
 
 VARIANTS = ("paper", "mass")
@@ -40,7 +40,7 @@ _VERTEX_EPS = 1e-9
 
 
 @dataclass(frozen=True)
-class FusionParams:
+class FusionParams(Record):
     """How a saliency map becomes actuator weights.
 
     variant : "paper" (the thesis) | "mass" (triangles weighted by their salient mass).
@@ -50,19 +50,12 @@ class FusionParams:
     """
 
     STAGE: ClassVar[str] = ANALYSIS
+    GROUP: ClassVar[str] = "fusion"
 
-    variant: str = "paper"
-    min_level: float = 0.3
-    k_std: float = 1.5
-    min_speck_area: float = 0.002
-
-    def __post_init__(self):
-        if self.variant not in VARIANTS:
-            raise ParameterError(f"fusion.variant must be one of {VARIANTS}, got {self.variant!r}")
-        if not (0.0 <= float(self.min_level) <= 1.0):
-            raise ParameterError(f"fusion.min_level must lie in 0..1, got {self.min_level!r}")
-        if not (0.0 <= float(self.min_speck_area) < 1.0):
-            raise ParameterError(f"fusion.min_speck_area must lie in 0..1, got {self.min_speck_area!r}")
+    variant: str = param("paper", choices=VARIANTS)
+    min_level: float = param(0.3, 0.0, 1.0)
+    k_std: float = param(1.5, -10.0, 10.0)
+    min_speck_area: float = param(0.002, 0.0, 0.99)
 
 
 def fallback_weights() -> np.ndarray:

@@ -2,7 +2,8 @@
 
 The four psychoacoustic features per 20 ms frame (:mod:`.features`, computed by :mod:`.loudness`,
 :mod:`.sharpness`, :mod:`.booming` and :mod:`.low_energy`), then the rule that turns them into a
-per-tick intensity in 0..1 (:mod:`.rule`).
+per-tick intensity in 0..1 (:mod:`.rule`: the default "events" rule judges each feature against its
+recent baseline, :mod:`.novelty`; the "thesis" rule against the film's maximum).
 """
 
 from autohaptics.intensity.features import AudioFeatureParams, AudioFeatures, compute_audio_features
@@ -10,7 +11,9 @@ from autohaptics.intensity.rule import (
     DEFAULT_THRESHOLDS,
     FEATURES,
     NORMALISERS,
+    RULES,
     IntensityParams,
+    audio_intensity,
     frame_intensity,
     normalise,
     normalise_features,
@@ -18,4 +21,5 @@ from autohaptics.intensity.rule import (
 )
 
 __all__ = ["AudioFeatureParams", "AudioFeatures", "DEFAULT_THRESHOLDS", "FEATURES", "IntensityParams", "NORMALISERS",
-           "compute_audio_features", "frame_intensity", "normalise", "normalise_features", "tick_intensity"]
+           "RULES", "audio_intensity", "compute_audio_features", "frame_intensity", "normalise", "normalise_features",
+           "tick_intensity"]

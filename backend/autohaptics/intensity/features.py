@@ -26,7 +26,6 @@ loop over an iterable of chunks. Chunked processing equals whole processing exac
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import ClassVar
@@ -38,7 +37,7 @@ from autohaptics.intensity import loudness as _loudness
 from autohaptics.intensity import low_energy as _low_energy
 from autohaptics.intensity import sharpness as _sharpness
 from autohaptics.errors import ParameterError
-from autohaptics.records import ANALYSIS
+from autohaptics.records import ANALYSIS, Record, param
 from autohaptics.progress import CancelToken, check_cancel
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE, FRAME_S, SAMPLES_PER_FRAME
 
@@ -50,7 +49,7 @@ _N_BARK = _loudness.Z_BARK.shape[0]
 
 
 @dataclass(frozen=True)
-class AudioFeatureParams:
+class AudioFeatureParams(Record):
     """Everything that changes the audio features (JSON-serialisable via dataclasses.asdict).
 
     pa_per_unit : float, Pa per digital unit (default 3.5566: 0 dBFS rms = 105 dB SPL, i.e. the
@@ -68,8 +67,9 @@ class AudioFeatureParams:
     """
 
     STAGE: ClassVar[str] = ANALYSIS
+    GROUP: ClassVar[str] = "audio"
 
-    pa_per_unit: float = 3.5566
+    pa_per_unit: float = param(3.5566, gt=0.0, unit="Pa")
     field: str = "free"
     loudness_method: str = "fast"
     booming_variant: str = "hatano"
@@ -78,14 +78,9 @@ class AudioFeatureParams:
     booming_min_loudness_sone: float = 0.1
     booming_lf_cutoff_hz: float = 280.0
     low_energy_order: int = 4
-    frame_loudness: str = "max"
+    frame_loudness: str = param("max", choices=FRAME_LOUDNESS)
 
-    def __post_init__(self):
-        v = self.pa_per_unit
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-            raise ParameterError(f"pa_per_unit must be a positive finite number of Pa, got {v!r}")
-        if self.frame_loudness not in FRAME_LOUDNESS:
-            raise ParameterError(f"frame_loudness must be one of {FRAME_LOUDNESS}, got {self.frame_loudness!r}")
+    def check(self) -> None:
         self.loudness_params()
         self.sharpness_params()
         self.booming_params()

@@ -1,12 +1,21 @@
-"""Audio -> vibration intensity (ALGORITHM.md section 2, thesis 3.1.1).
+"""Audio -> vibration intensity (ALGORITHM.md section 2, thesis 3.1.1), two rules.
 
-Recipe: normalise each of the four psychoacoustic parameters to [0, 1] over the clip ->
-apply the four thresholds per 20 ms frame -> where ANY normalised parameter exceeds its
-threshold the frame's intensity is the LARGEST of the four normalised values, else 0 ->
-each 100 ms tick takes the MAX of its five frames (timebase.frames_to_ticks).
+"events" (default): each feature's novelty against its own recent baseline (:mod:`.novelty`)
+is compared with its threshold; where ANY exceeds it, and the normalised loudness is at least
+``loudness_gate`` (a gate relative to the film's level), the frame's intensity is the LARGEST of
+the normalised loudness, booming and low-frequency energy (the sound's level against the film),
+else 0. A steady bed stays near its baseline and does not vibrate; impacts, hits and a rising
+rumble do, as hard as they are loud. Sharpness, which describes a sound's colour, not its level,
+can trigger but does not set the intensity.
 
+"thesis": normalise each of the four features to [0, 1] over the clip -> where ANY normalised
+feature exceeds its threshold the frame's intensity is the LARGEST of the four, else 0.
 Example from the thesis: (sharpness, booming, low_energy, loudness) = (0.6, 0.4, 0.5, 0.9)
 with thresholds (0.5, 0.65, 0.8, 0.85) -> 0.9.
+
+Both: each 100 ms tick takes the MAX of its five frames (timebase.frames_to_ticks). With a
+``density`` the four thresholds are scaled by one factor so that about that share of the ticks
+vibrate (:func:`density_scale`).
 """
 
 from __future__ import annotations
@@ -18,35 +27,47 @@ from typing import ClassVar
 import numpy as np
 
 from autohaptics.errors import ParameterError
+from autohaptics.intensity.novelty import feature_novelty
 from autohaptics.records import DERIVE
 from autohaptics.timebase import frames_to_ticks
 
 FEATURES = ("sharpness", "booming", "low_energy", "loudness")
 DEFAULT_THRESHOLDS = {"sharpness": 0.50, "booming": 0.65, "low_energy": 0.80, "loudness": 0.85}
 NORMALISERS = ("max", "percentile")
+RULES = ("events", "thesis")
+LEVEL_FEATURES = ("booming", "low_energy", "loudness")  # what sets the "events" rule's intensity
 
 
 @dataclass(frozen=True)
 class IntensityParams:
-    """How normalised features become a vibration intensity.
+    """How the audio features become a vibration intensity: the rule, its thresholds, gate and density.
 
-    thresholds : per-feature threshold on the normalised value, 0..1 (thesis: sharpness 0.50,
-        booming 0.65, low_energy 0.80, loudness 0.85). A threshold of 1 or more disables the feature.
+    rule : "events" (default: novelty against the recent baseline) or "thesis" (the thesis's
+        rule on the normalised features; ``params.THESIS_RULES``).
+    thresholds : per-feature threshold, 0..1, on the novelty ("events") or on the normalised
+        value ("thesis"); defaults sharpness 0.50, booming 0.65, low_energy 0.80, loudness 0.85
+        (the thesis's). A threshold of 1 or more disables the feature.
     normaliser : "max" divides by the clip maximum (the thesis); "percentile" divides by the
         ``percentile``-th percentile and clips at 1, so one explosion does not flatten a feature film.
     percentile : percentile used by the "percentile" normaliser, 50..100 (default 99.5).
-    loudness_gate : frames whose normalised loudness is below this never vibrate, 0..1
-        (default 0.05, about 40 phon below the clip's loudest moment). Not in the thesis: sharpness
-        and booming describe a sound's colour, not its level, so without a gate the hiss of a quiet
-        scene can drive the chair at full sharpness. 0 reproduces the thesis.
+    loudness_gate : frames whose normalised loudness is below this never vibrate, 0..1 (default
+        0.2, about 23 phon below the film's loudest moment; the thesis variant 0.05, about 43 phon).
+        Not in the thesis: without a gate the hiss of a quiet scene can drive the chair.
+    baseline_s : length of the "events" rule's recent baseline, seconds, 0.5..30 (default 3).
+    density : the share of the film's ticks that should vibrate, 0..1, or None (default: the
+        thresholds as they are). When set, the thresholds are scaled by one common factor so
+        that about this share vibrates; never more than the share above the loudness gate.
     """
 
     STAGE: ClassVar[str] = DERIVE
 
+    rule: str = "events"
     thresholds: dict = field(default_factory=lambda: dict(DEFAULT_THRESHOLDS))
     normaliser: str = "max"
     percentile: float = 99.5
-    loudness_gate: float = 0.05
+    loudness_gate: float = 0.2
+    baseline_s: float = 3.0
+    density: float | None = None
 
     def __post_init__(self):
         unknown = set(self.thresholds) - set(FEATURES)
@@ -61,6 +82,12 @@ class IntensityParams:
             raise ParameterError(f"percentile must lie in 50..100, got {self.percentile!r}")
         if not (0.0 <= float(self.loudness_gate) <= 1.0):
             raise ParameterError(f"loudness_gate must lie in 0..1, got {self.loudness_gate!r}")
+        if self.rule not in RULES:
+            raise ParameterError(f"intensity.rule must be one of {RULES}, got {self.rule!r}")
+        if not (0.5 <= float(self.baseline_s) <= 30.0):
+            raise ParameterError(f"intensity.baseline_s must lie in 0.5..30 s, got {self.baseline_s!r}")
+        if self.density is not None and not (0.0 <= float(self.density) <= 1.0):
+            raise ParameterError(f"intensity.density must lie in 0..1 (a share of the film), got {self.density!r}")
 
     def threshold(self, name: str) -> float:
         return float(self.thresholds.get(name, DEFAULT_THRESHOLDS[name]))
@@ -101,23 +128,81 @@ def normalise_features(features: dict[str, np.ndarray], *, params: IntensityPara
 
 
 def frame_intensity(normalised: dict[str, np.ndarray], *, params: IntensityParams) -> np.ndarray:
-    """The max rule per frame: I = max of the four values where any exceeds its threshold, else 0
-    (and 0 where normalised loudness is below ``params.loudness_gate``).
+    """The thesis's max rule per frame: I = max of the four values where any exceeds its threshold,
+    else 0 (and 0 where normalised loudness is below ``params.loudness_gate``).
 
     normalised : {feature: np.ndarray [shape=(n,)] in [0, 1]}.
     Returns float64 [shape=(n,)] in [0, 1].
     """
-    stack = np.stack([np.asarray(normalised[f], dtype=np.float64) for f in FEATURES])  # (4, n)
-    thr = np.array([params.threshold(f) for f in FEATURES])[:, None]
-    triggered = (stack > thr).any(axis=0)
-    if params.loudness_gate > 0:
-        triggered &= np.asarray(normalised["loudness"], dtype=np.float64) >= params.loudness_gate
-    return np.where(triggered, stack.max(axis=0), 0.0)
+    return triggered_values(normalised, normalised, params=params, value_features=FEATURES)
 
 
 def tick_intensity(normalised: dict[str, np.ndarray], n_ticks: int, *, params: IntensityParams) -> np.ndarray:
-    """Per-tick audio intensity: the max rule per 20 ms frame, then the MAX of each tick's five frames.
-
-    Returns float64 [shape=(n_ticks,)] in [0, 1].
-    """
+    """Per-tick intensity of the thesis's rule: the max rule per 20 ms frame, then the MAX of each
+    tick's five frames. Returns float64 [shape=(n_ticks,)] in [0, 1]."""
     return frames_to_ticks(frame_intensity(normalised, params=params), n_ticks)
+
+
+def decision_curves(features: dict[str, np.ndarray], normalised: dict[str, np.ndarray], *,
+                    params: IntensityParams) -> dict[str, np.ndarray]:
+    """The curves the thresholds apply to, per 20 ms frame, finite and >= 0: each feature's novelty
+    against its recent baseline ("events", unclipped: shown clipped at 1) or the normalised feature
+    itself ("thesis", 0..1)."""
+    if params.rule == "thesis":
+        return normalised
+    return feature_novelty({f: features[f] for f in FEATURES}, baseline_s=float(params.baseline_s))
+
+
+def triggered_values(normalised: dict[str, np.ndarray], curves: dict[str, np.ndarray], *, params: IntensityParams,
+                     value_features: tuple[str, ...], scale: float = 1.0) -> np.ndarray:
+    """Per frame: the largest normalised ``value_features`` where any enabled feature's curve
+    exceeds its threshold times ``scale`` and the loudness passes the gate, else 0.
+    Returns float64 [shape=(n,)] in [0, 1]."""
+    stack = np.stack([np.asarray(curves[f], dtype=np.float64) for f in FEATURES])  # (4, n)
+    thr = np.array([params.threshold(f) for f in FEATURES])
+    enabled = thr < 1.0
+    triggered = (stack[enabled] > (thr[enabled] * scale)[:, None]).any(axis=0)
+    if params.loudness_gate > 0:
+        triggered &= np.asarray(normalised["loudness"], dtype=np.float64) >= params.loudness_gate
+    values = np.stack([np.asarray(normalised[f], dtype=np.float64) for f in value_features]).max(axis=0)
+    return np.where(triggered, values, 0.0)
+
+
+def density_scale(normalised: dict[str, np.ndarray], curves: dict[str, np.ndarray], n_ticks: int, *,
+                  params: IntensityParams) -> float:
+    """The factor on every threshold that makes about ``params.density`` of the ticks vibrate:
+    each tick scores the largest curve / threshold over its frames above the loudness gate, and
+    the factor is the score of the first tick left out when the ticks are ranked (ties and the
+    gate can leave fewer). Returns a finite factor >= 0 (1.0 without a density)."""
+    if params.density is None or n_ticks == 0:
+        return 1.0
+    thr = np.array([params.threshold(f) for f in FEATURES])
+    enabled = thr < 1.0
+    if not enabled.any():
+        return 1.0
+    stack = np.stack([np.asarray(curves[f], dtype=np.float64) for f in FEATURES])[enabled]
+    ratio = stack / np.maximum(thr[enabled], 1e-6)[:, None]
+    score = ratio.max(axis=0) * (np.asarray(normalised["loudness"]) >= params.loudness_gate)
+    ticks = np.sort(frames_to_ticks(score, n_ticks))[::-1]
+    keep = int(round(float(params.density) * n_ticks))
+    if keep >= n_ticks:
+        return 0.0
+    return float(ticks[keep])
+
+
+def audio_intensity(features: dict[str, np.ndarray], n_ticks: int, *,
+                    params: IntensityParams) -> tuple[np.ndarray, dict[str, np.ndarray], dict]:
+    """The per-tick vibration intensity of ``params.rule`` (module docstring).
+
+    features : {feature: physical values per 20 ms frame [shape=(n_ticks * 5,)]}.
+    Returns (intensity float64 [shape=(n_ticks,)] in [0, 1], the per-tick curves the thresholds
+    apply to {feature: [shape=(n_ticks,)] in [0, 1]}, stats {"rule", "density", "threshold_scale"}).
+    """
+    norm = normalise_features(features, params=params)
+    curves = decision_curves(features, norm, params=params)
+    scale = density_scale(norm, curves, n_ticks, params=params)
+    value_features = FEATURES if params.rule == "thesis" else LEVEL_FEATURES
+    frames = triggered_values(norm, curves, params=params, value_features=value_features, scale=scale)
+    stats = {"rule": params.rule, "density": params.density, "threshold_scale": scale}
+    shown = {f: frames_to_ticks(np.minimum(curves[f], 1.0), n_ticks) for f in FEATURES}
+    return frames_to_ticks(frames, n_ticks), shown, stats

@@ -5,17 +5,8 @@ analysis signal), :mod:`.video` (decoded frames, all or the reference ones only)
 (a frame's small proxies, made only when a stage asks).
 """
 
-from autohaptics.media.probe import (
-    AudioInfo,
-    AudioReport,
-    MediaInfo,
-    VideoInfo,
-    check_complete,
-    check_truncation,
-    open_container,
-    probe,
-    source_block,
-)
+from autohaptics.media.probe import (AudioInfo, AudioReport, MediaInfo, VideoInfo, check_complete, check_truncation,
+                                     open_container, probe, source_block)
 
 # Imported when first used: the video side brings OpenCV (~0.15 s), which the audio pass and
 # `autohaptics features` never need.

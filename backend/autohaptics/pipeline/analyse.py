@@ -131,8 +131,7 @@ def _saliency_needed(params: GenerateParams, audio: dict | None, n: int) -> np.n
         return np.ones(n, bool)
     if params.mode != "multimodal" or audio is None:
         return np.zeros(n, bool)
-    norm = inten.normalise_features(audio, params=params.intensity)
-    return inten.tick_intensity(norm, n, params=params.intensity) > 0
+    return inten.audio_intensity(audio, n, params=params.intensity)[0] > 0
 
 
 def _audio_pass(info: media.MediaInfo, params: GenerateParams, n: int, stats: dict,

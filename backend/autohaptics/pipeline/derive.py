@@ -19,7 +19,7 @@ from autohaptics.params import DEFAULT_PRESET, GenerateParams
 from autohaptics.pipeline.cache import Analysis
 from autohaptics.records import params_to_dict
 from autohaptics.temperature import temperature_track
-from autohaptics.timebase import TICK_S, frames_to_ticks
+from autohaptics.timebase import TICK_S
 from autohaptics.timeline import Timeline, default_generator
 
 
@@ -34,7 +34,7 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
     n = analysis.n_ticks
     tl = Timeline.empty(n, source=source_block(analysis.info, sha256=analysis.sha256))
     stats = json.loads(json.dumps(analysis.stats))
-    intensity = _intensity(analysis, params, tl)
+    intensity = _intensity(analysis, params, tl, stats)
     video = analysis.video
     if "vibration" in params.tracks:
         vib, vstats = vibration_track(params.mode, intensity, seed=params.seed,
@@ -62,23 +62,26 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
     gen_params["temp_low"], gen_params["temp_high"] = temp_low, temp_high
     tl.generator = default_generator(mode=params.mode, preset=preset, params=gen_params)
     stats["derive"] = {"seconds": time.perf_counter() - t0}
-    stats["vibration"] = {"active_ticks": int((tl.vibration.max(axis=1) > 0).sum()), "ticks": n}
+    active = int((tl.vibration.max(axis=1) > 0).sum())
+    stats["vibration"] = {"active_ticks": active, "ticks": n, "share": active / n if n else 0.0,
+                          **stats.pop("intensity_rule", {})}
     tl.stats = stats
     return tl.validate()
 
 
-def _intensity(analysis: Analysis, params: GenerateParams, tl: Timeline) -> np.ndarray:
-    """The per-tick audio intensity (0 everywhere without an audio stream); the normalised
-    features go into ``tl.features``."""
+def _intensity(analysis: Analysis, params: GenerateParams, tl: Timeline, stats: dict) -> np.ndarray:
+    """The per-tick audio intensity (0 everywhere without an audio stream); the curves the
+    thresholds apply to go into ``tl.features`` (normalised features for the thesis rule, their
+    novelty for the events rule) and the rule's figures into ``stats["intensity_rule"]``."""
     n = analysis.n_ticks
     if analysis.audio is None:
         for name in inten.FEATURES:
             tl.features[name] = np.zeros(n)
         intensity = np.zeros(n)
     else:
-        norm = inten.normalise_features(analysis.audio, params=params.intensity)
-        intensity = inten.tick_intensity(norm, n, params=params.intensity)
+        intensity, curves, rule_stats = inten.audio_intensity(analysis.audio, n, params=params.intensity)
         for name in inten.FEATURES:
-            tl.features[name] = frames_to_ticks(norm[name], n)
+            tl.features[name] = curves[name]
+        stats["intensity_rule"] = rule_stats
     tl.features["intensity"] = intensity
     return intensity

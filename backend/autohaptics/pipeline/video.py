@@ -28,6 +28,7 @@ import numpy as np
 
 from autohaptics import fusion, media
 from autohaptics.airflow import cuts, depth
+from autohaptics.airflow.flow import is_static
 from autohaptics.airflow.pair import PairParams, pair_motion
 from autohaptics.fusion import saliency
 from autohaptics.imaging import resized
@@ -148,6 +149,7 @@ class _Pass:
         self.prev_sal_gray = None  # luma of the previous saliency proxy (the saliency motion cue)
         self.pending = None  # (tick, gray, rgb, sig, time) waiting for its successor frame (flow pair)
         self.last_time = 0.0
+        self.repeats = 0  # successor frames passed over as repeats of their pair's first frame
 
     def timed(self, stream):
         """``stream``'s frames, the time spent waiting for each counted as ``decode_wait``."""
@@ -171,7 +173,7 @@ class _Pass:
         want_sal = centre_tick is not None and bool(self.need_saliency[k:k + self.stride].any())
         rgb, gray, luma, sig = self._proxies(frame, analyse_this, want_sal)
         if is_successor:
-            self._pair(frame, gray, sig)
+            self._pair(frame, gray, sig, analyse_this)
         if analyse_this:
             self._analyse(frame, k, rgb, gray, luma, sig, want_sal)
 
@@ -189,11 +191,17 @@ class _Pass:
         sig = st["cuts"].run(cuts.frame_signature, sig_rgb) if sig_rgb is not None else None
         return rgb, gray, luma, sig
 
-    def _pair(self, frame, gray, sig) -> None:
-        """The waiting flow pair's motion, now that its successor frame is here."""
+    def _pair(self, frame, gray, sig, analysed: bool) -> None:
+        """The waiting flow pair's motion, now that its successor frame is here; or, when that frame
+        repeats the pair's first one (a frame-rate conversion, pulldown), wait for the next frame
+        (``flow.repeat_wait_s``; an analysed frame starts a pair of its own, so it never waits)."""
         pk, pgray, prgb, psig, pt = self.pending
-        self.pending = None
         st = self.stages
+        if not analysed and frame.time_s - pt < self.flow_params.repeat_wait_s and \
+                st["static"].run(is_static, pgray, gray, params=self.params.airflow):
+            self.repeats += 1
+            return
+        self.pending = None
 
         def successor_sig():
             # colour matters for the in-pair cut check (a green and a grey shot can share their
@@ -262,6 +270,7 @@ class _Pass:
             out.stats[name].update({"ticks_computed": done, "ticks_held": held, "ticks_skipped": int(n - done - held)})
         out.stats["flow"]["proxy_width"] = int(self.flow_params.proxy_width)
         out.stats["static"]["ticks_static"] = int(out.static.sum())
+        out.stats["flow"]["repeats_skipped"] = int(self.repeats)
         out.stats["cuts"]["cuts"] = int(out.cut.sum())
         out.stats["frames"] = {"ticks_with_frame": int(out.frame_mask.sum()), "ticks": n,
                                "last_time_s": round(self.last_time, 6)}

@@ -35,7 +35,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from autohaptics.chair import ChairLink, ChairPlayer, Comfort, list_ports, push
+from autohaptics.chair import ChairLink, ChairPlayer, Comfort, DeviceProfile, list_ports, push
 from autohaptics.errors import AutohapticsError, CancelledError, ParameterError
 from autohaptics.server.chair_settings import (
     SETTINGS_KEY,
@@ -355,6 +355,11 @@ class ChairService:
                 job.thread.join(5.0)
 
     # ------------------------------------------------------------------ status
+    def profile(self) -> DeviceProfile:
+        """The connected chair's temperature profile (its HELLO), the layout's defaults when none is."""
+        link = self._link
+        return link.profile if link is not None else DeviceProfile()
+
     def status(self) -> dict:
         with self._lock:
             link, player, pushing = self._link, self._player, self._push

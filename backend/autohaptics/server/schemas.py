@@ -112,6 +112,23 @@ class WaveformOut(BaseModel):
     max: list[float]
 
 
+class ChairTemperatureOut(BaseModel):
+    revision: int
+    tick_s: float
+    min_c: float
+    max_c: float
+    neutral_c: float
+    rate_c_per_s: float
+    values: list[float]
+
+
+class LaneValuesOut(BaseModel):
+    revision: int
+    t0: int
+    t1: int
+    values: dict[str, list]
+
+
 # ------------------------------------------------------------------------ edits
 class EditIn(_In):
     base_revision: int

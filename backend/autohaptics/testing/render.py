@@ -288,10 +288,18 @@ class AudioRenderer:
                 continue
             if lo >= hi:
                 continue
-            x = x * (10.0 ** (ev.level_dbfs / 20.0)) * _ramp(np.arange(lo, hi), s0, s1, ev.ramp_s * self.sr)
+            x = x * _gain(ev, np.arange(lo, hi), s0, s1) * _ramp(np.arange(lo, hi), s0, s1, ev.ramp_s * self.sr)
             out[chans, lo - a:hi - a] += x[None, :]
         self.pos = b
         return np.clip(out, -1.0, 1.0).astype(np.float32)
+
+
+def _gain(ev: Tone | Noise, idx: np.ndarray, s0: int, s1: int) -> np.ndarray | float:
+    """Linear gain of an event at sample indices ``idx`` of [s0, s1): its level, or the glide in dB."""
+    if ev.level_end_dbfs is None:
+        return 10.0 ** (ev.level_dbfs / 20.0)
+    db = ev.level_dbfs + (ev.level_end_dbfs - ev.level_dbfs) * (idx - s0) / max(s1 - s0, 1)
+    return 10.0 ** (db / 20.0)
 
 
 def _ramp(idx: np.ndarray, s0: int, s1: int, ramp_n: float) -> np.ndarray:

@@ -116,6 +116,7 @@ class Tone:
     """A sine burst during ``[t0, t1)`` s at ``freq_hz``, ``level_dbfs`` RMS, with raised-cosine ramps.
 
     channels : indices of the channels it plays on (None = all).
+    level_end_dbfs : if given, the level glides linearly in dB to it by ``t1`` (a rising rumble).
     """
 
     t0: float
@@ -124,6 +125,7 @@ class Tone:
     level_dbfs: float = -20.0
     channels: tuple[int, ...] | None = None
     ramp_s: float = 0.005
+    level_end_dbfs: float | None = None
 
     def __post_init__(self):
         check_interval(self.t0, self.t1, "tone")
@@ -133,7 +135,8 @@ class Tone:
 
 @dataclass(frozen=True)
 class Noise:
-    """A Gaussian noise burst during ``[t0, t1)`` s, ``level_dbfs`` RMS; colour "white" or "pink"."""
+    """A Gaussian noise burst during ``[t0, t1)`` s, ``level_dbfs`` RMS; colour "white" or "pink";
+    ``level_end_dbfs`` as for :class:`Tone`."""
 
     t0: float
     t1: float
@@ -142,6 +145,7 @@ class Noise:
     channels: tuple[int, ...] | None = None
     seed: int = 0
     ramp_s: float = 0.005
+    level_end_dbfs: float | None = None
 
     def __post_init__(self):
         check_interval(self.t0, self.t1, "noise")

@@ -37,6 +37,7 @@ REQUIRED: dict[str, tuple[str, ...]] = {
     "marker_delete": ("id",),
     "import": ("timeline",),
 }
+OPTIONAL: dict[str, tuple[str, ...]] = {name: ("cells",) for name in ("set", "scale", "clear", "fade_in", "fade_out")}
 OPS: tuple[str, ...] = tuple(REQUIRED)
 IMPORT_STORED_FIELDS = ("ref", "name", "n_ticks")  # an import op as stored: its document lives in a file
 MARKER_OPS = ("marker_add", "marker_update", "marker_delete")
@@ -70,10 +71,10 @@ def normalise(op: Any) -> tuple[dict, Any]:
         raise ParameterError(f"field 'op' must be one of {', '.join(OPS)}; got {name!r}")
     if name == "import" and "ref" in op:
         return _stored_import(op), None
-    required = REQUIRED[name]
-    unknown = sorted(set(op) - set(required) - {"op"})
+    required, optional = REQUIRED[name], OPTIONAL.get(name, ())
+    unknown = sorted(set(op) - set(required) - set(optional) - {"op"})
     if unknown:
-        raise ParameterError(f"op '{name}': unknown field '{unknown[0]}' (fields: {', '.join(required)})")
+        raise ParameterError(f"op '{name}': unknown field '{unknown[0]}' (fields: {', '.join(required + optional)})")
     missing = [f for f in required if f not in op]
     if missing:
         raise ParameterError(f"op '{name}': field '{missing[0]}' is required")
@@ -89,6 +90,8 @@ def normalise(op: Any) -> tuple[dict, Any]:
         out["t1"] = _tick(name, "t1", op["t1"])
         if out["t1"] <= out["t0"]:
             raise ParameterError(f"op '{name}': field 't1' ({out['t1']}) must be greater than t0 ({out['t0']})")
+    if "cells" in op:
+        out["cells"] = _cells(name, op["cells"], out["lanes"])
     if name == "set":
         out["value"] = _number(name, "value", op["value"])
     elif name == "scale":
@@ -208,6 +211,23 @@ def _points(value: Any) -> tuple[list, tuple[np.ndarray, np.ndarray]]:
     return arr.tolist(), (arr[:, 0], arr[:, 1])
 
 
+def _cells(name: str, value: Any, lanes: list[str]) -> list[list[int]]:
+    """A region of the fan grid: distinct [row, col] pairs, sorted; only for the lanes ["fans"]."""
+    if lanes != ["fans"]:
+        raise ParameterError(f"op '{name}': field 'cells' picks fans, so 'lanes' must be [\"fans\"] alone")
+    if not isinstance(value, list) or not value:
+        raise ParameterError(f"op '{name}': field 'cells' must be a non-empty list of [row, col] pairs")
+    cells = set()
+    for cell in value:
+        if (not isinstance(cell, list) or len(cell) != 2 or not all(isinstance(v, int) and not isinstance(v, bool)
+                                                                    for v in cell)
+                or not (0 <= cell[0] < FAN_ROWS and 0 <= cell[1] < FAN_COLS)):
+            raise ParameterError(f"op '{name}': field 'cells' holds {cell!r}; each cell is [row 0..{FAN_ROWS - 1}, "
+                                 f"col 0..{FAN_COLS - 1}]")
+        cells.add((cell[0], cell[1]))
+    return [list(c) for c in sorted(cells)]
+
+
 def _marker_id(name: str, field: str, value: Any) -> str:
     if not isinstance(value, str) or not value or len(value) > MAX_MARKER_ID:
         raise ParameterError(f"op '{name}': field '{field}' must be a string of 1..{MAX_MARKER_ID} characters")
@@ -259,6 +279,16 @@ def _lane_view(tl: Timeline, lane: str, a: int, b: int) -> np.ndarray:
     if lane == "fans":
         return tl.fans[a:b]
     return tl.vibration[a:b, ACTUATOR_IDS.index(lane)]
+
+
+def lane_values(tl: Timeline, lanes: list[str], t0: int, t1: int) -> dict[str, list]:
+    """Per-tick values of lanes over [t0, t1) at full precision, in the shape ``paste`` takes (what
+    the editor's Copy holds): vibration 0..1 and temperature C as (m,), fans as (m, 9, 17)."""
+    for lane in lanes:
+        _lane("copy", "lanes", lane)
+    if not 0 <= t0 < t1 <= tl.n_ticks:
+        raise ParameterError(f"the range must satisfy 0 <= t0 < t1 <= {tl.n_ticks} ticks, got {t0}..{t1}")
+    return {lane: _lane_view(tl, lane, t0, t1).tolist() for lane in dict.fromkeys(lanes)}
 
 
 def clamp(tl: Timeline, lane: str, values: np.ndarray) -> np.ndarray:
@@ -367,12 +397,28 @@ def _op_marker_delete(tl, markers, op, parsed, strict) -> None:
     del markers[op["id"]]
 
 
+def _in_cells(apply: Callable) -> Callable:
+    """A range op that, given ``cells``, changes only those fans (the others keep their values)."""
+    def region(tl, markers, op, parsed, strict) -> None:
+        if "cells" not in op:
+            apply(tl, markers, op, parsed, strict)
+            return
+        a, b = _span(tl, op["t0"], op["t1"], strict)
+        keep = np.ones((FAN_ROWS, FAN_COLS), dtype=bool)
+        for r, c in op["cells"]:
+            keep[r, c] = False
+        before = tl.fans[a:b][:, keep].copy()
+        apply(tl, markers, op, parsed, strict)
+        tl.fans[a:b, keep] = before
+    return region
+
+
 APPLY: dict[str, Callable] = {
-    "set": _op_set,
-    "scale": _op_scale,
-    "clear": _op_clear,
-    "fade_in": _fade("in"),
-    "fade_out": _fade("out"),
+    "set": _in_cells(_op_set),
+    "scale": _in_cells(_op_scale),
+    "clear": _in_cells(_op_clear),
+    "fade_in": _in_cells(_fade("in")),
+    "fade_out": _in_cells(_fade("out")),
     "paste": _op_paste,
     "pencil": _op_pencil,
     "temp_points": _op_temp_points,

@@ -2,6 +2,10 @@
  * The fan grid (17 x 9 on the chair) drawn over the video picture at the playhead (row 0 = top of the frame,
  * column 0 = left). The canvas covers the element; the grid covers only the picture inside it
  * (object-fit: contain leaves bars).
+ *
+ * It also picks a region of fans for the range operations: a drag selects a rectangle of cells,
+ * Ctrl (Cmd) + drag paints cells as a brush and adds them, a click outside the picture or Escape
+ * clears the region (outlined in yellow).
  */
 
 export class FanOverlay {
@@ -19,9 +23,75 @@ export class FanOverlay {
     /** @type {Float32Array|null} */
     this.grid = null;
     this.visible = false;
+    /** @type {Set<number>} the picked cells, row * cols + col */
+    this.region = new Set();
+    /** @type {(cells: Array<[number, number]>) => void} told whenever the region changes */
+    this.onRegion = () => {};
+    /** @type {{anchor: number, brush: boolean, base: Set<number>}|null} */
+    this._drag = null;
     this._ro = new ResizeObserver(() => this.draw());
     this._ro.observe(video);
     video.addEventListener("loadedmetadata", () => this.draw());
+    canvas.addEventListener("pointerdown", (e) => this._down(e));
+    canvas.addEventListener("pointermove", (e) => this._move(e));
+    canvas.addEventListener("pointerup", () => (this._drag = null));
+    canvas.addEventListener("keydown", (e) => {
+      if (e.key === "Escape" && this.region.size) this.setRegion([]);
+    });
+  }
+
+  /** The picked cells as [row, col] pairs, row-major. @returns {Array<[number, number]>} */
+  cells() {
+    return [...this.region].sort((a, b) => a - b).map((i) => /** @type {[number, number]} */ ([Math.floor(i / this.cols), i % this.cols]));
+  }
+
+  /** @param {Array<[number, number]>} cells */
+  setRegion(cells) {
+    this.region = new Set(cells.map(([r, c]) => r * this.cols + c));
+    this.onRegion(this.cells());
+    this.draw();
+  }
+
+  /** The cell under a pointer event, -1 outside the picture. @param {PointerEvent} e */
+  cellAt(e) {
+    const box = this.canvas.getBoundingClientRect();
+    const r = this.pictureRect();
+    const col = Math.floor(((e.clientX - box.x - r.x) / r.w) * this.cols);
+    const row = Math.floor(((e.clientY - box.y - r.y) / r.h) * this.rows);
+    return row >= 0 && row < this.rows && col >= 0 && col < this.cols ? row * this.cols + col : -1;
+  }
+
+  /** @param {PointerEvent} e */
+  _down(e) {
+    const cell = this.cellAt(e);
+    this.canvas.focus();
+    if (cell < 0) {
+      this.setRegion([]);
+      return;
+    }
+    this.canvas.setPointerCapture(e.pointerId);
+    const brush = e.ctrlKey || e.metaKey;
+    this._drag = { anchor: cell, brush, base: brush ? new Set(this.region) : new Set() };
+    this._move(e);
+  }
+
+  /** @param {PointerEvent} e */
+  _move(e) {
+    const d = this._drag;
+    const cell = d ? this.cellAt(e) : -1;
+    if (!d || cell < 0) return;
+    if (d.brush) {
+      d.base.add(cell);
+      this.region = new Set(d.base);
+    } else {
+      const cols = this.cols;
+      const [r0, r1] = [Math.floor(d.anchor / cols), Math.floor(cell / cols)].sort((a, b) => a - b);
+      const [c0, c1] = [d.anchor % cols, cell % cols].sort((a, b) => a - b);
+      this.region = new Set();
+      for (let r = r0; r <= r1; r++) for (let c = c0; c <= c1; c++) this.region.add(r * cols + c);
+    }
+    this.onRegion(this.cells());
+    this.draw();
   }
 
   /** @param {boolean} on */
@@ -88,6 +158,9 @@ export class FanOverlay {
       ctx.lineTo(r.x + r.w, y);
     }
     ctx.stroke();
+    ctx.strokeStyle = "#facc15";
+    ctx.lineWidth = 2;
+    for (const i of this.region) ctx.strokeRect(r.x + (i % cols) * cw + 1, r.y + Math.floor(i / cols) * ch + 1, cw - 2, ch - 2);
   }
 
   destroy() {

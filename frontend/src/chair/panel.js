@@ -154,7 +154,10 @@ export class ChairPanel extends Emitter {
       ...ports.map((p) => h("option", { value: p.device }, `${p.device}${p.likely_chair ? " ★" : ""}${p.description ? ` — ${p.description}` : ""}`)),
     );
     if (!ports.length) this.portSelect.append(h("option", { value: "" }, "No ports found"));
+    // The port in use, else the first that looks like a chair (a virtual chair counts), not /dev/ttyS0.
+    const chairLike = ports.find((p) => p.likely_chair) || ports.find((p) => p.kind === "virtual");
     if (current && ports.some((p) => p.device === current)) this.portSelect.value = current;
+    else if (chairLike) this.portSelect.value = chairLike.device;
     this._render();
   }
 

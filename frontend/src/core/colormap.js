@@ -14,6 +14,8 @@ export const COLORS = {
   vibration: "#fb923c",
   tempLine: "#f87171",
   tempNeutral: "#64748b",
+  tempTarget: "rgba(148, 163, 184, 0.55)",
+  tempLimit: "#fb923c",
   fans: "#67e8f9",
   marker: "#facc15",
   draft: "#e879f9",

@@ -166,6 +166,26 @@ export class Api {
     return `/api/projects/${enc(id)}/timeline.bin?layer=${layer}${blocks ? `&blocks=${blocks}` : ""}`;
   }
 
+  /**
+   * The composed temperature as the chair plays it (clamped, slew-limited) with the device's limits.
+   * @param {string} id
+   * @returns {Promise<{revision: number, tick_s: number, min_c: number, max_c: number, neutral_c: number,
+   *   rate_c_per_s: number, values: number[]}>}
+   */
+  chairTemperature(id) {
+    return this.request("GET", `/api/projects/${enc(id)}/timeline/chair-temperature`);
+  }
+
+  /**
+   * Composed values of lanes over [t0, t1) at full precision, in the shape the `paste` op takes.
+   * @param {string} id @param {string[]} lanes @param {number} t0 @param {number} t1
+   * @returns {Promise<{revision: number, t0: number, t1: number, values: Record<string, any[]>}>}
+   */
+  laneValues(id, lanes, t0, t1) {
+    const q = new URLSearchParams({ lanes: lanes.join(","), t0: String(t0), t1: String(t1) });
+    return this.request("GET", `/api/projects/${enc(id)}/timeline/values?${q}`);
+  }
+
   /** @param {string} id @returns {Promise<EditList>} */
   edits(id) {
     return this.request("GET", `/api/projects/${enc(id)}/edits`);

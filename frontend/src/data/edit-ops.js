@@ -38,6 +38,19 @@ export function fadeOp(sel, kind) {
 }
 
 /**
+ * A range op limited to a region of the fan grid (`cells`), when one is picked and the op edits the fans.
+ * @param {Record<string, any>} op
+ * @param {Array<[number, number]>} cells [row, col]
+ */
+export function inRegion(op, cells) {
+  if (!cells.length || !op.lanes.includes("fans")) return op;
+  if (op.lanes.length > 1) {
+    throw new Error("A fan region applies to the Fans lane alone: edit only Fans, or clear the region (Escape on the fan grid).");
+  }
+  return { ...op, cells: cells.map(([r, c]) => [r, c]) };
+}
+
+/**
  * `temp_points` over the span of the points: temperature is piecewise linear through them.
  * @param {Array<[number, number]>} points [tick, C]
  */
@@ -84,12 +97,12 @@ export class Clipboard {
   }
 
   /**
-   * @param {import("./timeline-data.js").TimelineData} data
-   * @param {Selection} sel
+   * Hold values copied at full precision (GET /timeline/values: the same numbers the server composes).
+   * @param {Record<string, any[]>} values per-lane values of one range
+   * @param {number} length ticks
    */
-  copy(data, sel) {
-    const values = data.slice(sel.lanes, sel.t0, sel.t1);
-    this.content = { values, length: sel.t1 - sel.t0 };
+  take(values, length) {
+    this.content = { values, length };
     return this.content;
   }
 

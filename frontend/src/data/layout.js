@@ -44,14 +44,16 @@ export function chairLayout(config) {
 }
 
 /**
- * The temperature range to draw: the device's range, widened to the values a timeline holds.
+ * The temperature range to draw: the generator's range, widened to the values a timeline holds
+ * and to the curve the chair plays.
  * @param {TemperatureRange} range
  * @param {{temperatureMin: number, temperatureMax: number}|null} data
+ * @param {{lo: number, hi: number}|null} [played]
  * @returns {TemperatureRange}
  */
-export function drawnTemperatureRange(range, data) {
-  const lo = Math.min(range.lo, data ? data.temperatureMin : Infinity);
-  const hi = Math.max(range.hi, data ? data.temperatureMax : -Infinity);
+export function drawnTemperatureRange(range, data, played = null) {
+  const lo = Math.min(range.lo, data ? data.temperatureMin : Infinity, played ? played.lo : Infinity);
+  const hi = Math.max(range.hi, data ? data.temperatureMax : -Infinity, played ? played.hi : -Infinity);
   return { lo, hi, neutral: range.neutral };
 }
 

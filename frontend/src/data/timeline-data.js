@@ -139,46 +139,6 @@ export class TimelineData {
       features,
     };
   }
-
-  /**
-   * Per-tick values of edit lanes over [t0, t1), in the shape the `paste` op takes.
-   * @param {string[]} lanes actuator ids, "temperature", "fans"
-   * @param {number} t0
-   * @param {number} t1
-   * @returns {Record<string, any[]>}
-   */
-  slice(lanes, t0, t1) {
-    t0 = Math.max(0, Math.floor(t0));
-    t1 = Math.min(this.nTicks, Math.floor(t1));
-    /** @type {Record<string, any[]>} */
-    const out = {};
-    for (const lane of lanes) {
-      const values = [];
-      if (lane === "temperature") {
-        for (let k = t0; k < t1; k++) values.push(round4(this.temperature[k]));
-      } else if (lane === "fans") {
-        const fans = this.fans;
-        if (!fans) throw new Error("The fan grid is still loading; copy again in a moment.");
-        const { fanRows, fanCols } = this.shape;
-        for (let k = t0; k < t1; k++) {
-          const rows = [];
-          for (let r = 0; r < fanRows; r++) {
-            const row = [];
-            for (let c = 0; c < fanCols; c++) row.push(round4(fans[(k * fanRows + r) * fanCols + c] / 255));
-            rows.push(row);
-          }
-          values.push(rows);
-        }
-      } else {
-        const ids = this.shape.actuatorIds;
-        const i = ids.indexOf(lane);
-        if (i < 0) throw new Error(`unknown lane ${lane}`);
-        for (let k = t0; k < t1; k++) values.push(round4(this.vibration[k * ids.length + i] / 255));
-      }
-      out[lane] = values;
-    }
-    return out;
-  }
 }
 
 /**
@@ -190,11 +150,6 @@ export class TimelineData {
 function fansOf(block, n, shape) {
   checkShape(block.info, [n, shape.fanRows, shape.fanCols]);
   return /** @type {Uint8Array} */ (block.data);
-}
-
-/** @param {number} v */
-function round4(v) {
-  return Math.round(v * 10000) / 10000;
 }
 
 /**

@@ -36,10 +36,12 @@ export class FeatureLane extends BaseLane {
    */
   constructor(name, hooks) {
     const label = FEATURE_LABELS[name] || name;
-    super({ id: `feature-${name}`, label, title: `${label} (normalised 0..1) and its threshold: drag the pink line`, height: 46 }, hooks);
+    super({ id: `feature-${name}`, label, title: `${label} (normalised 0..1) and its threshold: drag the pink line (Shift: ten times finer)`, height: 46 }, hooks);
     this.name = name;
     /** @type {number|null} value shown while the line is dragged */
     this.draft = null;
+    /** @type {{y: number, value: number}|null} where a threshold drag started and the value it grabbed */
+    this._grab = null;
   }
 
   /** The threshold drawn now (the draft while dragging). */
@@ -116,14 +118,29 @@ export class FeatureLane extends BaseLane {
   /** @param {import("../core/timeline.js").LanePointer} p */
   pointerDown(p) {
     if (!this._nearLine(p.y)) return false;
-    this.draft = this.valueAt(p.y, this.height);
+    const start = /** @type {number} */ (this.current());
+    this._grab = { y: p.y, value: start };
+    this.draft = start;
     this.hooks.onInput(this.name, this.draft);
     return true;
   }
 
+  /**
+   * The threshold a drag gives: the grabbed value moved by the pointer, a tenth as fast with Shift
+   * (fine mode), in steps of 0.01 (0.001 with Shift).
+   * @param {import("../core/timeline.js").LanePointer} p
+   */
+  _dragValue(p) {
+    const grab = this._grab || { y: p.y, value: this.valueAt(p.y, this.height) };
+    const fine = p.event.shiftKey;
+    const v = grab.value + ((grab.y - p.y) / (this.height - 2 * PAD)) * (fine ? 0.1 : 1);
+    const step = fine ? 1000 : 100;
+    return Math.round(Math.min(1, Math.max(0, v)) * step) / step;
+  }
+
   /** @param {import("../core/timeline.js").LanePointer} p */
   pointerMove(p) {
-    const v = this.valueAt(p.y, this.height);
+    const v = this._dragValue(p);
     if (v === this.draft) return;
     this.draft = v;
     this.hooks.onInput(this.name, v);
@@ -131,13 +148,15 @@ export class FeatureLane extends BaseLane {
 
   /** @param {import("../core/timeline.js").LanePointer} p */
   pointerUp(p) {
-    const v = this.valueAt(p.y, this.height);
+    const v = this._dragValue(p);
     this.draft = null;
+    this._grab = null;
     this.hooks.onCommit(this.name, v);
   }
 
   pointerCancel() {
     this.draft = null;
+    this._grab = null;
     this.hooks.onCancel(this.name);
   }
 }

@@ -1,5 +1,7 @@
 /**
- * The temperature curve (degrees C) with the neutral line. Two editing gestures:
+ * The temperature lane (degrees C): the curve the chair plays (after its clamp and slew limit,
+ * computed by the server) over the target edits change, the neutral line and the chair's limits.
+ * Two editing gestures:
  * - pencil tool: draw per-tick temperatures (one `pencil` op on release);
  * - points tool: place and drag breakpoints (Shift+click removes one); the editor turns the draft
  *   into one `temp_points` op when the user applies it.
@@ -17,6 +19,7 @@ const HIT_PX = 7;
  * @typedef {{
  *   data: () => import("../data/timeline-data.js").TimelineData|null,
  *   range: () => {lo: number, hi: number, neutral: number},
+ *   played: () => import("../data/played-temperature.js").PlayedTemperature|null,
  *   onPencil: (op: Record<string, any>) => void,
  *   onPointsChange: (points: Array<[number, number]>) => void,
  * }} TemperatureHooks
@@ -26,7 +29,8 @@ const HIT_PX = 7;
 export class TemperatureLane extends BaseLane {
   /** @param {TemperatureHooks} hooks */
   constructor(hooks) {
-    const title = "Target temperature in °C (dashed: neutral); pencil draws, points tool places breakpoints";
+    const title = "Temperature in °C: the chair's curve in colour (clamped and slew-limited by the chair), the target in grey, "
+      + "neutral dashed, the chair's limits dotted; pencil draws, points tool places breakpoints";
     super({ id: "temperature", label: "Temperature", title, height: 72 }, hooks);
     /** @type {PencilStroke|null} */
     this.stroke = null;
@@ -55,6 +59,8 @@ export class TemperatureLane extends BaseLane {
   }
 
   /**
+   * The target (thin, grey), what the chair plays (the coloured curve, once loaded), the neutral
+   * line (dashed) and the chair's limits (dotted, labelled).
    * @param {CanvasRenderingContext2D} ctx
    * @param {import("../core/timeline.js").LaneFrame} f
    */
@@ -73,21 +79,58 @@ export class TemperatureLane extends BaseLane {
     ctx.fillText(`${hi.toFixed(0)} °C`, 4, 2);
     ctx.textBaseline = "bottom";
     ctx.fillText(`${lo.toFixed(0)} °C`, 4, height - 1);
-    const yn = Math.round(this.yOf(neutral)) + 0.5;
-    ctx.strokeStyle = COLORS.tempNeutral;
-    ctx.setLineDash([4, 4]);
-    ctx.beginPath();
-    ctx.moveTo(0, yn);
-    ctx.lineTo(width, yn);
-    ctx.stroke();
-    ctx.setLineDash([]);
-    const grad = ctx.createLinearGradient(0, this.yOf(hi), 0, this.yOf(lo));
-    grad.addColorStop(0, "#f87171");
-    grad.addColorStop(Math.min(1, Math.max(0, (hi - neutral) / (hi - lo))), "#cbd5e1");
-    grad.addColorStop(1, "#60a5fa");
-    drawCurve(ctx, this.cols, data.temperaturePyr, f, 1 / data.tickS, (c) => this.yOf(c), grad);
+    this._hLine(ctx, width, neutral, COLORS.tempNeutral, [4, 4]);
+    const played = this.hooks.played();
+    if (played && played.revision === data.revision) {
+      this._drawLimits(ctx, width, played);
+      drawCurve(ctx, this.cols, data.temperaturePyr, f, 1 / data.tickS, (c) => this.yOf(c), COLORS.tempTarget);
+      const grad = ctx.createLinearGradient(0, this.yOf(hi), 0, this.yOf(lo));
+      grad.addColorStop(0, "#f87171");
+      grad.addColorStop(Math.min(1, Math.max(0, (hi - neutral) / (hi - lo))), "#cbd5e1");
+      grad.addColorStop(1, "#60a5fa");
+      drawCurve(ctx, this.cols, played.pyr, f, 1 / data.tickS, (c) => this.yOf(c), grad);
+    } else {
+      drawCurve(ctx, this.cols, data.temperaturePyr, f, 1 / data.tickS, (c) => this.yOf(c), COLORS.tempTarget);
+    }
     if (this.stroke) this.stroke.draw(ctx, view, (c) => this.yOf(c));
     if (this.points.length) this._drawPoints(ctx, view);
+  }
+
+  /**
+   * A horizontal line at a temperature, when it lies on the lane.
+   * @param {CanvasRenderingContext2D} ctx @param {number} width @param {number} c
+   * @param {string} color @param {number[]} dash
+   */
+  _hLine(ctx, width, c, color, dash) {
+    const y = Math.round(this.yOf(c)) + 0.5;
+    if (y < 0 || y > this.height) return null;
+    ctx.strokeStyle = color;
+    ctx.setLineDash(dash);
+    ctx.beginPath();
+    ctx.moveTo(0, y);
+    ctx.lineTo(width, y);
+    ctx.stroke();
+    ctx.setLineDash([]);
+    return y;
+  }
+
+  /**
+   * The chair's safe range as dotted lines with their labels (right-aligned).
+   * @param {CanvasRenderingContext2D} ctx @param {number} width
+   * @param {import("../data/played-temperature.js").PlayedTemperature} played
+   */
+  _drawLimits(ctx, width, played) {
+    ctx.save();
+    ctx.font = "10px system-ui, sans-serif";
+    ctx.textAlign = "right";
+    for (const [c, text] of [[played.maxC, "chair max"], [played.minC, "chair min"]]) {
+      const y = this._hLine(ctx, width, /** @type {number} */ (c), COLORS.tempLimit, [1, 3]);
+      if (y === null) continue;
+      ctx.fillStyle = COLORS.tempLimit;
+      ctx.textBaseline = y < 12 ? "top" : "bottom";
+      ctx.fillText(`${text} ${Number(c).toFixed(0)} °C`, width - 4, y < 12 ? y + 1 : y - 1);
+    }
+    ctx.restore();
   }
 
   /**

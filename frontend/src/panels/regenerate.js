@@ -4,7 +4,7 @@
  */
 
 import { h } from "../core/dom.js";
-import { modal } from "./widgets.js";
+import { modal, openModal } from "./widgets.js";
 import { FEATURE_LABELS } from "../lanes/features.js";
 
 /**
@@ -48,6 +48,6 @@ export function regenerateDialog({ presets, modes, preset, mode, thresholds }) {
       }
       dlg.remove();
     });
-    dlg.showModal();
+    openModal(dlg);
   });
 }

@@ -1,15 +1,21 @@
 /**
  * Threshold sliders, the keyboard-friendly twin of the threshold lines: `input` is the live
- * preview, `change` (release, or a keyboard step) the commit.
+ * preview, `change` (release, or a keyboard step) the commit. Beside them the density control
+ * (the share of the film that should vibrate: off = the thresholds as they are, on = the server
+ * scales the thresholds so about that share vibrates) and the share the current settings give.
  */
 
 import { h } from "../core/dom.js";
 import { FEATURE_LABELS } from "../lanes/features.js";
 
+/** @param {number} share 0..1 @returns {string} */
+const percent = (share) => `${Math.round(share * 100)} %`;
+
 export class ThresholdsPanel {
   /**
    * @param {string[]} names
-   * @param {{onInput: (name: string, value: number) => void, onCommit: (name: string, value: number) => void}} hooks
+   * @param {{onInput: (name: string, value: number) => void, onCommit: (name: string, value: number) => void,
+   *   onDensity?: (share: number|null) => void}} hooks
    */
   constructor(names, hooks) {
     /** @type {Map<string, {input: HTMLInputElement, out: HTMLOutputElement}>} */
@@ -29,7 +35,34 @@ export class ThresholdsPanel {
       list.append(h("label", { class: "threshold-row", for: id }, h("span", {}, FEATURE_LABELS[name] || name), input, out));
       this.rows.set(name, { input, out });
     }
-    this.el = h("section", { class: "panel", "aria-labelledby": "thr-title" }, h("h2", { class: "panel-title", id: "thr-title" }, "Thresholds"), list);
+    const density = this._densityRow(hooks.onDensity || (() => {}));
+    this.share = h("p", { class: "params-info", "data-testid": "vibration-share", "aria-live": "polite" }, "");
+    this.el = h("section", { class: "panel", "aria-labelledby": "thr-title" },
+      h("h2", { class: "panel-title", id: "thr-title" }, "Thresholds"), list, density, this.share);
+  }
+
+  /** The density row: a checkbox that turns it on and a slider for the share. @param {(share: number|null) => void} onDensity */
+  _densityRow(onDensity) {
+    this.densityOn = h("input", { type: "checkbox", id: "density-on", "data-testid": "density-on",
+      "aria-label": "Set the share of the film that vibrates" });
+    this.density = h("input", { type: "range", min: 0, max: 1, step: 0.01, value: 0.25, id: "density", class: "range",
+      "data-testid": "density", disabled: true });
+    this.densityOut = h("output", { class: "range-value", for: "density" }, "off");
+    const commit = () => onDensity(this.densityOn.checked ? Number(this.density.value) : null);
+    this.densityOn.addEventListener("change", () => {
+      this.density.disabled = !this.densityOn.checked;
+      this._showDensity();
+      commit();
+    });
+    this.density.addEventListener("input", () => this._showDensity());
+    this.density.addEventListener("change", commit);
+    return h("label", { class: "threshold-row", for: "density",
+      title: "Share of the film that vibrates: the thresholds are scaled together to give about this share" },
+    h("span", {}, this.densityOn, " Density"), this.density, this.densityOut);
+  }
+
+  _showDensity() {
+    this.densityOut.textContent = this.densityOn.checked ? percent(Number(this.density.value)) : "off";
   }
 
   /** @param {string} name @param {number} value */
@@ -40,8 +73,23 @@ export class ThresholdsPanel {
     row.out.textContent = value.toFixed(2);
   }
 
+  /** The density setting: a share 0..1, or null (off). @param {number|null} share */
+  setDensity(share) {
+    this.densityOn.checked = share !== null;
+    this.density.disabled = share === null || this.densityOn.disabled;
+    if (share !== null) this.density.value = String(share);
+    this._showDensity();
+  }
+
+  /** The share of the film's ticks the current settings make vibrate (null: no timeline). @param {number|null} share */
+  setShare(share) {
+    this.share.textContent = share === null ? "" : `Vibrates on ${percent(share)} of the film`;
+  }
+
   /** @param {boolean} disabled */
   setDisabled(disabled) {
     for (const { input } of this.rows.values()) input.disabled = disabled;
+    this.densityOn.disabled = disabled;
+    this.density.disabled = disabled || !this.densityOn.checked;
   }
 }

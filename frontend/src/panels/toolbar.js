@@ -53,8 +53,8 @@ export class EditToolbar {
 
     this.value = h("input", { type: "number", class: "input input-num", step: 0.05, value: "0.5", "aria-label": "Value to set (0..1, or °C for temperature)", "data-testid": "edit-value" });
     this.factor = h("input", { type: "number", class: "input input-num", step: 0.1, min: 0, value: "1.5", "aria-label": "Scale factor", "data-testid": "edit-factor" });
-    this.setBtn = btn("Set", "edit-set", () => actions.set(Number(this.value.value)), "Set the selection to the value");
-    this.scaleBtn = btn("Scale", "edit-scale", () => actions.scale(Number(this.factor.value)), "Multiply the selection by the factor");
+    this.setBtn = btn("Set", "edit-set", () => actions.set(this.value.valueAsNumber), "Set the selection to the value");
+    this.scaleBtn = btn("Scale", "edit-scale", () => actions.scale(this.factor.valueAsNumber), "Multiply the selection by the factor");
     this.clearBtn = btn("Clear", "edit-clear", () => actions.clear(), "Clear the selection (Delete)");
     this.fadeInBtn = btn("Fade in", "edit-fade-in", () => actions.fade("in"));
     this.fadeOutBtn = btn("Fade out", "edit-fade-out", () => actions.fade("out"));
@@ -85,7 +85,7 @@ export class EditToolbar {
 
   /**
    * @param {{tool: string, selection: import("../core/timeline.js").Selection|null, lanes: string[],
-   *   tickS: number, canPaste: boolean, points: number, markerSelected: boolean, ready: boolean}} s
+   *   tickS: number, canPaste: boolean, points: number, markerSelected: boolean, ready: boolean, cells?: number}} s
    */
   update(s) {
     for (const [name, b] of Object.entries(this.tools)) b.setAttribute("aria-pressed", String(name === s.tool));
@@ -105,7 +105,8 @@ export class EditToolbar {
     this.markerDelete.disabled = !s.markerSelected;
     if (s.selection) {
       const { t0, t1 } = s.selection;
-      this.info.textContent = `${formatTime(t0 * s.tickS)} – ${formatTime(t1 * s.tickS)} (${t1 - t0} ticks) on ${s.lanes.join(", ")}`;
+      const region = s.cells && s.lanes.includes("fans") ? ` (${s.cells} fans picked on the grid)` : "";
+      this.info.textContent = `${formatTime(t0 * s.tickS)} – ${formatTime(t1 * s.tickS)} (${t1 - t0} ticks) on ${s.lanes.join(", ")}${region}`;
     } else {
       this.info.textContent = s.tool === "points" ? "Click the Temperature lane to place points" : "Drag on the lanes to select a range";
     }

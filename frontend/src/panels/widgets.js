@@ -19,8 +19,7 @@ export function confirmDialog({ title, message, ok = "OK", danger = false }) {
       resolve(dlg.returnValue === "ok");
       dlg.remove();
     });
-    dlg.showModal();
-    okBtn.focus();
+    openModal(dlg);
   });
 }
 
@@ -40,18 +39,25 @@ export function promptDialog({ title, label, value = "", ok = "OK", maxLength = 
       resolve(dlg.returnValue === "ok" ? input.value.trim() : null);
       dlg.remove();
     });
-    dlg.showModal();
-    input.select();
+    openModal(dlg);
   });
 }
 
 /**
- * A <dialog> with a form (method=dialog), so Enter submits and Escape cancels.
+ * A <dialog> with a form (method=dialog): Enter in a field submits the primary (value "ok")
+ * button, Escape and a value-"cancel" button cancel (returnValue "cancel"). The cancel buttons
+ * are type=button, because implicit submission presses the form's first submit button.
+ * {@link openModal} opens it with the focus in the first field.
  * @param {string} title
  * @param {Node[]} body
  * @param {HTMLButtonElement[]} buttons
  */
 export function modal(title, body, buttons) {
+  for (const b of buttons) {
+    if (b.value !== "cancel") continue;
+    b.type = "button";
+    b.addEventListener("click", () => b.closest("dialog")?.close("cancel"));
+  }
   const titleId = `dlg-${Math.random().toString(36).slice(2)}`;
   const form = h(
     "form",
@@ -66,6 +72,18 @@ export function modal(title, body, buttons) {
   });
   document.body.append(dlg);
   return dlg;
+}
+
+/**
+ * Show a {@link modal} with the focus (and selection) in its first field, else on its primary button.
+ * @param {HTMLDialogElement} dlg
+ */
+export function openModal(dlg) {
+  dlg.showModal();
+  const first = /** @type {HTMLElement|null} */ (dlg.querySelector("input, select, textarea") || dlg.querySelector('button[value="ok"]'));
+  if (!first) return;
+  first.focus();
+  if (first instanceof HTMLInputElement && (first.type === "text" || first.type === "number")) first.select();
 }
 
 /**

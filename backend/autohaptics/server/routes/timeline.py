@@ -8,16 +8,20 @@ from pathlib import PurePosixPath
 from typing import Literal
 from urllib.parse import quote
 
+import numpy as np
 from anyio import to_thread
 from fastapi import APIRouter, Query, Request, Response
 
 from autohaptics.errors import ParameterError
 from autohaptics.formats import export_timeline, get_format
-from autohaptics.server.deps import SettingsDep, StoreDep, ComposerDep
-from autohaptics.server.schemas import EditIn, EditOut, EditsOut, HistoryOut, RevisionIn
+from autohaptics.layout import FAN_COLS, FAN_ROWS
+from autohaptics.server.deps import ChairDep, SettingsDep, StoreDep, ComposerDep
+from autohaptics.server.schemas import ChairTemperatureOut, EditIn, LaneValuesOut, EditOut, EditsOut, HistoryOut, RevisionIn
 from autohaptics.server.uploads import display_name, multipart_body, receive_upload
+from autohaptics.timeline import edit_ops
 
 router = APIRouter(tags=["timeline"])
+MAX_COPY_VALUES = 2_000_000  # one copy: 10 min of the fan grid, or hours of a few lanes
 
 _IMPORT_BODY = multipart_body(
     "our timeline JSON or CSV",
@@ -50,6 +54,35 @@ def get_timeline_bin(project_id: str, request: Request, composer: ComposerDep,
     if gzipped:
         headers["Content-Encoding"] = "gzip"
     return Response(data, media_type="application/octet-stream", headers=headers)
+
+
+@router.get("/api/projects/{project_id}/timeline/chair-temperature", response_model=ChairTemperatureOut)
+def get_chair_temperature(project_id: str, composer: ComposerDep, chair: ChairDep) -> dict:
+    """The composed temperature track as the chair plays it (the connected chair's profile, else the
+    default one): clamped to its safe range and slew-limited from neutral, C per tick."""
+    composed = composer.compose(project_id)
+    tl, profile = composed.timeline, chair.profile()
+    played = profile.played_temperature(tl.temperature_c, tick_s=tl.tick_s)
+    return {"revision": composed.revision, "tick_s": tl.tick_s, "min_c": profile.temp_min_c,
+            "max_c": profile.temp_max_c, "neutral_c": profile.temp_neutral_c,
+            "rate_c_per_s": profile.temp_rate_c_per_s, "values": np.round(played, 3).tolist()}
+
+
+@router.get("/api/projects/{project_id}/timeline/values", response_model=LaneValuesOut)
+def get_lane_values(project_id: str, composer: ComposerDep,
+                    lanes: str = Query(description="comma-separated lane ids, e.g. A1,A2,temperature,fans"),
+                    t0: int = Query(ge=0, description="first tick"),
+                    t1: int = Query(gt=0, description="tick after the last")) -> dict:
+    """The composed values of lanes over [t0, t1) at full precision (what the editor copies)."""
+    names = [lane.strip() for lane in lanes.split(",") if lane.strip()]
+    if not names:
+        raise ParameterError("lanes must name at least one lane")
+    width = sum(FAN_ROWS * FAN_COLS if lane == "fans" else 1 for lane in names)
+    if (t1 - t0) * width > MAX_COPY_VALUES:
+        raise ParameterError(f"a copy holds at most {MAX_COPY_VALUES} values; select fewer ticks or lanes")
+    composed = composer.compose(project_id)
+    return {"revision": composed.revision, "t0": t0, "t1": t1,
+            "values": edit_ops.lane_values(composed.timeline, names, t0, t1)}
 
 
 def _accepts_gzip(accept_encoding: str) -> bool:

@@ -29,6 +29,9 @@ export function debugState(page) {
     selection: tl && tl.selection ? { ...tl.selection, lanes: [...tl.selection.lanes] } : null,
     tool: tl ? tl.tool : null,
     thresholds: { ...page.params.thresholds },
+    played: page.played
+      ? { revision: page.played.revision, minC: page.played.minC, maxC: page.played.maxC, lo: page.played.lo, hi: page.played.hi }
+      : null,
     markers: page.markers.list.map((m) => ({ ...m })),
     timing: { ...page.timing },
     waveformReady: !Number.isNaN(page.timing.waveformLoaded),
@@ -44,7 +47,8 @@ export function debugState(page) {
 export function valuesAt(page, tick) {
   if (!page.data) return null;
   const v = page.data.valuesAt(tick);
-  return { vibration: v.vibration, temperature_c: v.temperature_c, fans: v.fans, fan_grid: Array.from(v.fan_grid), features: v.features };
+  const played = page.played && page.played.revision === page.data.revision ? page.played.at(tick) : null;
+  return { vibration: v.vibration, temperature_c: v.temperature_c, played_c: played, fans: v.fans, fan_grid: Array.from(v.fan_grid), features: v.features };
 }
 
 /** Page rectangle (client px) of a lane's canvas, for tests that point at lanes. @param {EditorPage} page @param {string} id */

@@ -4,7 +4,7 @@
  * through the edit session (autosave); the composed timeline is reloaded when the server took it.
  */
 
-import { Clipboard, clearOp, fadeOp, scaleOp, setOp, tempPointsOp } from "../../data/edit-ops.js";
+import { Clipboard, clearOp, fadeOp, inRegion, scaleOp, setOp, tempPointsOp } from "../../data/edit-ops.js";
 import { errorText } from "../../data/http.js";
 import { EditToolbar } from "../../panels/toolbar.js";
 import { toast } from "../../panels/widgets.js";
@@ -20,6 +20,14 @@ export class EditActions {
     this.points = [];
     /** @type {EditToolbar|null} */
     this.toolbar = null;
+    /** @type {Array<[number, number]>} fans picked on the fan grid: range ops on Fans change only these */
+    this.region = [];
+  }
+
+  /** The fan grid's picked region changed. @param {Array<[number, number]>} cells */
+  takeRegion(cells) {
+    this.region = cells;
+    this.updateToolbar();
   }
 
   buildToolbar() {
@@ -56,6 +64,7 @@ export class EditActions {
       points: this.points.length,
       markerSelected: !!page.markers.selected,
       ready: !!page.data,
+      cells: this.region.length,
     });
   }
 
@@ -87,7 +96,7 @@ export class EditActions {
     }
     let op;
     try {
-      op = build(sel);
+      op = inRegion(build(sel), this.region);
     } catch (err) {
       toast(errorText(err), "warn");
       return Promise.resolve(false);
@@ -138,15 +147,18 @@ export class EditActions {
     if (this.page.session) await this.page.session.redo();
   }
 
-  copy() {
-    const { timeline, data } = this.page;
+  /** Copy the selection's values at full precision (from the server; the lanes hold 1/255 steps). */
+  async copy() {
+    const { timeline, data, api, projectId } = this.page;
     const sel = timeline.selection;
     if (!sel || !data) return;
+    const t1 = Math.min(sel.t1, data.nTicks);
     let c;
     try {
-      c = this.clipboard.copy(data, sel);
+      const got = await api.laneValues(projectId, sel.lanes, sel.t0, t1);
+      c = this.clipboard.take(got.values, t1 - sel.t0);
     } catch (err) {
-      toast(errorText(err), "warn");
+      toast(`Could not copy: ${errorText(err)}`, "warn");
       return;
     }
     toast(`Copied ${c.length} ticks of ${sel.lanes.join(", ")}.`);

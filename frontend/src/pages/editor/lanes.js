@@ -53,6 +53,7 @@ export class EditorLanes {
     this.temperature = new TemperatureLane({
       data,
       range: () => page.tempRange(),
+      played: () => page.played,
       onPencil: (op) => page.edits.submitStroke(op, this.temperature),
       onPointsChange: (pts) => page.edits.takePoints(pts),
     });

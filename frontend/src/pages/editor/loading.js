@@ -6,6 +6,7 @@
 
 import { ApiError, errorText } from "../../data/http.js";
 import { EditSession } from "../../data/edit-session.js";
+import { PlayedTemperature } from "../../data/played-temperature.js";
 import { FIRST_BLOCKS, TimelineData } from "../../data/timeline-data.js";
 import { toast } from "../../panels/widgets.js";
 
@@ -114,6 +115,26 @@ export class TimelineLoader {
     page.timeline.invalidate();
     page.media.refresh();
     page.edits.updateToolbar();
+    page.params.showShare(data);
+    this.loadPlayed(data.revision);
+  }
+
+  /**
+   * The temperature the chair plays for a revision on screen; dropped when another one replaced it.
+   * @param {number} revision
+   */
+  async loadPlayed(revision) {
+    const page = this.page;
+    let played;
+    try {
+      played = new PlayedTemperature(await page.api.chairTemperature(page.projectId));
+    } catch (err) {
+      if (!page.disposed) toast(`Could not load the chair's temperature curve: ${errorText(err)}`, "warn");
+      return;
+    }
+    if (page.disposed || !page.data || page.data.revision !== revision || played.revision !== revision) return;
+    page.played = played;
+    page.timeline.invalidate("temperature");
   }
 
   /**

@@ -29,9 +29,11 @@ export class EditorMedia {
     // The media source is set once the timeline is drawn (attach), so the video's first range
     // requests do not compete with timeline.bin for the server.
     this.video = h("video", { class: "video", preload: "auto", playsinline: true, "data-testid": "video" });
-    const overlay = h("canvas", { class: "fan-overlay", hidden: true, "data-testid": "fan-overlay", "aria-label": "Fan grid at the playhead" });
+    const overlay = h("canvas", { class: "fan-overlay", hidden: true, tabindex: "0", "data-testid": "fan-overlay",
+      "aria-label": "Fan grid at the playhead: drag to pick a rectangle of fans for Set, Scale, Clear and the fades, Ctrl+drag to paint, Escape to clear" });
     const { fanRows, fanCols } = this.page.layout;
     this.fanOverlay = new FanOverlay(overlay, this.video, { rows: fanRows, cols: fanCols });
+    this.fanOverlay.onRegion = (cells) => this.page.edits.takeRegion(cells);
     this.player = new Player(this.video, { durationS, frameLoop: this.page.loop });
     return h("div", { class: "video-wrap" }, this.video, overlay);
   }

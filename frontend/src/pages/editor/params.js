@@ -1,6 +1,7 @@
 /**
  * The generation parameters in the editor: the thresholds (sliders and the lines on the feature
- * lanes, live while dragged, committed on release), the preset and mode line, and Regenerate.
+ * lanes, live while dragged, committed on release), the density (the `intensity.density`
+ * override) with the share of the film that vibrates, the preset and mode line, and Regenerate.
  */
 
 import { h } from "../../core/dom.js";
@@ -9,12 +10,16 @@ import { regenerateDialog } from "../../panels/regenerate.js";
 import { ThresholdsPanel } from "../../panels/thresholds.js";
 import { toast } from "../../panels/widgets.js";
 
+const DENSITY = "intensity.density";
+
 export class ParamsControl {
   /** @param {import("./shell.js").EditorPage} page */
   constructor(page) {
     this.page = page;
     /** @type {Record<string, number>} */
     this.thresholds = { ...(page.config.default_thresholds || {}) };
+    /** @type {Record<string, unknown>} the project's dotted overrides (the density is one) */
+    this.overrides = {};
     /** @type {ThresholdsPanel|null} */
     this.panel = null;
     this.info = h("p", { class: "params-info", "data-testid": "params-info" });
@@ -25,6 +30,7 @@ export class ParamsControl {
     this.panel = new ThresholdsPanel(features, {
       onInput: (name, v) => this.input(name, v),
       onCommit: (name, v) => this.commit(name, v),
+      onDensity: (share) => this.commitDensity(share),
     });
     this.showThresholds();
     return this.panel.el;
@@ -33,10 +39,50 @@ export class ParamsControl {
   /** Take the project's thresholds (when it has its own). @param {import("../../data/api.js").Project} project */
   takeThresholds(project) {
     if (project.params && project.params.thresholds) this.thresholds = { ...project.params.thresholds };
+    if (project.params && project.params.overrides) this.overrides = { ...project.params.overrides };
   }
 
   showThresholds() {
     for (const [n, v] of Object.entries(this.thresholds)) this.panel.set(n, v);
+    const d = this.overrides[DENSITY];
+    this.panel.setDensity(d === undefined || d === null ? null : Number(d));
+  }
+
+  /**
+   * The share of the film's ticks that vibrate in the timeline on screen (any actuator on).
+   * @param {import("../../data/timeline-data.js").TimelineData} data
+   */
+  showShare(data) {
+    if (!this.panel) return;
+    const nAct = data.shape.actuatorIds.length;
+    let on = 0;
+    for (let k = 0; k < data.nTicks; k++) {
+      for (let i = 0; i < nAct; i++) {
+        if (data.vibration[k * nAct + i] > 0) {
+          on++;
+          break;
+        }
+      }
+    }
+    this.panel.setShare(on / data.nTicks);
+  }
+
+  /**
+   * Commit the density (a share 0..1, or null to follow the thresholds alone): re-derived like a
+   * threshold. @param {number|null} share
+   */
+  async commitDensity(share) {
+    if (!this.page.session) return;
+    const before = this.overrides;
+    const overrides = { ...before };
+    if (share === null) delete overrides[DENSITY];
+    else overrides[DENSITY] = share;
+    this.overrides = overrides;
+    const ok = await this._put({ overrides });
+    if (!ok) {
+      this.overrides = before;
+      this.showThresholds();
+    }
   }
 
   /** @param {string} name */
@@ -79,34 +125,45 @@ export class ParamsControl {
     this.panel.set(name, value);
     page.timeline.invalidate();
     if (!page.session || value === before) return;
-    const thresholds = { ...this.thresholds };
+    const ok = await this._put({ thresholds: { ...this.thresholds } });
+    if (!ok) {
+      this.thresholds = { ...this.thresholds, [name]: before };
+      this.panel.set(name, before);
+      page.timeline.invalidate();
+    }
+  }
+
+  /**
+   * Send changed parameters: the server re-derives the vibration from its cached analysis (or
+   * starts an analysis job when that is needed), then the timeline is reloaded.
+   * @param {import("../../data/api.js").Params} body
+   * @returns {Promise<boolean>} false when the server refused them
+   */
+  async _put(body) {
+    const page = this.page;
     /** @type {import("../../data/api.js").Job|null} */
     let job = null;
     let derived = false;
     const ok = await page.session.run(async () => {
-      const res = await page.api.putParams(page.projectId, { thresholds });
+      const res = await page.api.putParams(page.projectId, body);
       if (res.job) job = res.job;
       if (res.derived && typeof res.revision === "number") {
         derived = true;
         page.session?.setRevision(res.revision);
       }
     });
-    if (!ok) {
-      this.thresholds = { ...this.thresholds, [name]: before };
-      this.panel.set(name, before);
-      page.timeline.invalidate();
-      return;
-    }
+    if (!ok) return false;
     if (derived) {
       // Derived from the cache: shown now. A job that came with it refines the ticks the cache could
       // only estimate, in the background (docs/API.md "Parameters").
       await page.loader.reload();
       this.updateInfo();
       if (job) await page.jobs.follow(job);
-      return;
+      return true;
     }
     if (job) await page.jobs.follow(job);
     this.updateInfo();
+    return true;
   }
 
   async regenerate() {

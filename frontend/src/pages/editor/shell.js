@@ -52,6 +52,8 @@ export class EditorPage {
     this.data = /** @type {import("../../data/timeline-data.js").TimelineData|null} */ (null);
     this.session = /** @type {import("../../data/edit-session.js").EditSession|null} */ (null);
     this.timeline = /** @type {TimelineView|null} */ (null);
+    /** what the chair plays of the temperature track (null until loaded) */
+    this.played = /** @type {import("../../data/played-temperature.js").PlayedTemperature|null} */ (null);
     /** revision of the timeline last drawn on the lanes */
     this.drawnRevision = /** @type {number|null} */ (null);
     this.disposed = false;
@@ -109,9 +111,9 @@ export class EditorPage {
     return this.layout.tickS;
   }
 
-  /** Temperature range for drawing: the generator's range, widened to the data. */
+  /** Temperature range for drawing: the generator's range, widened to the data and to what the chair plays. */
   tempRange() {
-    return drawnTemperatureRange(this.layout.temperature, this.data);
+    return drawnTemperatureRange(this.layout.temperature, this.data, this.played);
   }
 
   /** @param {number} durationS */

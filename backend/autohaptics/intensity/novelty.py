@@ -1,0 +1,72 @@
+"""How far a feature stands above its own recent baseline: the "events" rule's measure
+(ALGORITHM.md section 2, decision 2026-11; docs/GUIDE.md "Vibration").
+
+A steady bed (music, dialogue, room tone) keeps every feature near the loud level it had over the
+last few seconds; an impact, an explosion, a booming hit or a rising rumble lifts it above that.
+Per 20 ms frame:
+
+- the feature goes to a scale on which equal ratios sound alike: loudness (sone), sharpness (acum)
+  and the booming index as they are; low-frequency energy (Pa^2) to the power 0.3, Stevens's
+  loudness exponent for energy;
+- its envelope is the maximum over the last ``ENVELOPE_S`` (1 s: the loud level of speech or music
+  between its syllables and notes, so that they do not count as events one by one);
+- the baseline is the mean envelope over ``baseline_s`` seconds ending ``GAP_S`` (0.1 s) before
+  the frame (only the frames the film has: before the first ``GAP_S`` the baseline is silence,
+  so sound that starts the film is an onset);
+- novelty = log2(value / baseline) / ``FULL_OCTAVES``, at least 0: 0 at or below the baseline,
+  1 at a rise of 2^0.5 (+5 phon for loudness); :func:`novelty` clips it at 1 for display, the
+  rule compares the unclipped value (so that a density can rank ticks that all passed 1).
+
+Sharpness describes a sound's colour, not its level: :func:`feature_novelty` keeps its novelty
+only where the loudness rises above its baseline too (a hiss or a consonant between louder vowels
+is brighter than what came before, but not an event).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from autohaptics.timebase import FRAME_S
+
+ENVELOPE_S = 1.0
+GAP_S = 0.1
+FULL_OCTAVES = 0.5
+EXPONENTS = {"sharpness": 1.0, "booming": 1.0, "low_energy": 0.3, "loudness": 1.0}
+FLOOR = 1e-2  # of the feature's maximum over the film, added to value and baseline: no 0/0
+
+
+def feature_novelty(features: dict[str, np.ndarray], *, baseline_s: float = 3.0) -> dict[str, np.ndarray]:
+    """Unclipped novelty (>= 0, finite) of each of the four features, sharpness kept only where the
+    loudness rises too (module docstring). features : {name: [shape=(n,)] per 20 ms frame}."""
+    out = {f: novelty(x, exponent=EXPONENTS[f], baseline_s=baseline_s, clip=False) for f, x in features.items()}
+    if "sharpness" in out and "loudness" in out:
+        out["sharpness"] = np.where(out["loudness"] > 0, out["sharpness"], 0.0)
+    return out
+
+
+def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, clip: bool = True) -> np.ndarray:
+    """Novelty of one feature curve (module docstring).
+
+    x : float [shape=(n,)], one value per 20 ms frame, >= 0 (non-finite values count as 0).
+    baseline_s : length of the recent baseline, seconds (> 0).
+    Returns float64 [shape=(n,)], finite, >= 0 and (with ``clip``) <= 1; all zeros for silence.
+    """
+    v = np.asarray(x, dtype=np.float64)
+    v = np.where(np.isfinite(v), np.maximum(v, 0.0), 0.0) ** exponent
+    n = v.size
+    top = float(v.max()) if n else 0.0
+    if top <= 0.0:
+        return np.zeros(n)
+    env_n = max(1, int(round(ENVELOPE_S / FRAME_S)))
+    from scipy.ndimage import maximum_filter1d  # here: the CLI's option parsing imports this module
+
+    env = maximum_filter1d(v, env_n, origin=(env_n - 1) // 2, mode="nearest")  # max of frames t-env_n+1 .. t
+    cum = np.concatenate([[0.0], np.cumsum(env)])
+    idx = np.arange(n)
+    hi = np.clip(idx - int(round(GAP_S / FRAME_S)), 0, n)
+    lo = np.clip(hi - max(1, int(round(baseline_s / FRAME_S))), 0, n)
+    count = hi - lo
+    base = np.where(count > 0, (cum[hi] - cum[lo]) / np.maximum(count, 1), 0.0)
+    floor = FLOOR * top
+    out = np.maximum(np.log2((v + floor) / (np.maximum(base, 0.0) + floor)) / FULL_OCTAVES, 0.0)
+    return np.minimum(out, 1.0) if clip else out

@@ -1,0 +1,256 @@
+"""The editor walked as a designer (issue 18): dialogs answer Enter and Escape, values keep their
+precision through copy and paste, the temperature lane shows what the chair plays."""
+
+from __future__ import annotations
+
+import csv
+import io
+
+import pytest
+
+from browser_support import lane_rect, open_editor, state, wait_job, wait_revision_above
+
+pytestmark = pytest.mark.browser
+
+
+def select_time(pg, t0_s: float, t1_s: float) -> None:
+    """Select [t0_s, t1_s) on A5 (drag over the middle row of the heat map)."""
+    r = lane_rect(pg, "actuators")
+    y = r["y"] + r["height"] / 2
+    pg.mouse.move(pg.evaluate("(t) => window.autohaptics.clientXOf(t)", t0_s), y)
+    pg.mouse.down()
+    pg.mouse.move(pg.evaluate("(t) => window.autohaptics.clientXOf(t)", t1_s), y, steps=4)
+    pg.mouse.up()
+
+
+def test_enter_submits_and_escape_cancels_every_dialog(page, api, project_copy):
+    pid = project_copy["id"]
+    open_editor(page, pid)
+    # Add marker: the focus starts in the label, Enter adds it.
+    page.click("[data-testid=marker-add]")
+    assert page.evaluate("() => document.activeElement.dataset.testid") == "dialog-input"
+    page.keyboard.type("Door slam")
+    s0 = state(page)
+    page.keyboard.press("Enter")
+    s1 = wait_revision_above(page, s0["revision"])
+    assert [m["label"] for m in s1["markers"]] == ["Door slam"]
+    # Escape cancels: nothing is sent.
+    page.click("[data-testid=marker-add]")
+    page.keyboard.type("Not this one")
+    page.keyboard.press("Escape")
+    page.wait_for_selector("dialog[open]", state="detached")
+    assert state(page)["revision"] == s1["revision"]
+    # Regenerate: focus in the first field, Escape cancels, Enter in a threshold starts the job.
+    page.click("[data-testid=regenerate]")
+    page.wait_for_selector("[data-testid=regenerate-dialog][open]")
+    assert page.evaluate("() => document.activeElement.dataset.testid") == "regen-preset"
+    page.keyboard.press("Escape")
+    page.wait_for_selector("dialog[open]", state="detached")
+    assert api.get(f"/api/projects/{pid}").json()["status"] == "ready"
+    page.click("[data-testid=regenerate]")
+    page.fill("[data-testid=regen-threshold-loudness]", "0.7")
+    page.focus("[data-testid=regen-threshold-loudness]")
+    page.keyboard.press("Enter")
+    page.wait_for_selector("dialog[open]", state="detached")
+    page.wait_for_function(f"() => fetch('/api/projects/{pid}').then(r => r.json())"
+                           ".then(p => p.params.thresholds.loudness === 0.7)")
+    # Rename on the projects page: Enter renames, Escape keeps the name.
+    page.goto("/#/")
+    row = page.locator(f"[data-testid=project-row][data-id='{pid}']")
+    row.locator("[data-testid=project-rename]").click()
+    page.keyboard.press("Control+A")
+    page.keyboard.type("Renamed by Enter")
+    page.keyboard.press("Enter")
+    page.wait_for_function(f"() => fetch('/api/projects/{pid}').then(r => r.json())"
+                           ".then(p => p.name === 'Renamed by Enter')")
+    row.locator("[data-testid=project-rename]").click()
+    page.keyboard.type("Not this name")
+    page.keyboard.press("Escape")
+    page.wait_for_selector("dialog[open]", state="detached")
+    assert api.get(f"/api/projects/{pid}").json()["name"] == "Renamed by Enter"
+
+
+def test_the_temperature_lane_shows_what_the_chair_plays(page, api, project_copy):
+    pid = project_copy["id"]
+    rev = api.get(f"/api/projects/{pid}").json()["revision"]
+    r = api.post(f"/api/projects/{pid}/edits", json={"base_revision": rev, "op": {
+        "op": "set", "lanes": ["temperature"], "t0": 100, "t1": 200, "value": 45.0}})
+    assert r.status_code == 200, r.text
+    open_editor(page, pid)
+    page.wait_for_function("() => { const s = window.autohaptics.state(); return s.played && s.played.revision === s.revision; }")
+    played = state(page)["played"]
+    assert (played["minC"], played["maxC"]) == (18.0, 40.0)
+    ticks = page.evaluate("() => Array.from({length: 300}, (_, k) => window.autohaptics.valuesAt(k))")
+    target = [v["temperature_c"] for v in ticks]
+    chair = [v["played_c"] for v in ticks]
+    assert target[150] == pytest.approx(45.0)
+    assert chair[199] == pytest.approx(40.0, abs=1e-3), "the chair plays its own maximum, not the 45 C target"
+    assert max(chair) <= 40.0 + 1e-3
+    assert max(abs(a - b) for a, b in zip(chair, chair[1:])) <= 0.1 + 1e-3, "at most 1 C/s"
+    # The chair's limit is drawn: its label colour is on the lane.
+    lit = page.evaluate("""() => {
+        const c = document.querySelector('canvas[data-lane="temperature"]');
+        const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+        let n = 0;
+        for (let i = 0; i < d.length; i += 4) if (d[i] === 0xfb && d[i + 1] === 0x92 && d[i + 2] === 0x3c) n++;
+        return n; }""")
+    assert lit > 20
+
+
+def test_a_pasted_half_is_a_half_in_the_csv(page, api, project_copy):
+    pid = project_copy["id"]
+    open_editor(page, pid)
+    select_time(page, 20.05, 20.95)  # ticks 200..209
+    page.fill("[data-testid=edit-value]", "0.5")
+    s0 = state(page)
+    page.click("[data-testid=edit-set]")
+    s1 = wait_revision_above(page, s0["revision"])
+    page.click("[data-testid=edit-copy]")  # the toolbar's Copy and Paste this time (test_tools uses the keys)
+    page.wait_for_function("() => !document.querySelector('[data-testid=edit-paste]').disabled")
+    page.evaluate("() => { document.querySelector('[data-testid=video]').currentTime = 0; }")
+    page.wait_for_function("() => window.autohaptics.state().playheadS === 0")
+    page.click("[data-testid=edit-paste]")
+    wait_revision_above(page, s1["revision"])
+    paste = api.get(f"/api/projects/{pid}/edits").json()["ops"][-1]
+    assert paste["op"] == "paste" and paste["t0"] == 0
+    assert paste["values"] == {"A5": [0.5] * 10}
+    rows = list(csv.DictReader(io.StringIO(api.get(f"/api/projects/{pid}/export?format=csv").text)))
+    assert [float(rows[k]["A5"]) for k in range(10)] == [0.5] * 10
+    assert rows[0]["A5"] in ("0.5", "0.5000")
+
+
+def overlay_cell_xy(pg, row: int, col: int) -> tuple[float, float]:
+    """Client coordinates of the middle of one fan cell on the overlay (the picture inside the video)."""
+    return tuple(pg.evaluate(
+        """([row, col]) => {
+            const c = document.querySelector('[data-testid=fan-overlay]');
+            const v = document.querySelector('[data-testid=video]');
+            const b = c.getBoundingClientRect();
+            const s = Math.min(b.width / v.videoWidth, b.height / v.videoHeight);
+            const pw = v.videoWidth * s, ph = v.videoHeight * s;
+            const x0 = b.x + (b.width - pw) / 2, y0 = b.y + (b.height - ph) / 2;
+            return [x0 + (col + 0.5) * pw / 17, y0 + (row + 0.5) * ph / 9];
+        }""", [row, col]))
+
+
+def fan_column(rows: list[dict], row: int, col: int) -> list[float]:
+    return [float(r[f"fan_r{row}_c{col}"]) for r in rows]
+
+
+def test_a_fan_region_edit_survives_reload_regeneration_and_export(page, api, project_copy):
+    pid = project_copy["id"]
+    open_editor(page, pid)
+    before = list(csv.DictReader(io.StringIO(api.get(f"/api/projects/{pid}/export?format=csv").text)))
+    r = lane_rect(page, "fans")
+    y = r["y"] + r["height"] / 2
+    page.mouse.move(page.evaluate("(t) => window.autohaptics.clientXOf(t)", 5.05), y)
+    page.mouse.down()
+    page.mouse.move(page.evaluate("(t) => window.autohaptics.clientXOf(t)", 7.95), y, steps=4)
+    page.mouse.up()
+    assert state(page)["selection"] == {"t0": 50, "t1": 80, "lanes": ["fans"]}
+    page.click("[data-testid=toggle-fan-overlay]")
+    page.wait_for_function("() => document.querySelector('[data-testid=video]').videoWidth > 0")
+    # A rectangle of rows 1..2 x columns 3..5, then one more cell painted with Ctrl.
+    page.mouse.move(*overlay_cell_xy(page, 1, 3))
+    page.mouse.down()
+    page.mouse.move(*overlay_cell_xy(page, 2, 5), steps=4)
+    page.mouse.up()
+    page.keyboard.down("Control")
+    page.mouse.move(*overlay_cell_xy(page, 7, 16))
+    page.mouse.down()
+    page.mouse.up()
+    page.keyboard.up("Control")
+    assert "7 fans picked" in page.text_content("[data-testid=selection-info]")
+    page.fill("[data-testid=edit-value]", "0.8")
+    s0 = state(page)
+    page.click("[data-testid=edit-set]")
+    wait_revision_above(page, s0["revision"])
+    op = api.get(f"/api/projects/{pid}/edits").json()["ops"][-1]
+    picked = [[1, 3], [1, 4], [1, 5], [2, 3], [2, 4], [2, 5], [7, 16]]
+    assert op == {"op": "set", "lanes": ["fans"], "t0": 50, "t1": 80, "value": 0.8, "cells": picked}
+
+    def check() -> None:
+        rows = list(csv.DictReader(io.StringIO(api.get(f"/api/projects/{pid}/export?format=csv").text)))
+        for row, col in picked:
+            assert fan_column(rows, row, col)[50:80] == [0.8] * 30
+        for row, col in ((0, 0), (1, 2), (3, 4), (8, 16)):  # outside the region: as generated
+            assert fan_column(rows, row, col) == fan_column(before, row, col)
+
+    check()
+    page.reload()
+    open_editor(page, pid)
+    grid = page.evaluate("() => window.autohaptics.valuesAt(60).fan_grid")
+    assert grid[1 * 17 + 4] == pytest.approx(0.8, abs=1 / 255) and grid[7 * 17 + 16] == pytest.approx(0.8, abs=1 / 255)
+    rev = api.get(f"/api/projects/{pid}").json()["revision"]
+    r = api.put(f"/api/projects/{pid}/params", json={"thresholds": {"loudness": 0.5}})
+    assert r.status_code in (200, 202), r.text
+    if r.json().get("job"):
+        assert wait_job(api, r.json()["job"]["id"])["status"] == "done"
+    assert api.get(f"/api/projects/{pid}").json()["revision"] > rev
+    check()
+
+
+CONTROLS_CLIPPED = """() => {
+    // Every control of the header, the side column, the transport and the toolbar, scrolled into
+    // view inside its own scroll area, must lie inside the viewport and inside that area.
+    const out = [];
+    const scroller = (el) => {
+        for (let p = el.parentElement; p; p = p.parentElement) {
+            const o = getComputedStyle(p).overflowY;
+            if ((o === 'auto' || o === 'scroll') && p.scrollHeight > p.clientHeight + 1) return p;
+        }
+        return null;
+    };
+    const sel = '.topbar button, .side button, .side input, .side select, .transport button, .toolbar button, .toolbar input';
+    for (const el of document.querySelectorAll(sel)) {
+        if (el.closest('[hidden]') || el.offsetParent === null || el.classList.contains('visually-hidden')) continue;
+        el.scrollIntoView({block: 'nearest', inline: 'nearest'});
+        const r = el.getBoundingClientRect();
+        const box = scroller(el);
+        const area = box ? box.getBoundingClientRect() : {top: 0, left: 0, bottom: innerHeight, right: innerWidth};
+        const inside = (b) => r.top >= b.top - 1 && r.left >= b.left - 1 && r.bottom <= b.bottom + 1 && r.right <= b.right + 1;
+        if (!inside(area) || !inside({top: 0, left: 0, bottom: innerHeight, right: innerWidth})) {
+            out.push(`${el.dataset.testid || el.textContent.trim() || el.tagName} at ${Math.round(r.top)}..${Math.round(r.bottom)}`);
+        }
+    }
+    for (const panel of document.querySelectorAll('.side .panel')) {
+        if (panel.scrollHeight > panel.clientHeight + 1) out.push(`panel ${panel.textContent.slice(0, 20)} scrolls on its own`);
+    }
+    return out;
+}"""
+
+
+@pytest.mark.parametrize("width, height", [(1366, 768), (1440, 900), (1920, 1080)])
+def test_no_panel_is_clipped_and_the_ruler_stays(page, project_copy, width, height):
+    page.set_viewport_size({"width": width, "height": height})
+    open_editor(page, project_copy["id"])
+    assert page.evaluate(CONTROLS_CLIPPED) == []
+    for name in ("sharpness", "booming", "low_energy", "loudness"):
+        assert page.is_visible(f"[data-testid=threshold-{name}]")
+    host = page.locator(".timeline-host")
+    host.evaluate("(el) => { el.scrollTop = el.scrollHeight; }")
+    ruler = page.locator("[data-testid=ruler]").bounding_box()
+    top = host.bounding_box()["y"]
+    assert top - 1 <= ruler["y"] <= top + 2, "the ruler stays at the top of the scrolled lanes"
+    for lane in ("fans", "markers"):
+        r = lane_rect(page, lane)
+        assert 0 <= r["y"] and r["y"] + r["height"] <= height, f"{lane} lane reachable"
+
+
+def test_a_threshold_drag_with_shift_is_ten_times_finer(page, project_copy):
+    open_editor(page, project_copy["id"])
+    s0 = state(page)
+    thr0 = s0["thresholds"]["booming"]
+    r = lane_rect(page, "feature-booming")
+    y0 = r["y"] + r["height"] - 3 - thr0 * (r["height"] - 6)
+    x = r["x"] + r["width"] * 0.4
+    page.mouse.move(x, y0)
+    page.keyboard.down("Shift")
+    page.mouse.down()
+    page.mouse.move(x, y0 + 15, steps=5)
+    page.mouse.up()
+    page.keyboard.up("Shift")
+    s1 = wait_revision_above(page, s0["revision"])
+    moved = thr0 - s1["thresholds"]["booming"]
+    full = 15 / (r["height"] - 6)  # what 15 px move without Shift
+    assert moved == pytest.approx(full / 10, abs=0.002)

@@ -1,0 +1,133 @@
+"""Known answers for the default "events" vibration rule and the density control, on sound the
+tests write themselves (autohaptics.testing.sounds -> a real .wav -> the pipeline), and properties
+of the rule on any input."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from hypothesis.extra import numpy as hnp
+
+from autohaptics import intensity as it
+from autohaptics.errors import ParameterError
+from autohaptics.params import THESIS_RULES, resolve_params
+from autohaptics.pipeline.generate import generate
+from autohaptics.testing import sounds, write_scene
+from autohaptics.timebase import FRAMES_PER_TICK, TICK_S
+
+
+def _run(tmp_path, scene, **overrides):
+    """(per-tick intensity, the chair's strongest actuator per tick, stats) for ``scene``."""
+    path = tmp_path / f"{scene.name}.wav"
+    if not path.exists():
+        write_scene(path, scene)
+    params, _ = resolve_params("balanced", {"mode": "audio", "tracks": ["vibration"], **overrides})
+    tl = generate(path, params)
+    return tl.features["intensity"], tl.vibration.max(axis=1), tl.stats["vibration"]
+
+
+def _ticks(t0, t1):
+    return np.arange(int(round(t0 / TICK_S)), int(round(t1 / TICK_S)))
+
+
+def test_impacts_drive_the_chair_and_the_music_bed_does_not(tmp_path):
+    intensity, chair, stats = _run(tmp_path, sounds.music_with_impacts())
+    impact = np.concatenate([_ticks(t, t + sounds.IMPACT_LENGTH_S) for t in sounds.IMPACT_TIMES_S])
+    assert (chair[impact] >= 0.7 * chair.max()).all(), chair[impact]
+    assert (intensity[impact] >= 0.7 * intensity.max()).all()
+    music_only = np.ones(chair.size, bool)
+    for t in sounds.IMPACT_TIMES_S:  # an impact and the second after it (its decay)
+        music_only[_ticks(t, t + 1.3)] = False
+    assert (chair[music_only] > 0).mean() <= 0.2
+    assert stats["share"] == pytest.approx((chair > 0).mean())
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_speech_alone_rarely_vibrates(tmp_path, seed):
+    scene = sounds.speech(level_dbfs=-20.0 - 4 * seed, seed=seed)
+    _, chair, _ = _run(tmp_path, scene)
+    assert (chair > 0).mean() <= 0.2
+    _, thesis, _ = _run(tmp_path, scene, **THESIS_RULES)
+    assert (thesis > 0).mean() > 0.4  # what the default fixes: the thesis rule buzzes on speech
+
+
+def test_silence_never_vibrates(tmp_path):
+    intensity, chair, stats = _run(tmp_path, sounds.silence())
+    assert not chair.any() and not intensity.any() and stats["share"] == 0.0
+    _, chair, _ = _run(tmp_path, sounds.silence(), **{"intensity.density": 0.5})
+    assert not chair.any()
+
+
+def test_a_rising_rumble_vibrates_ever_harder(tmp_path):
+    scene = sounds.rising_rumble(duration_s=10.0, start_s=1.0)
+    _, chair, _ = _run(tmp_path, scene)
+    rumble = chair[_ticks(1.0, 10.0)]
+    assert not chair[_ticks(0.0, 1.0)].any()
+    second_half = rumble[rumble.size // 2:]
+    assert (second_half > 0).all()
+    on = rumble[rumble > 0]
+    assert on.size > rumble.size / 2
+    # rising: each later second vibrates harder than the one before it
+    per_second = [on[k:k + 10].mean() for k in range(0, on.size - 9, 10)]
+    assert all(b > a for a, b in zip(per_second, per_second[1:])), per_second
+    assert np.corrcoef(np.arange(on.size), on)[0, 1] > 0.95
+
+
+@pytest.mark.parametrize("make", [sounds.speech, sounds.rising_rumble, sounds.music_with_impacts])
+def test_density_gives_about_that_share(tmp_path, make):
+    scene = make()
+    _, chair, stats = _run(tmp_path, scene, **{"intensity.density": 0.25})
+    gated = _run(tmp_path, scene, **{"intensity.density": 1.0})[1]
+    want = min(0.25, (gated > 0).mean())  # never more than the ticks above the loudness gate
+    assert abs((chair > 0).mean() - want) <= 0.03
+    assert stats["density"] == 0.25 and stats["share"] == pytest.approx((chair > 0).mean())
+
+
+def test_density_works_with_the_thesis_rule_too(tmp_path):
+    _, chair, _ = _run(tmp_path, sounds.speech(), **THESIS_RULES, **{"intensity.density": 0.25})
+    assert abs((chair > 0).mean() - 0.25) <= 0.03
+
+
+@pytest.mark.parametrize("override, value, message", [
+    ("intensity.rule", "loud", "intensity.rule"), ("intensity.density", 1.5, "density"),
+    ("intensity.density", "nan", "density"), ("intensity.baseline_s", 0.0, "baseline_s"),
+])
+def test_rule_and_density_are_validated(override, value, message):
+    with pytest.raises(ParameterError, match=message):
+        resolve_params("balanced", {override: value})
+
+
+def test_no_density_is_the_default_and_can_be_asked_for():
+    assert resolve_params("balanced")[0].intensity.density is None
+    assert resolve_params("balanced", {"intensity.density": "none"})[0].intensity.density is None
+
+
+_feature = hnp.arrays(np.float64, st.integers(1, 80).map(lambda k: k * FRAMES_PER_TICK),
+                      elements=st.floats(0, 1e6) | st.just(0.0) | st.just(np.nan) | st.just(np.inf))
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.data(), st.sampled_from(it.RULES), st.none() | st.floats(0, 1), st.sampled_from(["max", "percentile"]))
+def test_intensity_is_finite_and_in_range_for_any_features(data, rule, density, normaliser):
+    first = data.draw(_feature)
+    feats = {f: data.draw(hnp.arrays(np.float64, first.size, elements=st.floats(0, 1e6) | st.just(np.nan)))
+             for f in it.FEATURES[1:]}
+    feats["sharpness"] = first
+    feats = {f: np.where(np.isfinite(x), x, 0.0) for f, x in feats.items()}  # the analysis repairs these
+    n = first.size // FRAMES_PER_TICK
+    params = it.IntensityParams(rule=rule, density=density, normaliser=normaliser)
+    out, curves, stats = it.audio_intensity(feats, n, params=params)
+    assert out.shape == (n,) and np.isfinite(out).all() and out.min() >= 0 and out.max() <= 1
+    for c in curves.values():
+        assert c.shape == (n,) and np.isfinite(c).all() and c.min() >= 0 and c.max() <= 1
+    assert np.isfinite(stats["threshold_scale"]) and stats["threshold_scale"] >= 0
+
+
+@settings(max_examples=40, deadline=None)
+@given(hnp.arrays(np.float64, st.integers(0, 400), elements=st.floats(0, 1e9) | st.just(np.nan) | st.just(np.inf)),
+       st.floats(0.5, 30))
+def test_novelty_is_finite_and_zero_for_silence(x, baseline_s):
+    from autohaptics.intensity.novelty import novelty
+
+    out = novelty(x, baseline_s=baseline_s)
+    assert out.shape == x.shape and np.isfinite(out).all() and (out >= 0).all() and (out <= 1).all()
+    assert not novelty(np.zeros(x.size), baseline_s=baseline_s).any()

@@ -1,0 +1,97 @@
+"""The tracks are a property of the film, not of its encoding: a generated motion scene, encoded once
+and re-encoded the ways a film reaches a user (half size; 25 -> 30 fps by repeated frames; 24 -> 30 fps
+by 3:2 pulldown; VP9 at a low bit rate), must give the same fans, vibration onsets and temperature
+as the original encode. Also the flow pair's repeated-frame rule on its own (issue 16, points 3-4).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from autohaptics import pipeline
+from autohaptics import testing as synth
+from autohaptics.metrics import compare_timelines
+from autohaptics.params import THESIS_RULES, resolve_params
+from autohaptics.testing import Noise, Scene, Segment, Shape, Texture, Tone
+from autohaptics.testing.reencode import reencode
+
+
+def tex(seed: int, scale: float = 0.08, contrast: float = 0.35) -> Texture:
+    return Texture("noise", scale, contrast, seed=seed)
+
+
+# Three shots, each with its own motion: a disc crossing the lower left, a disc rushing at the
+# camera on the right, a panning background; a quiet tone with three loud bursts; warm, cool and
+# grey shots.
+MOTION = Scene(6.0,
+               background=(Segment(0, 2.0, (150, 90, 60), texture=tex(1)),
+                           Segment(2.0, 4.0, (70, 110, 170), texture=tex(2)),
+                           Segment(4.0, 6.0, (120, 120, 120), texture=tex(3), pan=(0.25, 0.0))),
+               shapes=(Shape("circle", (240, 230, 200), t_on=0.4, t_off=1.8, xy0=(0.1, 0.7), xy1=(0.5, 0.6),
+                             size0=(0.18, 0.3), texture=Texture("noise", 0.3, 0.5, seed=5)),
+                       Shape("circle", (235, 140, 40), t_on=2.4, t_off=3.8, xy0=(0.75, 0.45), size0=(0.08, 0.14),
+                             size1=(0.4, 0.7), texture=Texture("noise", 0.25, 0.5, seed=6))),
+               audio=(Tone(0, 6, 220.0, level_dbfs=-30.0), Noise(1.0, 1.15, level_dbfs=-6.0, seed=1),
+                      Noise(3.0, 3.15, level_dbfs=-6.0, seed=2), Noise(5.0, 5.15, level_dbfs=-6.0, seed=3)))
+
+VARIANTS = {
+    "half size": (25, dict(width=320, height=180), ".mp4"),
+    "25 -> 30 fps, repeated frames": (25, dict(fps=30, conversion="repeat"), ".mp4"),
+    "24 -> 30 fps, 3:2 pulldown": (24, dict(fps=30, conversion="pulldown"), ".mp4"),
+    "VP9 at 150 kbit/s, Opus": (24, dict(video_codec="libvpx-vp9", video_bit_rate=150_000), ".webm"),
+    # measured 0.787 tolerant fan IoU (ticks F1 1.00): the heavier artefacts of the 25 fps encode
+    # move the embedded depth's detail cue (docs/BENCHMARKS.md, "Fans across encodes")
+    "VP9 at 150 kbit/s, 25 fps": pytest.param(25, dict(video_codec="libvpx-vp9", video_bit_rate=150_000), ".webm",
+                                              marks=pytest.mark.xfail(strict=True, reason="tolerant fan IoU 0.79")),
+}
+
+
+@pytest.fixture(scope="module")
+def originals(tmp_path_factory) -> dict:
+    d = tmp_path_factory.mktemp("reencode")
+    out = {}
+    for fps in (24, 25):
+        path = synth.write_scene(d / f"motion_{fps}.mp4", MOTION, width=640, height=360, fps=fps)
+        out[fps] = (path, pipeline.generate(path))
+    return out
+
+
+@pytest.mark.parametrize("fps, kwargs, suffix", list(VARIANTS.values()), ids=list(VARIANTS))
+def test_a_reencode_gives_the_same_fans_vibration_and_temperature(originals, tmp_path, fps, kwargs, suffix):
+    src, ref = originals[fps]
+    test = pipeline.generate(reencode(src, tmp_path / f"re{suffix}", **kwargs))
+    r = compare_timelines(ref, test)
+    fans = r["fans"]
+    assert fans["ref_ticks_on"] >= 10, "the scene must blow on a good share of its 60 ticks"
+    assert fans["ticks_f1"] >= 0.9, fans
+    assert fans["iou_tolerant"] >= 0.8, fans
+    assert r["vibration"]["onsets"]["f1"] >= 0.9, r["vibration"]["onsets"]
+    assert r["temperature"]["mae_c"] <= 0.5
+
+
+@pytest.fixture(scope="module")
+def repeated_pan(tmp_path_factory):
+    """A background panning at 0.2 frame widths/s, 24 fps, converted to 30 fps by repeated frames
+    (every fifth frame a repeat: the ticks, three frames apart, meet every phase of the pattern)."""
+    d = tmp_path_factory.mktemp("pan")
+    scene = Scene(2.0, background=(Segment(0, 2.0, (120, 120, 120), texture=tex(4, 0.1, 0.5), pan=(0.2, 0.0)),))
+    src = synth.write_scene(d / "pan24.mp4", scene, width=320, height=180, fps=24)
+    return reencode(src, d / "pan30.mp4", fps=30, conversion="repeat")
+
+
+def test_a_tick_whose_successor_frame_repeats_still_sees_the_motion(repeated_pan):
+    tl = pipeline.generate(repeated_pan)
+    motion = tl.features["motion_fw_per_s"][1:-1]
+    # every pair spans one source frame (1/24 s of motion) over its real interval, 1/30 or 2/30 s
+    assert motion.min() >= 0.5 * 0.2 and motion.max() <= 1.5 * 0.2, motion
+    assert tl.stats["video"]["flow"]["repeats_skipped"] > 0
+
+
+def test_the_thesis_rule_pairs_the_next_frame_even_when_it_repeats(repeated_pan):
+    params, _ = resolve_params("balanced", dict(THESIS_RULES))
+    assert params.flow.repeat_wait_s == 0
+    tl = pipeline.generate(repeated_pan, params=params)
+    motion = tl.features["motion_fw_per_s"][1:-1]
+    assert (motion < 0.01).any(), motion  # a tick whose next decoded frame is a repeat reads still
+    assert tl.stats["video"]["flow"]["repeats_skipped"] == 0
