@@ -5,6 +5,7 @@ analysis signal), :mod:`.video` (decoded frames, all or the reference ones only)
 (a frame's small proxies, made only when a stage asks).
 """
 
+from autohaptics.lazy import lazy_attributes
 from autohaptics.media.probe import (AudioInfo, AudioReport, MediaInfo, VideoInfo, check_complete, check_truncation,
                                      open_container, probe, source_block)
 
@@ -13,13 +14,7 @@ from autohaptics.media.probe import (AudioInfo, AudioReport, MediaInfo, VideoInf
 _LAZY = {"iter_audio": "audio", "read_audio": "audio", "Frame": "frames", "DECODE_MODES": "video",
          "SPARSE_MIN_FPS": "video", "decode_all": "video", "iter_video": "video"}
 
-
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        return getattr(importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_attributes(__name__, _LAZY)
 
 
 __all__ = ["AudioInfo", "AudioReport", "DECODE_MODES", "Frame", "MediaInfo", "SPARSE_MIN_FPS", "VideoInfo",
