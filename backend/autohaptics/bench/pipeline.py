@@ -57,18 +57,19 @@ def generation_argv(args) -> tuple[str, ...]:
     return tuple(argv + (["--allow-truncated"] if args.allow_truncated else []))
 
 
-def whole_process(path: Path, args, out: Path) -> tuple[float, float]:
-    """Median whole-process seconds (start to exit) of a bare decode and of ``generate``, alternating."""
+def whole_process(path: Path, args, out: Path) -> tuple[float, float, float, float]:
+    """Median whole-process seconds (start to exit) of a bare decode and of ``generate``, alternating:
+    wall decode, wall generate, CPU (user + system) decode, CPU generate."""
     from autohaptics.bench.child import measure_decode, measure_generate
 
     work = out / f"{path.stem}_process"
     work.mkdir(parents=True, exist_ok=True)
     run = GenerateRun(f"generate_{args.preset}", generation_argv(args))
-    decode_s, gen_s = [], []
+    runs = []
     for _ in range(max(1, args.repeat)):
-        decode_s.append(measure_decode(path, work)["process_wall_s"])
-        gen_s.append(measure_generate(path, run, work)["process_wall_s"])
-    return statistics.median(decode_s), statistics.median(gen_s)
+        d, g = measure_decode(path, work), measure_generate(path, run, work)
+        runs.append((d["process_wall_s"], g["process_wall_s"], d["process_cpu_s"], g["process_cpu_s"]))
+    return tuple(statistics.median(col) for col in zip(*runs))
 
 
 def run(args) -> int:
@@ -105,8 +106,9 @@ def bench_one(path: Path, args, params, preset: str, generate) -> None:
           f"{'%dx%d @ %.2f fps' % (v.width, v.height, v.fps) if v else 'no video'}, preset {preset}, mode {params.mode}")
     print(f"in-process: bare decode {d:.3f} s, generate {g:.3f} s, ratio {g / d:.3f} (median of {len(gen_s)}), "
           f"peak RSS {max(rss):.0f} MB")
-    pd, pg = whole_process(path, args, Path(args.out))
-    print(f"whole process (start to exit): bare decode {pd:.3f} s, generate {pg:.3f} s, ratio {pg / pd:.3f}")
+    pd, pg, cd, cg = whole_process(path, args, Path(args.out))
+    print(f"whole process (start to exit): bare decode {pd:.3f} s, generate {pg:.3f} s, ratio {pg / pd:.3f}; "
+          f"CPU {cd:.3f} s and {cg:.3f} s, ratio {cg / cd:.3f}")
     rows = []
     st = tl.stats
     rows.append(["audio (decode+features)", st.get("audio", {}).get("seconds", 0.0), "", "", ""])
@@ -120,5 +122,6 @@ def bench_one(path: Path, args, params, preset: str, generate) -> None:
     out.mkdir(parents=True, exist_ok=True)
     fig = {"file": str(path), "preset": preset, "decode_s": decode_s, "generate_s": gen_s, "ratio": g / d,
            "process_decode_s": pd, "process_generate_s": pg, "process_ratio": pg / pd,
+           "process_decode_cpu_s": cd, "process_generate_cpu_s": cg, "process_cpu_ratio": cg / cd,
            "peak_rss_mb": max(rss), "stats": st, "time": time.strftime("%Y-%m-%d %H:%M:%S")}
     (out / f"pipeline_{path.stem}_{preset}.json").write_text(json.dumps(fig, indent=1, default=str))
