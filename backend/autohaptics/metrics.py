@@ -1,7 +1,8 @@
 """Error metrics between two timelines of the same source (a reference and a test run).
 
-Pure functions on the 100 ms tick grid; :func:`compare_timelines` gathers them into one JSON
-report of ``test`` against ``ref`` over their common ticks (a length difference is reported).
+Every metric is a pure function of arrays on the 100 ms tick grid; :func:`compare_timelines` gathers them into
+one JSON-serialisable report. ``ref`` is the reference, ``test`` the run under test; where the two differ in
+length only the common ticks ``0 .. min(n_ref, n_test) - 1`` are compared and the difference is reported.
 
 - vibration: mean absolute error over ticks x actuators (0..1), per actuator too, of the chair's
   strongest actuator per tick (``chair_mae``: the timing and level, without the spatial spread), and onset

@@ -287,6 +287,17 @@ def test_run_child_reports_the_childs_own_peak_memory():
     assert run_child([sys.executable, "-c", "import time; time.sleep(30)"], timeout_s=1).returncode == -9
 
 
+def test_run_child_reports_the_childs_own_cpu_time():
+    from autohaptics.bench.child import run_child
+
+    spin = "import time; t = time.process_time()\nwhile time.process_time() - t < 0.3: pass"
+    busy = run_child([sys.executable, "-c", spin])
+    idle = run_child([sys.executable, "-c", "import time; time.sleep(0.3)"])
+    assert busy.returncode == 0 and idle.returncode == 0
+    assert 0.3 <= busy.cpu_s < busy.wall_s + 0.05  # user + system seconds of the child itself
+    assert idle.cpu_s < 0.25 and idle.wall_s >= 0.3  # sleeping costs wall time, not CPU
+
+
 @pytest.mark.slow
 def test_bench_accuracy_end_to_end(tmp_path):
     """A 2 s synthetic clip through every configuration: table, verdicts, plot and JSON."""

@@ -121,7 +121,7 @@ def test_cli_export_to_stdout_and_format_specific_options(tmp_path, capsysbinary
 def test_cli_errors_are_one_line(tmp_path, capsys, monkeypatch):
     # main()'s own error handling, over a parser holding just the export and import commands
     # (the full parser imports every command module of the package).
-    def parser() -> argparse.ArgumentParser:
+    def parser(command=None) -> argparse.ArgumentParser:
         p = argparse.ArgumentParser(prog="autohaptics")
         sub = p.add_subparsers(dest="command", required=True)
         cli_export.register(sub)

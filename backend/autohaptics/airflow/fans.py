@@ -30,17 +30,16 @@ class AirflowParams:
     floor : motion below this never counts (frame widths/s, default 0.005); also the depth skip limit.
     strong_rel : adaptive threshold = strong_rel x the 95th percentile of the moving ticks' motion
         (default 0.3; module docstring).
-    cell_rel : a cell is "strong motion" at this fraction of the tick's strongest cell or more;
-        near_min : a cell is "near" at this nearness or more (0..1, 1 = nearest).
-    static_level, static_fraction : a frame pair is static when fewer than ``static_fraction`` of
-        the proxy's pixels changed by more than ``static_level`` grey levels (noise tolerant, yet a
-        small moving object is seen).
-    fill_enclosed : a near cell enclosed by "on" cells blows too (an approaching object's centre).
+    cell_rel : a cell is "strong motion" at this fraction of the tick's strongest cell or more.
+    near_min : a cell is "near" at this nearness or more (0..1, 1 = nearest).
+    static_level, static_fraction : a frame pair is static when fewer than ``static_fraction`` of the proxy's
+        pixels changed by more than ``static_level`` grey levels (noise tolerant, yet a small moving object is seen).
+    fill_enclosed : a near cell enclosed by "on" cells blows too (the still centre of an object
+        expanding toward the camera; see the module docstring).
     flat_std : a frame whose luma standard deviation is below this (grey levels) is flat; a pair
         of flat frames has no motion (:func:`is_fade`).
-    fade_min_step : a pair whose mean brightness moved by at least this (grey levels) and that
-        differs in nothing else than a global brightness/contrast change is a fade: no motion
-        (:func:`is_fade`).
+    fade_min_step : a pair whose mean brightness moved by at least this (grey levels) and that differs in
+        nothing else than a global brightness/contrast change is a fade: no motion (:func:`is_fade`).
     cell_sigma_ticks : a blowing tick's cells are judged on their motion averaged over the
         neighbouring ticks of its shot with Gaussian weights of this standard deviation (ticks;
         default 2, 0 = the tick alone; :func:`smoothed_cell_motion`).

@@ -24,6 +24,7 @@ class ChildResult:
     peak_rss_mb: float  # the child's own peak resident set size (ru_maxrss via wait4), MiB
     stdout: str
     stderr: str
+    cpu_s: float = 0.0  # the child's user + system CPU seconds (wait4): steadier than wall on a shared machine
 
 
 # A launcher of a few MB runs the measured command: a process's ru_maxrss starts at the RSS of the
@@ -41,7 +42,8 @@ if pid == 0:
         os._exit(127)
 _, status, usage = os.wait4(pid, 0)
 with open(out, "w") as fh:
-    json.dump({"status": status, "maxrss_kb": usage.ru_maxrss, "wall_s": time.perf_counter() - t0}, fh)
+    json.dump({"status": status, "maxrss_kb": usage.ru_maxrss, "wall_s": time.perf_counter() - t0,
+               "cpu_s": usage.ru_utime + usage.ru_stime}, fh)
 """
 
 
@@ -67,7 +69,7 @@ def run_child(cmd: list[str], *, timeout_s: float | None = None, env: dict | Non
         if "status" not in doc:
             raise ParameterError(f"the measuring launcher failed (exit {proc.returncode}): {err.read()[-500:]}")
         return ChildResult(os.waitstatus_to_exitcode(doc["status"]), doc["wall_s"], doc["maxrss_kb"] / 1024.0,
-                           out.read(), err.read())
+                           out.read(), err.read(), doc["cpu_s"])
 
 
 def _worker_cmd(*args: str) -> list[str]:
@@ -100,6 +102,7 @@ def _child_json(cmd: list[str], result: Path) -> dict:
         raise ParameterError(f"benchmark run failed (exit {r.returncode}): {' '.join(cmd[3:])}: {last}")
     doc = json.loads(result.read_text())
     doc["process_wall_s"] = r.wall_s
+    doc["process_cpu_s"] = r.cpu_s
     doc["peak_rss_mb"] = r.peak_rss_mb
     return doc
 

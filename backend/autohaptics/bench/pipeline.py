@@ -1,9 +1,12 @@
-"""``autohaptics bench pipeline VIDEO``: full generation time / bare decode time, per-stage seconds.
+"""``autohaptics bench pipeline VIDEO...``: full generation time / bare decode time, per-stage seconds.
 
 Both are measured in this one run, alternating, each repeated, so machine noise hits both alike;
 the figure that matters is the ratio (target <= 1.25 on a 1080p clip with the balanced preset).
-``--loop N`` first writes a longer clip by playing VIDEO N times in a row (re-encoded with x264
-and AAC at the source resolution), for clips too short to measure.
+It is given in-process (the ``generate`` call against ``decode_all``, warmed up) and for whole
+processes (start to exit, imports and kernel loading included, against a process that only
+decodes). ``--loop N`` first writes a longer clip by playing VIDEO N times in a row (re-encoded
+with x264 and AAC at the source resolution), for clips too short to measure; ``--films`` adds the
+1080p24 and 480p25 5.1 clips of :mod:`autohaptics.bench.clips`.
 """
 
 from __future__ import annotations
@@ -12,16 +15,21 @@ import json
 import statistics
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 from autohaptics import media
+from autohaptics.bench.clips import film_clips, looped_clip
 from autohaptics.bench.common import measure, table
+from autohaptics.errors import ParameterError
 from autohaptics.params import add_generation_options, params_from_args
 
 
 def register(sub) -> None:
     p = sub.add_parser("pipeline", help="generation wall time divided by bare decode time, per-stage seconds")
-    p.add_argument("video", help="input media file")
+    p.add_argument("video", nargs="*", help="input media files")
+    p.add_argument("--films", action="store_true",
+                   help="also the 1080p24 and 480p25 5.1 clips made from the shared clips (into --out)")
     p.add_argument("--repeat", type=int, default=3, help="measurements of each (default 3; the median is reported)")
     p.add_argument("--loop", type=int, default=1, help="first write a clip that plays VIDEO this many times")
     p.add_argument("--out", default="out/bench", help="folder for the looped clip and the JSON figures")
@@ -29,63 +37,59 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def looped_clip(src: str | Path, times: int, out_dir: Path) -> Path:
-    """Write ``src`` played ``times`` times in a row (x264 veryfast + AAC), reusing an existing file."""
-    import av
-    import numpy as np
+@dataclass(frozen=True)
+class GenerateRun:
+    """The measured child's generation options (what :func:`autohaptics.bench.child.measure_generate` takes)."""
 
-    src = Path(src)
-    out = out_dir / f"{src.stem}_x{times}.mp4"
-    if out.exists():
-        return out
-    out_dir.mkdir(parents=True, exist_ok=True)
-    info = media.probe(src)
-    tmp = out.with_suffix(".part.mp4")
-    with av.open(str(tmp), "w") as dst:
-        vs = as_ = None
-        if info.video is not None:
-            vs = dst.add_stream("libx264", rate=round(info.video.fps))
-            vs.width, vs.height, vs.pix_fmt = info.video.width, info.video.height, "yuv420p"
-            vs.options = {"preset": "veryfast", "crf": "20"}
-        if info.audio is not None:
-            layout = {1: "mono", 2: "stereo", 6: "5.1"}.get(info.audio.channels, "stereo")
-            as_ = dst.add_stream("aac", rate=info.audio.sample_rate, layout=layout)
-        v_n = a_n = 0
-        for _ in range(times):
-            with av.open(str(src)) as s:
-                streams = [x for x in (s.streams.video[:1] + s.streams.audio[:1])]
-                for frame in s.decode(*streams):
-                    if isinstance(frame, av.VideoFrame) and vs is not None:
-                        f = av.VideoFrame.from_ndarray(frame.to_ndarray(format="yuv420p"), format="yuv420p")
-                        f.pts = v_n
-                        v_n += 1
-                        dst.mux(vs.encode(f))
-                    elif isinstance(frame, av.AudioFrame) and as_ is not None:
-                        arr = frame.to_ndarray()
-                        if not frame.format.is_planar:
-                            arr = arr.reshape(-1, frame.layout.nb_channels).T
-                        arr = np.ascontiguousarray(arr[: as_.layout.nb_channels].astype(np.float32))
-                        f = av.AudioFrame.from_ndarray(arr, format="fltp", layout=as_.layout.name)
-                        f.sample_rate = info.audio.sample_rate
-                        f.pts = a_n
-                        a_n += f.samples
-                        dst.mux(as_.encode(f))
-        if vs is not None:
-            dst.mux(vs.encode(None))
-        if as_ is not None:
-            dst.mux(as_.encode(None))
-    tmp.replace(out)
-    return out
+    name: str
+    argv: tuple[str, ...]
+
+    def cli_args(self) -> list[str]:
+        return list(self.argv)
+
+
+def generation_argv(args) -> tuple[str, ...]:
+    """The generation options of ``args`` (:func:`autohaptics.params.add_generation_options`) as argv."""
+    argv = ["--preset", args.preset] + (["--mode", args.mode] if args.mode else [])
+    argv += [a for t in args.threshold for a in ("--threshold", t)]
+    argv += [a for o in args.overrides for a in ("--set", o)]
+    argv += ["--pa-per-unit", repr(args.pa_per_unit)] if args.pa_per_unit is not None else []
+    return tuple(argv + (["--allow-truncated"] if args.allow_truncated else []))
+
+
+def whole_process(path: Path, args, out: Path) -> tuple[float, float, float, float]:
+    """Median whole-process seconds (start to exit) of a bare decode and of ``generate``, alternating:
+    wall decode, wall generate, CPU (user + system) decode, CPU generate."""
+    from autohaptics.bench.child import measure_decode, measure_generate
+
+    work = out / f"{path.stem}_process"
+    work.mkdir(parents=True, exist_ok=True)
+    run = GenerateRun(f"generate_{args.preset}", generation_argv(args))
+    runs = []
+    for _ in range(max(1, args.repeat)):
+        d, g = measure_decode(path, work), measure_generate(path, run, work)
+        runs.append((d["process_wall_s"], g["process_wall_s"], d["process_cpu_s"], g["process_cpu_s"]))
+    return tuple(statistics.median(col) for col in zip(*runs))
 
 
 def run(args) -> int:
     from autohaptics.pipeline import generate
 
     params, preset = params_from_args(args)
-    path = Path(args.video)
+    paths = [Path(v) for v in args.video]
     if args.loop > 1:
-        print(f"writing {args.loop} x {path.name} ...", file=sys.stderr)
-        path = looped_clip(path, args.loop, Path(args.out))
+        print(f"writing {args.loop} x ...", file=sys.stderr)
+        paths = [looped_clip(p, args.loop, Path(args.out)) for p in paths]
+    if args.films:
+        paths += film_clips(Path(args.out))
+    if not paths:
+        raise ParameterError("give at least one VIDEO or --films")
+    for path in paths:
+        bench_one(path, args, params, preset, generate)
+
+
+def bench_one(path: Path, args, params, preset: str, generate) -> None:
+    """The figures of one clip: in-process (median of --repeat) and whole-process, printed and saved."""
     info = media.probe(path)
     generate(path, params, preset=preset)  # warm-up: JIT caches, file cache
     decode_s, gen_s, rss = [], [], []
@@ -100,8 +104,11 @@ def run(args) -> int:
     v = info.video
     print(f"{path.name}: {info.duration_s:.1f} s, "
           f"{'%dx%d @ %.2f fps' % (v.width, v.height, v.fps) if v else 'no video'}, preset {preset}, mode {params.mode}")
-    print(f"bare decode {d:.3f} s, generate {g:.3f} s, ratio {g / d:.3f} (median of {len(gen_s)}), "
+    print(f"in-process: bare decode {d:.3f} s, generate {g:.3f} s, ratio {g / d:.3f} (median of {len(gen_s)}), "
           f"peak RSS {max(rss):.0f} MB")
+    pd, pg, cd, cg = whole_process(path, args, Path(args.out))
+    print(f"whole process (start to exit): bare decode {pd:.3f} s, generate {pg:.3f} s, ratio {pg / pd:.3f}; "
+          f"CPU {cd:.3f} s and {cg:.3f} s, ratio {cg / cd:.3f}")
     rows = []
     st = tl.stats
     rows.append(["audio (decode+features)", st.get("audio", {}).get("seconds", 0.0), "", "", ""])
@@ -114,6 +121,7 @@ def run(args) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     fig = {"file": str(path), "preset": preset, "decode_s": decode_s, "generate_s": gen_s, "ratio": g / d,
+           "process_decode_s": pd, "process_generate_s": pg, "process_ratio": pg / pd,
+           "process_decode_cpu_s": cd, "process_generate_cpu_s": cg, "process_cpu_ratio": cg / cd,
            "peak_rss_mb": max(rss), "stats": st, "time": time.strftime("%Y-%m-%d %H:%M:%S")}
     (out / f"pipeline_{path.stem}_{preset}.json").write_text(json.dumps(fig, indent=1, default=str))
-    return 0

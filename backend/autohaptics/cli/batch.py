@@ -7,13 +7,17 @@ from __future__ import annotations
 
 import sys
 
-from autohaptics.params import add_generation_options, params_from_args
 from autohaptics.errors import ParameterError
 from autohaptics.progress import ProgressBar
 
+COMMAND = "batch"
+HELP = "generate timelines for many films (folders, files or glob patterns)"
+
 
 def register(sub) -> None:
-    p = sub.add_parser("batch", help="generate timelines for many films (folders, files or glob patterns)", description=__doc__)
+    from autohaptics.params import add_generation_options
+
+    p = sub.add_parser(COMMAND, help=HELP, description=__doc__)
     p.add_argument("inputs", nargs="+", metavar="FOLDER_OR_GLOB",
                    help="a folder (its media files), a file, or a quoted glob pattern ('films/**/*.mkv')")
     p.add_argument("-o", "--output-dir", required=True, metavar="OUTDIR",
@@ -30,6 +34,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from autohaptics.batch import run_batch
+    from autohaptics.params import params_from_args
 
     if args.scheduler is not None and args.jobs is not None:
         raise ParameterError("--jobs is for local runs; with --scheduler the cluster's workers set the parallelism")

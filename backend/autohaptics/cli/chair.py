@@ -11,9 +11,12 @@ import threading
 from autohaptics.errors import DeviceError
 from autohaptics.progress import ProgressBar
 
+COMMAND = "chair"
+HELP = "talk to the haptic chair (or a virtual one)"
+
 
 def register(sub) -> None:
-    p = sub.add_parser("chair", help="talk to the haptic chair (or a virtual one)",
+    p = sub.add_parser(COMMAND, help=HELP,
                        description="List ports, run a virtual chair, push a timeline, stop, read status.")
     chair_sub = p.add_subparsers(dest="chair_command", metavar="ACTION")
     chair_sub.required = True

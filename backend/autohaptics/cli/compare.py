@@ -7,10 +7,13 @@ import sys
 
 from autohaptics.errors import ParameterError
 
+COMMAND = "compare"
+HELP = "error metrics between two timelines of the same source"
+
 
 def register(sub) -> None:
     p = sub.add_parser(
-        "compare", help="error metrics between two timelines of the same source",
+        COMMAND, help=HELP,
         description="Compare a timeline (TEST) against a reference (REF) of the same source: vibration MAE and "
                     "onset precision/recall/F1 (onsets matched within +-1 tick per actuator), temperature MAE (C), "
                     "fan-cell IoU over the ticks where either side blows (exact, and with a tolerance of one cell: an "

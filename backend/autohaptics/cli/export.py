@@ -6,16 +6,17 @@ import argparse
 import sys
 
 from autohaptics.errors import ParameterError
-from autohaptics.formats import FORMATS, export_timeline, get_format, write_csv_sidecar
-from autohaptics.formats.common import atomic_output
-from autohaptics.formats.importing import csv_meta_path
-from autohaptics.timeline import Timeline
+
+COMMAND = "export"
+HELP = "convert a timeline to CSV, AHAP, MPEG-I hjif, MPEG-V SEM or JSON"
 
 
 def register(sub) -> None:
+    from autohaptics.formats import FORMATS
+
     formats = "; ".join(f"{f.name}: {f.description}" for f in FORMATS.values())
     p = sub.add_parser(
-        "export", help="convert a timeline to CSV, AHAP, MPEG-I hjif, MPEG-V SEM or JSON",
+        COMMAND, help=HELP,
         description=f"Convert a timeline file to another format ({formats}). "
                     "docs/EXPORT.md documents the mapping and the limits of each format.")
     p.add_argument("timeline", help="the timeline JSON file")
@@ -31,6 +32,11 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from autohaptics.formats import export_timeline, get_format, write_csv_sidecar
+    from autohaptics.formats.common import atomic_output
+    from autohaptics.formats.importing import csv_meta_path
+    from autohaptics.timeline import Timeline
+
     spec = get_format(args.format)
     if args.meta and spec.name != "csv":
         raise ParameterError("--meta applies to --format csv only")

@@ -12,23 +12,30 @@ import os
 import sys
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import numpy as np
-
-from autohaptics.intensity import features as af
-from autohaptics import media
 from autohaptics.errors import ParameterError
-from autohaptics.intensity.loudness import LOUDNESS_METHODS, STEP_S
 from autohaptics.progress import ProgressBar
-from autohaptics.timebase import ANALYSIS_SAMPLE_RATE, FRAME_S
+
+if TYPE_CHECKING:  # imported where used: `autohaptics --help` loads no numpy
+    import numpy as np
+
+    from autohaptics import media
+    from autohaptics.intensity import features as af
 
 _UNITS = {"t_s": "s", "loudness": "sone", "sharpness": "acum",
           "booming": "sone (hatano) or dimensionless (paper)", "low_energy": "Pa^2"}
 _LONG_INPUT_S = 20.0  # inputs longer than this get a progress bar on a terminal
 
+COMMAND = "features"
+HELP = "compute loudness, sharpness, booming and low-frequency energy of a file"
+
 
 def register(sub) -> None:
-    p = sub.add_parser("features", help="compute loudness, sharpness, booming and low-frequency energy of a file", description=__doc__)
+    from autohaptics.intensity import features as af
+    from autohaptics.intensity.loudness import LOUDNESS_METHODS
+
+    p = sub.add_parser(COMMAND, help=HELP, description=__doc__)
     p.add_argument("input", metavar="AUDIO_OR_VIDEO", help="any media file with an audio stream")
     p.add_argument("-o", "--output", required=True, metavar="OUT.json", help="output file, or '-' for stdout")
     d = af.AudioFeatureParams()
@@ -50,6 +57,10 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from autohaptics import media
+    from autohaptics.intensity import features as af
+    from autohaptics.timebase import ANALYSIS_SAMPLE_RATE, FRAME_S
+
     params = af.AudioFeatureParams(pa_per_unit=args.pa_per_unit, field=args.field, loudness_method=args.method,
                                    booming_variant=args.booming, low_energy_cutoff_hz=args.low_energy_cutoff,
                                    frame_loudness=args.frame_loudness)
@@ -74,6 +85,10 @@ def run(args: argparse.Namespace) -> int:
 
 def _document(info: media.MediaInfo, params: af.AudioFeatureParams, feats: af.AudioFeatures,
               report: media.AudioReport, args: argparse.Namespace) -> dict:
+    from autohaptics.intensity import features as af
+    from autohaptics.intensity.loudness import STEP_S
+    from autohaptics.timebase import ANALYSIS_SAMPLE_RATE, FRAME_S
+
     doc = {
         "source": info.source_block(),
         "params": dataclasses.asdict(params),
@@ -91,6 +106,8 @@ def _document(info: media.MediaInfo, params: af.AudioFeatureParams, feats: af.Au
 
 
 def _floats(x: np.ndarray) -> list[float]:
+    import numpy as np
+
     # Six significant digits: the features' own accuracy is ~1e-3 relative; keeps files small.
     return [float(f"{v:.6g}") for v in np.asarray(x, dtype=np.float64).tolist()]
 

@@ -6,12 +6,16 @@ import sys
 from pathlib import Path
 
 from autohaptics.errors import ParameterError
-from autohaptics.params import add_generation_options, params_from_args
 from autohaptics.progress import ProgressBar
+
+COMMAND = "generate"
+HELP = "generate a haptic timeline from a video (or audio) file"
 
 
 def register(sub) -> None:
-    p = sub.add_parser("generate", help="generate a haptic timeline from a video (or audio) file",
+    from autohaptics.params import add_generation_options
+
+    p = sub.add_parser(COMMAND, help=HELP,
                        description="Analyse a film's sound and picture and write a timeline JSON file.")
     p.add_argument("video", help="input media file")
     p.add_argument("-o", "--output", required=True, help="output timeline JSON file")
@@ -23,6 +27,7 @@ def register(sub) -> None:
 def run(args) -> int:
     from autohaptics.runner.heap import release_between_passes
     from autohaptics.pipeline import generate
+    from autohaptics.params import params_from_args
 
     params, preset = params_from_args(args)
     out = Path(args.output)

@@ -7,11 +7,13 @@ from __future__ import annotations
 import argparse
 
 from autohaptics.errors import ParameterError
-from autohaptics.formats.importing import csv_meta_path, import_timeline
+
+COMMAND = "import"
+HELP = "read a timeline CSV (or JSON), validate it and write the timeline JSON"
 
 
 def register(sub) -> None:
-    p = sub.add_parser("import", help="read a timeline CSV (or JSON), validate it and write the timeline JSON", description=__doc__)
+    p = sub.add_parser(COMMAND, help=HELP, description=__doc__)
     p.add_argument("file", help="the CSV or JSON file to import")
     p.add_argument("-o", "--output", required=True, help="the timeline JSON to write")
     p.add_argument("-f", "--format", choices=["csv", "json"], default=None,
@@ -23,6 +25,8 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from autohaptics.formats.importing import csv_meta_path, import_timeline
+
     if args.meta and args.no_meta:
         raise ParameterError("--meta and --no-meta exclude each other")
     meta = None if args.no_meta else (args.meta or "auto")

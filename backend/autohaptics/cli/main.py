@@ -12,39 +12,66 @@ import sys
 
 from autohaptics import __version__
 from autohaptics.errors import AutohapticsError, CancelledError
-from autohaptics.runner.heap import bound_heap
 
 EXIT_ERROR = 2
 EXIT_CANCELLED = 130
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser; only ``command``'s module registers its options (see :func:`add_commands`)."""
     parser = argparse.ArgumentParser(
         prog="autohaptics",
         description="Turn a movie into 4D haptic effects (vibration, temperature, airflow).")
     parser.add_argument("--version", action="version", version=f"autohaptics {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    register_all(sub, "autohaptics.cli", skip=("main",))
+    add_commands(sub, "autohaptics.cli", chosen=command, skip=("main",))
     return parser
+
+
+def add_commands(sub, package: str, *, chosen: str | None, skip: tuple[str, ...] = ()) -> None:
+    """Every module of ``package`` with a ``COMMAND`` name: the ``chosen`` one calls its
+    ``register(sub)``, the others are listed by ``COMMAND`` and ``HELP`` only. Command modules
+    import nothing heavy at module level, so ``--help`` and a mistyped command start in a few
+    tens of milliseconds; the pipeline is imported by the command that runs."""
+    for module in _modules(package, skip):
+        name = getattr(module, "COMMAND", None)
+        if name is None:
+            continue
+        if name == chosen:
+            module.register(sub)
+        else:
+            sub.add_parser(name, help=module.HELP, add_help=False)
 
 
 def register_all(sub, package: str, *, skip: tuple[str, ...] = ()) -> None:
     """Call ``register(sub)`` of every module of ``package`` that has one (by name, ``skip`` and
     private modules left out): each sub-command lives in its own module."""
-    pkg = importlib.import_module(package)
-    for mod in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
-        if mod.name in skip or mod.name.startswith("_"):
-            continue
-        register = getattr(importlib.import_module(f"{package}.{mod.name}"), "register", None)
+    for module in _modules(package, skip):
+        register = getattr(module, "register", None)
         if register is not None:
             register(sub)
 
 
+def _modules(package: str, skip: tuple[str, ...]) -> list:
+    pkg = importlib.import_module(package)
+    names = sorted(m.name for m in pkgutil.iter_modules(pkg.__path__))
+    return [importlib.import_module(f"{package}.{name}") for name in names
+            if name not in skip and not name.startswith("_")]
+
+
+def command_word(argv: list[str]) -> str | None:
+    """The sub-command named in ``argv`` (its first word that is not an option), if any."""
+    return next((a for a in argv if not a.startswith("-")), None)
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(command_word(argv))
     args = parser.parse_args(argv)
     debug = bool(os.environ.get("AUTOHAPTICS_DEBUG"))
+    from autohaptics.runner.heap import bound_heap
+
     bound_heap()  # freed temporaries go back to the OS (docs/BENCHMARKS.md, '2-hour film')
     try:
         rc = args.func(args)

@@ -7,17 +7,16 @@ import sys
 import tempfile
 import threading
 import time
-import urllib.error
-import urllib.request
-import uuid
-import webbrowser
 from pathlib import Path
 
 from autohaptics.errors import ParameterError
 
+COMMAND = "serve"
+HELP = "run the web editor and its HTTP API"
+
 
 def register(sub) -> None:
-    p = sub.add_parser("serve", help="run the web editor and its HTTP API",
+    p = sub.add_parser(COMMAND, help=HELP,
                        description="Serve the editor (frontend/) and the API (docs/API.md); OpenAPI at /docs.")
     p.add_argument("--host", default="127.0.0.1",
                    help="address to bind (default 127.0.0.1: the editor has no authentication)")
@@ -66,6 +65,11 @@ SAMPLE_NAME = "sample (10 s demo)"
 def _open_sample(url: str) -> None:
     """Open the editor on the sample project: reuse it when the data folder has it, otherwise write
     the sample clip and upload it through the API once /health answers."""
+    import urllib.error
+    import urllib.request
+    import uuid
+    import webbrowser
+
     try:
         from autohaptics.testing import sample_clip
     except ImportError as exc:

@@ -14,11 +14,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.signal as ss
 
+from autohaptics.cachedir import cached_arrays, digest, source_bytes
 from autohaptics.errors import ParameterError
 from autohaptics.intensity import iso532_tables as T
-from autohaptics.intensity import kernels as K
+from autohaptics.intensity import compiled as K
 
 SAMPLE_RATE_HZ = T.SAMPLE_RATE_HZ
 LEVEL_STEP = SAMPLE_RATE_HZ // T.LEVEL_RATE_HZ  # 24 input samples per 0.5 ms level sample
@@ -135,27 +135,47 @@ _FIT_FLOOR_DB = -60.0
 
 @functools.lru_cache(maxsize=None)
 def plan(method: str) -> Plan:
+    """The filter bank of ``method`` ("iso" or "fast"); the fast bank's designs come from the
+    cache folder after the first process designed them (:func:`fast_design`)."""
     sos, gain = iso_sos()
     if method == "iso":
         bands = np.arange(T.N_THIRD_OCTAVE_BANDS)
         grp = BandGroup(SAMPLE_RATE_HZ, bands, sos, gain, smoothing_pole(bands, SAMPLE_RATE_HZ))
         return Plan((grp,), (), T.NL_ITERATIONS, nl_coefficients(T.NL_ITERATIONS))
-    groups, stages = [], []
-    rate = SAMPLE_RATE_HZ
-    for q, f_pass, f_stop in _FAST_STAGES:
-        stages.append(Decimator(q, _decimator(rate, q, f_pass, f_stop)))
+    key = "fast-bank-" + digest(source_bytes(__file__), source_bytes(T.__file__), np.__version__)
+    design = cached_arrays("filters", key, fast_design)
+    stages = tuple(Decimator(q, design[f"stage{i}"]) for i, (q, _, _) in enumerate(_FAST_STAGES))
+    groups = []
+    for gi, (rate, _) in enumerate(_FAST_GROUPS):
+        bands = _group_bands(gi)
+        groups.append(BandGroup(rate, bands, design[f"group{gi}_sos"], design[f"group{gi}_gain"],
+                                smoothing_pole(bands, rate)))
+    return Plan(tuple(groups), stages, _FAST_NL_ITERATIONS, nl_coefficients(_FAST_NL_ITERATIONS))
+
+
+def fast_design() -> dict[str, np.ndarray]:
+    """The fast bank's designed filters: ``stage<i>`` (decimator sos) and ``group<i>_sos`` /
+    ``group<i>_gain`` (the band filters of each rate, ISO's own at 48 kHz)."""
+    sos, gain = iso_sos()
+    design, rate = {}, SAMPLE_RATE_HZ
+    for i, (q, f_pass, f_stop) in enumerate(_FAST_STAGES):
+        design[f"stage{i}"] = _decimator(rate, q, f_pass, f_stop)
         rate //= q
-    for gi, (rate, hi) in enumerate(_FAST_GROUPS):
-        lo = _FAST_GROUPS[gi + 1][1] + 1 if gi + 1 < len(_FAST_GROUPS) else 0
-        bands = np.arange(lo, hi + 1)
+    for gi, (rate, _) in enumerate(_FAST_GROUPS):
+        bands = _group_bands(gi)
         if rate == SAMPLE_RATE_HZ:
             g_sos, g_gain = sos[bands], gain[bands]
         else:
             designed = [rediscretise(sos[b], gain[b], T.CENTRE_FREQUENCIES_HZ[b], rate) for b in bands]
             g_sos = np.stack([d[0] for d in designed])
             g_gain = np.array([d[1] for d in designed])
-        groups.append(BandGroup(rate, bands, g_sos, g_gain, smoothing_pole(bands, rate)))
-    return Plan(tuple(groups), tuple(stages), _FAST_NL_ITERATIONS, nl_coefficients(_FAST_NL_ITERATIONS))
+        design[f"group{gi}_sos"], design[f"group{gi}_gain"] = g_sos, g_gain
+    return design
+
+
+def _group_bands(gi: int) -> np.ndarray:
+    lo = _FAST_GROUPS[gi + 1][1] + 1 if gi + 1 < len(_FAST_GROUPS) else 0
+    return np.arange(lo, _FAST_GROUPS[gi][1] + 1)
 
 
 def rediscretise(sos48: np.ndarray, gain48: float, fc: float, rate: int) -> tuple[np.ndarray, float]:
@@ -169,6 +189,8 @@ def rediscretise(sos48: np.ndarray, gain48: float, fc: float, rate: int) -> tupl
     Above 0.45 ``rate`` the decimators have removed the signal. Matching the phase too keeps the
     filter's group delay, hence the timing of the band envelopes. Returns (sos [shape=(3, 6)], 1.0).
     """
+    import scipy.signal as ss  # only while designing: importing it takes 0.7-1.1 s
+
     f = np.geomspace(max(fc / 16.0, 5.0), 0.45 * rate, _FIT_POINTS)
     target = ss.sosfreqz(sos48, worN=f, fs=SAMPLE_RATE_HZ)[1] * gain48
     zinv = np.exp(-2j * np.pi * f / rate)
@@ -220,5 +242,7 @@ def _back_substitute(r: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 def _decimator(rate: int, q: int, f_pass: float, f_stop: float) -> np.ndarray:
+    import scipy.signal as ss
+
     order, wn = ss.ellipord(f_pass, f_stop, _DECIMATOR_RIPPLE_DB, _DECIMATOR_STOP_DB, fs=rate)
     return ss.ellip(order, _DECIMATOR_RIPPLE_DB, _DECIMATOR_STOP_DB, wn, btype="low", output="sos", fs=rate)

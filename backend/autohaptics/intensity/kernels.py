@@ -1,4 +1,5 @@
-"""Compiled inner loops of the ISO 532-1 loudness stage (numba, cached on disk).
+"""Compiled inner loops of the ISO 532-1 loudness stage (numba). Callers reach them through
+:mod:`.compiled`, which loads them built ahead of time, without importing numba.
 
 Why compiled: the nonlinear decay and the slope construction are sequential, state-dependent
 recursions (a branch per band and per 0.5 ms sample, 24 virtual sub-steps each) that numpy cannot
@@ -308,6 +309,19 @@ def slopes(core, zup, rns, usl, spec_row, total, spec):
             while iz < n_z:
                 spec[row, iz] = 0.0
                 iz += 1
+
+
+@numba.njit(**_JIT)
+def first_order(x, b_now, b_prev, pole, zi, out):
+    """y[i] = b_now x[i] + b_prev x[i-1] + pole y[i-1] (scipy ``lfilter``'s transposed direct form,
+    the same arithmetic): x, out float64 [shape=(n,)]; zi float64 [shape=(1,)], the state (in/out)."""
+    z = zi[0]
+    for i in range(x.shape[0]):
+        v = x[i]
+        y = b_now * v + z
+        z = b_prev * v + pole * y
+        out[i] = y
+    zi[0] = z
 
 
 @numba.njit(**_JIT)

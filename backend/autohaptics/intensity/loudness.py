@@ -31,7 +31,7 @@ import numpy as np
 
 from autohaptics.intensity import iso532_tables as T
 from autohaptics.intensity import filterbank as fb
-from autohaptics.intensity import kernels as K
+from autohaptics.intensity import compiled as K
 from autohaptics.intensity import zwicker as zw
 from autohaptics.intensity.filterbank import LEVEL_STEP, ceil_div
 from autohaptics.intensity.zwicker import TW_STEP

@@ -20,9 +20,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.signal as ss
 
-from autohaptics.intensity import kernels as K
+from autohaptics.cachedir import cached_arrays, digest
+from autohaptics.intensity import compiled as K
 from autohaptics.errors import ParameterError
 from autohaptics.intensity.loudness import check_pressure
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE, SAMPLES_PER_FRAME
@@ -103,7 +103,14 @@ def low_energy(p: np.ndarray, *, params: LowEnergyParams = LowEnergyParams()) ->
 
 @functools.lru_cache(maxsize=None)
 def _lowpass_sos(cutoff_hz: float, order: int) -> np.ndarray:
-    return ss.butter(order, cutoff_hz, btype="low", output="sos", fs=ANALYSIS_SAMPLE_RATE)
+    """The Butterworth low-pass (sos), designed once per machine (scipy.signal takes ~1 s to import)."""
+    def build() -> dict:
+        import scipy.signal as ss
+
+        return {"sos": ss.butter(order, cutoff_hz, btype="low", output="sos", fs=ANALYSIS_SAMPLE_RATE)}
+
+    key = "lowpass-" + digest(cutoff_hz, order, ANALYSIS_SAMPLE_RATE, np.__version__)
+    return cached_arrays("filters", key, build)["sos"]
 
 
 def _lowpass(p: np.ndarray, zi: np.ndarray, params: LowEnergyParams) -> tuple[np.ndarray, np.ndarray]:

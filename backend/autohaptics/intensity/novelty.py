@@ -25,7 +25,6 @@ is brighter than what came before, but not an event).
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import maximum_filter1d
 
 from autohaptics.timebase import FRAME_S
 
@@ -59,6 +58,8 @@ def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, cl
     if top <= 0.0:
         return np.zeros(n)
     env_n = max(1, int(round(ENVELOPE_S / FRAME_S)))
+    from scipy.ndimage import maximum_filter1d  # here: the CLI's option parsing imports this module
+
     env = maximum_filter1d(v, env_n, origin=(env_n - 1) // 2, mode="nearest")  # max of frames t-env_n+1 .. t
     cum = np.concatenate([[0.0], np.cumsum(env)])
     idx = np.arange(n)

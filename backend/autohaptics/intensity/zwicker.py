@@ -11,10 +11,9 @@ import functools
 import math
 
 import numpy as np
-import scipy.signal as ss
 
 from autohaptics.intensity import iso532_tables as T
-from autohaptics.intensity import kernels as K
+from autohaptics.intensity import compiled as K
 from autohaptics.intensity.filterbank import Plan
 
 TW_STEP = T.LEVEL_RATE_HZ // T.LOUDNESS_RATE_HZ  # 4 level samples per 2 ms output
@@ -113,8 +112,9 @@ def temporal_weighting(total: np.ndarray, weighting: np.ndarray, *, started: boo
             zi = b_prev * x[0] + pole * y[0]
             i0 = 1
         if x.size > i0:
-            y[i0:], zf = ss.lfilter([b_now, b_prev], [1.0, -pole], x[i0:], zi=[zi])
-            zi = float(zf[0])
+            state = np.array([zi], dtype=np.float64)
+            K.first_order(np.ascontiguousarray(x[i0:], dtype=np.float64), b_now, b_prev, pole, state, y[i0:])
+            zi = float(state[0])
         new[idx] = zi
         out += wgt * y
     return out, new

@@ -5,11 +5,17 @@ analysis signal), :mod:`.video` (decoded frames, all or the reference ones only)
 (a frame's small proxies, made only when a stage asks).
 """
 
-from autohaptics.media.audio import iter_audio, read_audio
-from autohaptics.media.frames import Frame
+from autohaptics.lazy import lazy_attributes
 from autohaptics.media.probe import (AudioInfo, AudioReport, MediaInfo, VideoInfo, check_complete, check_truncation,
                                      open_container, probe, source_block)
-from autohaptics.media.video import DECODE_MODES, SPARSE_MIN_FPS, decode_all, iter_video
+
+# Imported when first used: the video side brings OpenCV (~0.15 s), which the audio pass and
+# `autohaptics features` never need.
+_LAZY = {"iter_audio": "audio", "read_audio": "audio", "Frame": "frames", "DECODE_MODES": "video",
+         "SPARSE_MIN_FPS": "video", "decode_all": "video", "iter_video": "video"}
+
+__getattr__ = lazy_attributes(__name__, _LAZY)
+
 
 __all__ = ["AudioInfo", "AudioReport", "DECODE_MODES", "Frame", "MediaInfo", "SPARSE_MIN_FPS", "VideoInfo",
            "check_complete", "check_truncation", "decode_all", "iter_audio", "iter_video", "open_container", "probe",

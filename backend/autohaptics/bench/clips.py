@@ -1,0 +1,151 @@
+"""Clips the benchmarks write for themselves from the shared clips (nothing large is committed).
+
+:func:`reencode` re-encodes a clip (x264 veryfast crf 20 with its B-frames and long GOP, AAC),
+optionally played several times in a row, scaled and letterboxed, at another frame rate, with the
+sound upmixed to 5.1; :func:`film_clips` makes the two film-like clips of ``--films``: 1080p at
+24 fps with stereo sound (the Sintel trailer upscaled) and 854x480 at 25 fps with 5.1 sound (the
+Big Buck Bunny opening). Files are written once and reused.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from autohaptics.errors import ParameterError
+
+SHARED_ENV = "AUTOHAPTICS_SHARED"
+# (output name, shared clip, width, height, fps, audio layout)
+FILMS = (("film_1080p24_stereo", "sintel_trailer_640x272_vp8_vorbis.webm", 1920, 1080, 24, "stereo"),
+         ("film_480p25_5.1", "bbb_opening_30s_1280x720_vp8_vorbis.webm", 854, 480, 25, "5.1"))
+
+
+def shared_media() -> Path:
+    """The shared clips: ``$AUTOHAPTICS_SHARED/media`` or ``../shared/media`` next to the repository."""
+    env = os.environ.get(SHARED_ENV)
+    base = Path(env) if env else Path(__file__).resolve().parents[3].parent / "shared"
+    return base / "media"
+
+
+def film_clips(out_dir: Path) -> list[Path]:
+    """The film-like clips of :data:`FILMS`, written into ``out_dir`` from the shared clips."""
+    clips = []
+    for name, src, width, height, fps, layout in FILMS:
+        path = shared_media() / src
+        if not path.is_file():
+            raise ParameterError(f"{path}: shared clip not found (set {SHARED_ENV} to the shared folder)")
+        clips.append(reencode(path, out_dir / f"{name}.mp4", size=(width, height), fps=fps, layout=layout))
+    return clips
+
+
+def looped_clip(src: str | Path, times: int, out_dir: Path) -> Path:
+    """``src`` played ``times`` times in a row, at its own size, rate and channels."""
+    src = Path(src)
+    return reencode(src, out_dir / f"{src.stem}_x{times}.mp4", times=times)
+
+
+def reencode(src: Path, out: Path, *, times: int = 1, size: tuple[int, int] | None = None, fps: int | None = None,
+             layout: str | None = None) -> Path:
+    """Write ``src`` re-encoded to ``out`` (H.264 + AAC at 48 kHz), reusing an existing file.
+
+    size : (width, height); the picture is scaled to the width, letterboxed (or cropped) to the height.
+    fps : output frame rate; each output frame shows the source frame on screen at its time.
+    layout : "stereo" or "5.1" (front from left/right, centre and LFE from their mean, surrounds
+        at half level); default the source's own (mono, stereo or 5.1).
+    """
+    import av
+
+    from autohaptics import media
+
+    if out.exists():
+        return out
+    out.parent.mkdir(parents=True, exist_ok=True)
+    info = media.probe(src)
+    tmp = out.with_suffix(".part.mp4")
+    with av.open(str(tmp), "w") as dst:
+        vs = as_ = None
+        if info.video is not None:
+            width, height = size or (info.video.width, info.video.height)
+            vs = dst.add_stream("libx264", rate=fps or round(info.video.fps))
+            vs.width, vs.height, vs.pix_fmt = width, height, "yuv420p"
+            vs.options = {"preset": "veryfast", "crf": "20"}
+        if info.audio is not None:
+            layout = layout or {1: "mono", 2: "stereo", 6: "5.1"}.get(info.audio.channels, "stereo")
+            as_ = dst.add_stream("aac", rate=48000, layout=layout)
+        counts = [0, 0]  # video frames, audio samples written
+        rates = (info.video.fps, fps or round(info.video.fps)) if info.video else (0.0, 0)
+        for _ in range(times):
+            _copy(src, dst, vs, as_, counts, rates)
+        for stream in (vs, as_):
+            if stream is not None:
+                dst.mux(stream.encode(None))
+    tmp.replace(out)
+    return out
+
+
+def _copy(src: Path, dst, vs, as_, counts: list[int], rates: tuple[float, int]) -> None:
+    """One play of ``src`` into ``dst``; ``rates`` = (source fps, output fps)."""
+    import av
+
+    resampler = av.AudioResampler(format="fltp", layout="stereo", rate=48000) if as_ is not None else None
+    src_fps, fps = rates
+    with av.open(str(src)) as s:
+        start, i = counts[0], 0
+        for frame in s.decode(*(s.streams.video[:1] + s.streams.audio[:1])):
+            if isinstance(frame, av.VideoFrame) and vs is not None:
+                i += 1
+                picture = None
+                # the output frames whose time falls on this source frame (the i-th)
+                while (counts[0] - start) * src_fps < i * fps:
+                    if picture is None:
+                        picture = _picture(frame, vs.width, vs.height)
+                    f = av.VideoFrame.from_ndarray(picture, format="yuv420p")
+                    f.pts = counts[0]
+                    counts[0] += 1
+                    dst.mux(vs.encode(f))
+            elif isinstance(frame, av.AudioFrame) and as_ is not None:
+                for r in resampler.resample(frame):
+                    _write_audio(dst, as_, r.to_ndarray(), counts)
+
+
+def _picture(frame, width: int, height: int):
+    """The frame as a yuv420p array [shape=(height * 3 // 2, width)], scaled to ``width`` and
+    letterboxed or cropped to ``height``."""
+    import numpy as np
+
+    h = max(2, int(round(frame.height * width / frame.width / 2)) * 2)
+    yuv = frame.reformat(width=width, height=h, format="yuv420p").to_ndarray()
+    y, u, v = yuv[:h], yuv[h:].reshape(-1)[: h * width // 4], yuv[h:].reshape(-1)[h * width // 4:]
+    out_y = np.full((height, width), 16, np.uint8)
+    out_c = np.full((2, height // 2, width // 2), 128, np.uint8)
+    top = (height - h) // 2
+    src_top = max(0, -top)
+    rows = min(h - src_top, height)
+    dst_top = max(0, top)
+    out_y[dst_top:dst_top + rows] = y[src_top:src_top + rows]
+    for k, c in enumerate((u, v)):
+        c = c.reshape(h // 2, width // 2)
+        out_c[k, dst_top // 2:(dst_top + rows) // 2] = c[src_top // 2:(src_top + rows) // 2]
+    return np.concatenate([out_y, out_c[0].reshape(-1, width), out_c[1].reshape(-1, width)])
+
+
+def _write_audio(dst, as_, stereo, counts: list[int]) -> None:
+    import av
+    import numpy as np
+
+    left, right = stereo[0], stereo[1]
+    n_out = as_.layout.nb_channels
+    if n_out == 6:  # FL FR FC LFE BL BR
+        mid = 0.5 * (left + right)
+        arr = np.stack([left, right, 0.7 * mid, mid, 0.5 * left, 0.5 * right])
+    elif n_out == 1:
+        arr = (0.5 * (left + right))[None]
+    else:
+        arr = np.stack([left, right])
+    f = av.AudioFrame.from_ndarray(np.ascontiguousarray(arr, dtype=np.float32), format="fltp",
+                                   layout=as_.layout.name)
+    f.sample_rate = 48000
+    f.pts = counts[1]
+    counts[1] += f.samples
+    dst.mux(as_.encode(f))
+

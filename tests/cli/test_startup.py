@@ -1,0 +1,60 @@
+"""Start-up: ``autohaptics --help`` and argument errors load none of the heavy libraries (checked by
+what a fresh interpreter has imported, never by timing; the figures are in docs/BENCHMARKS.md)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from shared_data import REPO
+
+HEAVY = ("numpy", "av", "cv2", "scipy", "numba", "autohaptics.pipeline", "autohaptics.params")
+_PROBE = """
+import json, sys
+from autohaptics.cli.main import main
+try:
+    rc = main(sys.argv[1:])
+except SystemExit as exc:
+    rc = exc.code
+print(json.dumps({"rc": rc, "modules": sorted(sys.modules)}), file=sys.stderr)
+"""
+
+
+def _run(*argv: str) -> tuple[int, list[str], str]:
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "backend"), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.run([sys.executable, "-c", _PROBE, *argv], capture_output=True, text=True, env=env, timeout=120)
+    doc = json.loads(proc.stderr.strip().splitlines()[-1])
+    return doc["rc"], doc["modules"], proc.stdout + proc.stderr
+
+
+def test_help_imports_nothing_heavy():
+    rc, modules, out = _run("--help")
+    assert rc == 0
+    for name in ("generate", "serve", "export", "import", "batch", "features", "compare", "chair", "bench"):
+        assert f"    {name}" in out
+    assert [m for m in HEAVY if m in modules] == []
+
+
+@pytest.mark.parametrize("argv", [["no-such-command"], []])
+def test_command_errors_import_nothing_heavy(argv):
+    rc, modules, out = _run(*argv)
+    assert rc == 2 and "usage: autohaptics" in out
+    assert [m for m in HEAVY if m in modules] == []
+
+
+def test_a_missing_argument_does_not_import_the_pipeline():
+    # the command's options come from the parameter records (numpy); no pipeline, no compiler, no scipy
+    rc, modules, out = _run("generate")
+    assert rc == 2 and "the following arguments are required: video, -o/--output" in out
+    assert [m for m in ("autohaptics.pipeline", "scipy", "numba", "onnxruntime") if m in modules] == []
+
+
+@pytest.mark.parametrize("command", ["generate", "serve", "export", "import", "batch", "features", "compare",
+                                     "chair", "bench"])
+def test_every_command_has_its_own_help(command):
+    rc, _, out = _run(command, "--help")
+    assert rc == 0 and f"usage: autohaptics {command}" in out
