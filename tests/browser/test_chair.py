@@ -329,3 +329,36 @@ def test_push_the_selection_and_disconnect(cpage, chair_api, film, chair):
     pg.click("[data-testid=chair-connect]")  # now "Disconnect"
     pg.wait_for_selector("[data-testid=chair-state][data-state=idle]")
     assert pg.text_content("[data-testid=chair-indicator]") == "Chair off"
+
+
+def test_a_push_shows_where_the_chair_is_and_how_far_it_has_got(cpage, chair_api, film, chair):
+    pg, pid = cpage, film["id"]
+    open_editor(pg, pid)
+    connect_in_the_panel(pg, chair.device)
+    rect = pg.evaluate("() => window.autohaptics.laneRect('actuators')")
+    pg.mouse.move(pg.evaluate("() => window.autohaptics.clientXOf(2.0)"), rect["y"] + 5)
+    pg.mouse.down()
+    pg.mouse.move(pg.evaluate("() => window.autohaptics.clientXOf(6.0)"), rect["y"] + 5, steps=4)
+    pg.mouse.up()
+    sel = pg.evaluate("() => window.autohaptics.state().selection")
+    playhead = pg.evaluate("() => window.autohaptics.state().playheadS")
+    pg.click("[data-testid=chair-push]")
+    # While it plays: the chair's own playhead on the timeline, and in words where it is and how far.
+    pg.wait_for_function("() => /^Chair at \\d+:\\d\\d\\.\\d · \\d+ % of /.test("
+                         "document.querySelector('[data-testid=chair-push-text]').textContent)")
+    head = pg.locator("[data-testid=chair-head]")
+    assert head.is_visible()
+    x = head.bounding_box()["x"] + 1
+    t0, t1 = sel["t0"] * 0.1, sel["t1"] * 0.1
+    assert pg.evaluate("() => window.autohaptics.clientXOf(%f)" % (t0 - 0.15)) <= x <= pg.evaluate(
+        "() => window.autohaptics.clientXOf(%f)" % (t1 + 0.15))
+    assert pg.evaluate("() => window.autohaptics.state().playheadS") == playhead, "the player stays where it was"
+    text = pg.text_content("[data-testid=chair-push-text]")
+    def clock(t: float) -> str:
+        return f"{int(t // 60)}:{t % 60:04.1f}"
+
+    assert text.endswith(f"of {clock(t0)}–{clock(t1)}"), text
+    chair.wait_for(lambda e: e["ev"] == "stop", timeout_s=15.0)
+    pg.wait_for_function("() => document.querySelector('[data-testid=chair-push-text]').textContent.endsWith('done')")
+    assert not head.is_visible(), "the chair's playhead goes when the push ends"
+    assert pg.text_content("[data-testid=chair-frames]") != "–"

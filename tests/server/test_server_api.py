@@ -145,11 +145,12 @@ def test_edit_undo_redo_reload_and_regenerate_keep_edits(client, data_dir):
     assert r.status_code == 200 and r.json()["markers"] == [{"id": "m1", "t_s": 0.3, "label": "door"}]
 
     undo = client.post(f"/api/projects/{pid}/undo", json={"base_revision": rev + 2})
-    assert undo.json() == {"revision": rev + 3, "cursor": 1, "markers": []}
+    assert undo.json() == {"revision": rev + 3, "cursor": 1, "markers": [], "params": None, "job": None}
     assert client.get(f"/api/projects/{pid}/timeline").json()["markers"] == []
     assert client.post(f"/api/projects/{pid}/undo", json={"base_revision": rev}).status_code == 409
     redo = client.post(f"/api/projects/{pid}/redo", json={"base_revision": rev + 3})
-    assert redo.json() == {"revision": rev + 4, "cursor": 2, "markers": [{"id": "m1", "t_s": 0.3, "label": "door"}]}
+    assert redo.json() == {"revision": rev + 4, "cursor": 2, "markers": [{"id": "m1", "t_s": 0.3, "label": "door"}],
+                           "params": None, "job": None}
     assert client.post(f"/api/projects/{pid}/redo", json={"base_revision": rev + 4}).json()["detail"] == \
         "nothing to redo"
     edits = client.get(f"/api/projects/{pid}/edits").json()
@@ -190,7 +191,8 @@ def test_params_rederive_from_the_cache_keeps_edits(client):
                                                                       "booming": 0.0, "low_energy": 0.0}})
     assert r.status_code == 200, r.text
     body = r.json()
-    assert body["derived"] is True and body["revision"] == rev + 2 and body["job"] is None
+    # Re-derived (rev + 2) and recorded as an undoable 'params' op after the edit (rev + 3).
+    assert body["derived"] is True and body["revision"] == rev + 3 and body["job"] is None and body["cursor"] == 2
     assert 0 < body["seconds"] < 5
     doc = client.get(f"/api/projects/{pid}/timeline").json()
     vib = np.asarray(doc["tracks"]["vibration"])

@@ -192,7 +192,9 @@ def test_restart_while_running_fails_the_job_and_it_can_be_rerun(tmp_path, long_
         assert client.post(f"/api/jobs/{job['id']}/cancel").status_code == 202
         assert sse(client, job["id"])[-1][0] == "cancelled"
         after = client.get(f"/api/projects/{project['id']}").json()
-        assert after["status"] == "cancelled" and after["has_timeline"] and after["revision"] == p["revision"]
+        assert after["status"] == "ready" and after["job"]["status"] == "cancelled"  # the cancelled attempt: a note
+        assert after["has_timeline"] and after["revision"] == p["revision"]
+        assert after["params"] == p["params"], "the parameters of the timeline on show, not the cancelled attempt's"
         assert client.get(f"/api/projects/{project['id']}/timeline").content == before
 
 

@@ -252,3 +252,41 @@ def test_the_chair_temperature_is_the_target_clamped_and_slew_limited(client, pr
     assert played[69:100] == pytest.approx(40.0) and played.max() <= 40.0
     assert played[-1] == pytest.approx(40.0 - (N_TICKS - 100) * step)
     assert client.get("/api/projects/nope/timeline/chair-temperature").status_code == 404
+
+
+def test_a_parameter_change_is_an_undoable_op_in_the_edit_history(client, project):
+    pid = project["id"]
+    p0 = client.get(f"/api/projects/{pid}").json()
+    vib0 = client.get(f"/api/projects/{pid}/timeline").json()["tracks"]["vibration"]
+    edit(client, pid, {"op": "set", "lanes": ["A1"], "t0": 0, "t1": 10, "value": 0.25})
+    off = {"loudness": 1.0, "sharpness": 1.0, "booming": 1.0, "low_energy": 1.0}
+    r = client.put(f"/api/projects/{pid}/params", json={"thresholds": off})
+    assert r.status_code == 200 and r.json()["derived"] and r.json()["cursor"] == 2, r.text
+    e = client.get(f"/api/projects/{pid}/edits").json()
+    assert e["revision"] == r.json()["revision"] and e["cursor"] == 2
+    assert e["ops"][1] == {"op": "params", "from": p0["params"], "to": {**p0["params"], "thresholds": off}}
+    # The same parameters again change nothing and record nothing.
+    r = client.put(f"/api/projects/{pid}/params", json={"thresholds": off})
+    assert r.json()["cursor"] is None and client.get(f"/api/projects/{pid}/edits").json()["cursor"] == 2
+
+    def vibration() -> np.ndarray:
+        return np.asarray(client.get(f"/api/projects/{pid}/timeline").json()["tracks"]["vibration"])
+
+    assert vibration()[10:].max() == 0 and vibration()[0:10, 0].tolist() == [0.25] * 10
+    rev = client.get(f"/api/projects/{pid}").json()["revision"]
+    u = client.post(f"/api/projects/{pid}/undo", json={"base_revision": rev})
+    assert u.status_code == 200, u.text
+    assert u.json()["params"] == p0["params"] and u.json()["cursor"] == 1 and u.json()["job"] is None
+    assert client.get(f"/api/projects/{pid}").json()["params"] == p0["params"]
+    assert u.json()["revision"] == client.get(f"/api/projects/{pid}").json()["revision"]
+    assert np.array_equal(vibration()[10:], np.asarray(vib0)[10:]), "the previous thresholds' vibration is back"
+    # An ordinary op undone answers without parameters; redo brings the thresholds back.
+    u2 = client.post(f"/api/projects/{pid}/undo", json={"base_revision": u.json()["revision"]}).json()
+    assert u2["params"] is None and u2["cursor"] == 0
+    r1 = client.post(f"/api/projects/{pid}/redo", json={"base_revision": u2["revision"]}).json()
+    r2 = client.post(f"/api/projects/{pid}/redo", json={"base_revision": r1["revision"]}).json()
+    assert r2["params"]["thresholds"] == off and client.get(f"/api/projects/{pid}").json()["params"]["thresholds"] == off
+    assert vibration()[10:].max() == 0
+    # The op is the service's record of PUT params: a client cannot post one.
+    bad = client.post(f"/api/projects/{pid}/edits", json={"base_revision": r2["revision"], "op": e["ops"][1]})
+    assert bad.status_code == 400 and "PUT /api/projects/{id}/params" in bad.json()["detail"]

@@ -231,7 +231,7 @@ def _range(draw):
 
 @st.composite
 def valid_op(draw):
-    name = draw(st.sampled_from([o for o in OPS if o != "import"]))
+    name = draw(st.sampled_from([o for o in OPS if o not in ("import", "params")]))
     lanes = draw(st.lists(st.sampled_from(LANES), min_size=1, max_size=4))
     t0, t1 = draw(_range())
     if name in ("set", "scale", "clear", "fade_in", "fade_out"):
@@ -314,3 +314,18 @@ def test_range_ops_on_a_region_of_fan_cells_leave_the_other_fans_alone():
 def test_a_bad_fan_region_is_refused_in_one_sentence(op, message):
     with pytest.raises(ParameterError, match=message):
         validate_op(op)
+
+
+def test_a_params_op_changes_no_track_and_is_checked():
+    doc = {"preset": "balanced", "mode": "audio", "thresholds": {"loudness": 0.5}, "overrides": {}}
+    op = {"op": "params", "from": doc, "to": {**doc, "thresholds": {"loudness": 0.3}}}
+    assert validate_op(op) == op
+    from autohaptics.timeline import Timeline
+    base = Timeline.empty(20)
+    base.vibration[:] = 0.5
+    out, markers = apply_ops(base, [op])
+    assert np.array_equal(out.vibration, base.vibration) and markers == []
+    with pytest.raises(ParameterError, match="field 'to' must be an object with exactly the fields"):
+        validate_op({"op": "params", "from": doc, "to": {"preset": "balanced"}})
+    with pytest.raises(ParameterError, match="'thresholds' and 'overrides' must be objects"):
+        validate_op({"op": "params", "from": doc, "to": {**doc, "thresholds": [0.5]}})

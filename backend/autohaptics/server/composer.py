@@ -234,6 +234,8 @@ class Composer:
         for an invalid op (a stored import must name one of this project's imports).
         """
         normalised = edit_ops.validate_op(op)
+        if normalised["op"] == "params":
+            raise ParameterError("op 'params' is recorded by PUT /api/projects/{id}/params; change the parameters there")
         if self.generated(pid) is None:
             raise Conflict("the project has no timeline yet; edits need a generated timeline")
         current = self.store.revision(pid)

@@ -92,6 +92,7 @@ class _Live:
     stage: str = ""
     started_at: str | None = None
     cancel_requested: bool = False
+    previous: dict | None = None  # the parameters of the timeline the job would replace (None: none yet)
     subscribers: Subscribers = field(default_factory=Subscribers)
 
 
@@ -164,7 +165,8 @@ class JobRunner:
         job = self.store.create_job(project["id"], params)
         media_path = str(self.store.media_path(project))
         live = _Live(job_id=job["id"], project_id=project["id"], params=params, name=project["name"],
-                     media_path=media_path, cancel=cancel)
+                     media_path=media_path, cancel=cancel,
+                     previous=project["params"] if project.get("has_timeline") else None)
         spec = {"job_id": job["id"], "media_path": media_path, "work_dir": str(self.store.job_work_dir(job["id"])),
                 "params": params, "name": project["name"]}
         with self._lock:
@@ -307,7 +309,7 @@ class JobRunner:
         # Under the project's parameter lock: a parameter change either lands before the current
         # parameters are read here (and is derived with), or after the job is gone.
         with self.params_lock(live.project_id):
-            params = live.params
+            params = live.params if status == "done" else live.previous  # a stopped job: back to the timeline's
             if status == "done":
                 try:
                     params = self._current_params(live)

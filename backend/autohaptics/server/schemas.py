@@ -102,6 +102,7 @@ class ParamsOut(BaseModel):
     derived: bool
     seconds: float | None = None
     job: JobOut | None = None
+    cursor: int | None = None  # the edit history's cursor after the change was recorded (a 'params' op)
 
 
 class WaveformOut(BaseModel):
@@ -152,6 +153,14 @@ class MarkerOut(BaseModel):
 
 class HistoryOut(RevisionOut):
     markers: list[MarkerOut]
+
+
+class StepOut(HistoryOut):
+    """Undo / redo: a 'params' op stepped over brings its parameters back (``params``, and ``job``
+    when they need a new analysis)."""
+
+    params: ParamsDoc | None = None
+    job: JobOut | None = None
 
 
 class EditOut(HistoryOut):

@@ -267,9 +267,10 @@ class Store:
     def finish_job(self, job_id: str, status: str, *, error: str | None = None, started_at: str | None = None,
                    params: dict | None = None) -> dict | None:
         """Record a job's end. ``done``: its work folder's analysis.npz and generated.npz replace the
-        project's, the revision increases and ``params`` (what the timeline was derived with) are
-        stored. Returns the job, or None when its project was deleted meanwhile. The work folder
-        is removed in every case."""
+        project's and the revision increases. ``params`` (what the timeline on show was derived
+        with) are stored. A project whose job did not finish but that has a timeline stays
+        ``ready`` (its ``job`` says what happened). Returns the job, or None when its project was
+        deleted meanwhile. The work folder is removed in every case."""
         work = self.job_work_dir(job_id)
         try:
             with self._tx() as db:
@@ -287,8 +288,10 @@ class Store:
                     for name in ("analysis.npz", GENERATED):
                         os.replace(work / name, pdir / name)
                     db.execute("UPDATE projects SET revision=revision+1, has_timeline=1 WHERE id=?", (pid,))
-                    if params is not None:
-                        db.execute("UPDATE projects SET params=? WHERE id=?", (json.dumps(params), pid))
+                elif db.execute("SELECT has_timeline FROM projects WHERE id=?", (pid,)).fetchone()[0]:
+                    project_status = "ready"  # the previous timeline stays; the job keeps its own status
+                if params is not None:
+                    db.execute("UPDATE projects SET params=? WHERE id=? AND job_id=?", (json.dumps(params), pid, job_id))
                 db.execute("UPDATE projects SET status=?, updated_at=? WHERE id=? AND job_id=?",
                            (project_status, stamp, pid, job_id))
         finally:
@@ -324,10 +327,11 @@ class Store:
                 "SELECT op FROM edits WHERE project_id=? ORDER BY seq", (pid,))]
         return {"revision": row["revision"], "cursor": row["cursor"], "ops": ops}
 
-    def append_edit(self, pid: str, base_revision: int, op: dict) -> dict:
-        """Append ``op`` at the cursor (dropping the redo tail); Conflict when ``base_revision`` is stale."""
+    def append_edit(self, pid: str, base_revision: int | None, op: dict) -> dict:
+        """Append ``op`` at the cursor (dropping the redo tail); Conflict when ``base_revision`` is stale
+        (None: on top of the current revision)."""
         with self._tx() as db:
-            row = self._check_revision(db, pid, base_revision)
+            row = self._require(db, pid) if base_revision is None else self._check_revision(db, pid, base_revision)
             cursor = row["cursor"]
             db.execute("DELETE FROM edits WHERE project_id=? AND seq>=?", (pid, cursor))
             db.execute("INSERT INTO edits (project_id, seq, op, created_at) VALUES (?, ?, ?, ?)",

@@ -36,11 +36,13 @@ REQUIRED: dict[str, tuple[str, ...]] = {
     "marker_update": ("marker",),
     "marker_delete": ("id",),
     "import": ("timeline",),
+    "params": ("from", "to"),
 }
 OPTIONAL: dict[str, tuple[str, ...]] = {name: ("cells",) for name in ("set", "scale", "clear", "fade_in", "fade_out")}
 OPS: tuple[str, ...] = tuple(REQUIRED)
 IMPORT_STORED_FIELDS = ("ref", "name", "n_ticks")  # an import op as stored: its document lives in a file
 MARKER_OPS = ("marker_add", "marker_update", "marker_delete")
+PARAMS_FIELDS = ("preset", "mode", "thresholds", "overrides")  # a stored parameter document
 TRACKS = ("vibration", "temperature_c", "fans")
 _REF = re.compile(r"^[0-9a-f]{32}$")
 
@@ -121,7 +123,20 @@ def normalise(op: Any) -> tuple[dict, Any]:
         except ParameterError as exc:
             raise ParameterError(f"op 'import': field 'timeline': {exc}") from None
         out["timeline"] = doc
+    elif name == "params":
+        out["from"], out["to"] = _params_doc(op["from"], "from"), _params_doc(op["to"], "to")
     return out, parsed
+
+
+def _params_doc(value: Any, field: str) -> dict:
+    """A stored parameter document ``{preset, mode, thresholds, overrides}`` (its values are checked
+    where it is applied, by :func:`autohaptics.params.resolve_doc`)."""
+    if not isinstance(value, dict) or sorted(value) != sorted(PARAMS_FIELDS):
+        raise ParameterError(f"op 'params': field '{field}' must be an object with exactly the fields "
+                             f"{', '.join(PARAMS_FIELDS)}")
+    if not isinstance(value["thresholds"], dict) or not isinstance(value["overrides"], dict):
+        raise ParameterError(f"op 'params': field '{field}': 'thresholds' and 'overrides' must be objects")
+    return {k: value[k] for k in PARAMS_FIELDS}
 
 
 def _stored_import(op: dict) -> dict:
@@ -397,6 +412,10 @@ def _op_marker_delete(tl, markers, op, parsed, strict) -> None:
     del markers[op["id"]]
 
 
+def _op_params(tl, markers, op, parsed, strict) -> None:
+    """A parameter change changes the generated layer (the service re-derives it), no composed track."""
+
+
 def _in_cells(apply: Callable) -> Callable:
     """A range op that, given ``cells``, changes only those fans (the others keep their values)."""
     def region(tl, markers, op, parsed, strict) -> None:
@@ -425,4 +444,5 @@ APPLY: dict[str, Callable] = {
     "marker_add": _op_marker_add,
     "marker_update": _op_marker_update,
     "marker_delete": _op_marker_delete,
+    "params": _op_params,
 }

@@ -77,6 +77,7 @@ export class ChairPanel extends Emitter {
     this.pushBtn = h("button", { class: "btn btn-small", type: "button", "data-testid": "chair-push", onclick: () => this.pushRange() }, "Push to chair");
     this.pushProgress = progressBar("Push to the chair", "chair-push-progress");
     this.pushProgress.el.hidden = true;
+    this.pushText = h("p", { class: "chair-push-text", "data-testid": "chair-push-text", "aria-live": "polite", hidden: true });
 
     this.el = h(
       "section",
@@ -88,7 +89,7 @@ export class ChairPanel extends Emitter {
       h("label", { class: "chair-field", for: "chair-latency" }, h("span", {}, "Latency offset"), h("span", { class: "chair-field-input" }, this.latencyInput, this.latencyHint)),
       h("label", { class: "threshold-row", for: "chair-intensity" }, h("span", {}, "Intensity"), this.intensityInput, this.intensityOut),
       chips,
-      h("div", { class: "chair-row" }, this.pushBtn, this.pushProgress.el),
+      h("div", { class: "chair-row" }, this.pushBtn, this.pushProgress.el, this.pushText),
     );
     /** @type {ChairStatus|null} */
     this.status = null;
@@ -266,8 +267,10 @@ export class ChairPanel extends Emitter {
     if (!s) return;
     const v = this.values;
     v.port.textContent = s.port || "–";
-    v.frames.textContent = String(s.frames_sent);
-    v.lastTick.textContent = s.last_tick === null ? "–" : `${s.last_tick} (${formatTime(s.last_tick * this.tickS)})`;
+    // The counters are this project's: after another project played, they show "–" here.
+    const mine = this.chairPlaysThis;
+    v.frames.textContent = mine ? String(s.frames_sent) : "–";
+    v.lastTick.textContent = !mine || s.last_tick === null ? "–" : `${s.last_tick} (${formatTime(s.last_tick * this.tickS)})`;
     const chair = s.diagnostics && s.diagnostics.chair;
     v.errors.textContent = chair ? `CRC ${chair.crc_errors} · length ${chair.length_errors}` : "–";
     v.safe.textContent = chair ? (chair.safe ? `yes (${chair.safe_reason})` : "no") : "–";
@@ -276,10 +279,35 @@ export class ChairPanel extends Emitter {
     const error = s.error || (state === "reconnecting" && s.diagnostics ? s.diagnostics.last_error : null);
     this.errorEl.hidden = !error;
     this.errorEl.textContent = error || "";
-    const push = s.push;
-    this.pushProgress.el.hidden = !push;
-    if (push) this.pushProgress.set(push.progress, push.state === "running" ? `${formatTime(push.start_s)}–${formatTime(push.end_s)}` : push.state);
+    this._renderPush(s.push && s.push.project_id === this.projectId ? s.push : null);
     this._renderSettings(s.settings, false);
+  }
+
+  /** Whether the chair's counters belong to this project (nothing else played since it connected). */
+  get chairPlaysThis() {
+    const s = this.status;
+    const owner = s && ((s.push && s.push.project_id) || (s.playback && s.playback.project_id));
+    return !owner || owner === this.projectId;
+  }
+
+  /** Where a running push of this project has the chair (s), else null. */
+  get pushPositionS() {
+    const s = this.status;
+    const push = s && s.push;
+    if (!push || push.project_id !== this.projectId || push.state !== "running") return null;
+    return s.last_tick === null ? push.start_s : Math.max(push.start_s, Math.min(push.end_s, s.last_tick * this.tickS));
+  }
+
+  /** The push's bar and, in words, where the chair is and how far it has got. @param {import("../data/api.js").ChairPush|null} push */
+  _renderPush(push) {
+    this.pushProgress.el.hidden = this.pushText.hidden = !push;
+    if (!push) return;
+    const span = `${formatTime(push.start_s)}–${formatTime(push.end_s)}`;
+    this.pushProgress.set(push.progress, push.state);
+    const at = this.pushPositionS;
+    this.pushText.textContent = at !== null
+      ? `Chair at ${formatTime(at)} · ${Math.round(push.progress * 100)} % of ${span}`
+      : `Push of ${span} ${push.state}${push.error ? `: ${push.error}` : ""}`;
   }
 
   /**

@@ -199,11 +199,22 @@ export class TimelineView extends Emitter {
     if (x < 0 || x > this.width) this._setStart(timeS - this.visibleS / 2);
   }
 
+  /**
+   * Where the chair is (a push plays it apart from the player), as a second playhead; null hides it.
+   * @param {number|null} timeS
+   */
+  setChairHead(timeS) {
+    this.chairS = timeS;
+    this._placePlayhead();
+  }
+
   _placePlayhead() {
-    const x = this.timeToX(this.playheadS);
-    const visible = x >= -1 && x <= this.width + 1;
-    this.playheadEl.style.display = visible ? "" : "none";
-    if (visible) this.playheadEl.style.transform = `translateX(${LABEL_WIDTH + x}px)`;
+    for (const [el, t] of [[this.playheadEl, this.playheadS], [this.chairHeadEl, this.chairS]]) {
+      const x = t === null ? NaN : this.timeToX(t);
+      const visible = x >= -1 && x <= this.width + 1;
+      el.style.display = visible ? "" : "none";
+      if (visible) el.style.transform = `translateX(${LABEL_WIDTH + x}px)`;
+    }
   }
 
   // ------------------------------------------------------------------ lanes
@@ -316,13 +327,17 @@ export class TimelineView extends Emitter {
     this.playheadEl = h("div", { class: "tl-playhead" });
     this.playheadEl.setAttribute("data-testid", "playhead");
     this.playheadEl.setAttribute("aria-hidden", "true");
+    this.chairHeadEl = h("div", { class: "tl-playhead tl-chairhead", "data-testid": "chair-head", "aria-hidden": "true" });
+    /** @type {number|null} the chair's position while a push plays it (s) */
+    this.chairS = null;
+    this.chairHeadEl.style.display = "none";
     const scroll = h("div", { class: "tl-scroll" });
     scroll.setAttribute("data-testid", "timeline-scrollbar");
     this.thumbEl = h("div", { class: "tl-scroll-thumb" });
     scroll.append(this.thumbEl);
     this.scrollEl = scroll;
     const body = h("div", { class: "tl-body" });
-    body.append(rulerRow, this.lanesEl, this.playheadEl);
+    body.append(rulerRow, this.lanesEl, this.playheadEl, this.chairHeadEl);
     root.append(body, scroll);
     this.root = root;
     this.bodyEl = body;
@@ -356,7 +371,7 @@ export class TimelineView extends Emitter {
   }
 
   _resizePlayhead() {
-    this.playheadEl.style.height = `${this.bodyEl.scrollHeight}px`;
+    this.playheadEl.style.height = this.chairHeadEl.style.height = `${this.bodyEl.scrollHeight}px`;
   }
 
   /** @param {{lane: Lane, canvas: HTMLCanvasElement}} entry */

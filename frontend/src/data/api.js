@@ -18,7 +18,7 @@ import { watchChair, watchJob } from "./streams.js";
  *   media_type?: string, view?: Record<string, any>|null}} Project
  * @typedef {{id: string, t_s: number, label: string}} Marker
  * @typedef {{revision: number, cursor: number, ops: Array<Record<string, any>>, markers: Marker[]}} EditList
- * @typedef {{revision: number, cursor: number, markers: Marker[]}} HistoryAnswer
+ * @typedef {{revision: number, cursor: number, markers: Marker[], params?: Params|null, job?: Job|null}} HistoryAnswer
  * @typedef {{points: number, duration_s: number, has_audio?: boolean, min: number[], max: number[]}} Waveform
  * @typedef {{device: string, description: string, kind: "usb"|"serial"|"virtual", likely_chair: boolean}} ChairPort
  * @typedef {{latency_ms: number, comfort: {scale: number, mute: Record<string, boolean>}}} ChairSettings
@@ -137,7 +137,7 @@ export class Api {
   /**
    * @param {string} id
    * @param {Params} params
-   * @returns {Promise<{revision?: number, derived?: boolean, seconds?: number, job?: Job}>}
+   * @returns {Promise<{revision?: number, derived?: boolean, seconds?: number, job?: Job, cursor?: number|null}>}
    */
   putParams(id, params) {
     return this.request("PUT", `/api/projects/${enc(id)}/params`, params);

@@ -11,7 +11,8 @@ import { Emitter } from "../core/events.js";
 /**
  * @typedef {{revision: number, cursor: number, nOps: number}} HistoryState
  * @typedef {{
- *   changed: HistoryState & {reason: "edit"|"undo"|"redo"|"reload"|"conflict"|"params"},
+ *   changed: HistoryState & {reason: "edit"|"undo"|"redo"|"reload"|"conflict"|"params",
+ *     params?: import("./api.js").Params|null, job?: import("./api.js").Job|null},
  *   save: {state: "saved"|"saving"|"error", message: string},
  *   conflict: {message: string},
  * }} HistoryEvents
@@ -138,23 +139,30 @@ export class EditSession extends Emitter {
   }
 
   /**
-   * A parameter change or a finished job moved the revision.
+   * A parameter change or a finished job moved the revision; a parameter change the server
+   * recorded as a `params` op (PUT params answers its `cursor`) is the newest op.
    * @param {number} revision
+   * @param {number|null} [cursor]
    */
-  setRevision(revision) {
+  setRevision(revision, cursor = null) {
     this.revision = revision;
+    if (typeof cursor === "number") {
+      this.ops = [...this.ops.slice(0, cursor - 1), { op: "params" }];
+      this.cursor = cursor;
+    }
     this.emit("changed", { ...this.state(), reason: "params" });
   }
 
   /**
-   * @param {{revision: number, cursor: number, markers: import("./api.js").Marker[]}} res
+   * @param {{revision: number, cursor: number, markers: import("./api.js").Marker[],
+   *   params?: import("./api.js").Params|null, job?: import("./api.js").Job|null}} res
    * @param {"edit"|"undo"|"redo"} reason
    */
   _apply(res, reason) {
     this.revision = res.revision;
     this.cursor = res.cursor;
     this.markers = res.markers;
-    this.emit("changed", { ...this.state(), reason });
+    this.emit("changed", { ...this.state(), reason, params: res.params || null, job: res.job || null });
   }
 
   /** @param {unknown} err */

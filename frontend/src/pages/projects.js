@@ -29,6 +29,10 @@ export class ProjectsPage {
     this.config = ctx.config;
     /** @type {Map<string, {close: () => void}>} job watchers of the list rows */
     this.watchers = new Map();
+    /** @type {Map<string, {el: HTMLElement, set: (fraction: number, note?: string) => void}>} the rows' job bars */
+    this.rowBars = new Map();
+    /** @type {Map<string, number>} how many projects bear each name */
+    this.names = new Map();
     /** @type {JobProgress|null} */
     this.uploadJob = null;
     /** @type {{abort: () => void}|null} */
@@ -122,6 +126,9 @@ export class ProjectsPage {
     if (this.disposed) return;
     for (const w of this.watchers.values()) w.close();
     this.watchers.clear();
+    this.rowBars.clear();
+    this.names = new Map();
+    for (const p of projects) this.names.set(p.name, (this.names.get(p.name) || 0) + 1);
     this.listEl.replaceChildren(...projects.map((p) => this._row(p)));
     this.emptyEl.hidden = projects.length > 0;
   }
@@ -130,7 +137,7 @@ export class ProjectsPage {
   _row(p) {
     const open = h("a", { class: "project-name-link", href: `#/project/${encodeURIComponent(p.id)}`, "data-testid": "project-open" }, p.name);
     const status = h("span", { class: `badge badge-${p.status}`, "data-testid": "project-status" }, STATUS_TEXT[p.status] || p.status);
-    const meta = h("span", { class: "project-meta" }, [p.duration_s ? formatTime(p.duration_s) : "", formatDate(p.updated_at)].filter(Boolean).join(" · "));
+    const meta = h("span", { class: "project-meta", "data-testid": "project-meta" }, this._meta(p));
     const btn = (/** @type {string} */ text, /** @type {string} */ testid, /** @type {() => void} */ fn) =>
       h("button", { class: "btn btn-small", type: "button", "data-testid": testid, "aria-label": `${text} ${p.name}`, onclick: fn }, text);
     const row = h(
@@ -144,15 +151,38 @@ export class ProjectsPage {
         btn("Delete", "project-delete", () => this.remove(p))),
     );
     const job = p.job;
+    if (p.has_timeline && job && (job.status === "cancelled" || job.status === "failed")) {
+      row.append(h("p", { class: "project-note", "data-testid": "project-note" },
+        `Last regeneration ${job.status}${job.error ? ` (${job.error})` : ""}; the previous timeline is kept.`));
+    }
     if (job && !isTerminal(job.status)) {
       const bar = progressBar(`Generation of ${p.name}`, "row-progress");
       bar.set(job.progress || 0);
+      this.rowBars.set(p.id, bar);
       row.append(bar.el);
       const w = this.api.watchJob(job.id, (f) => bar.set(f));
       this.watchers.set(p.id, w);
       w.promise.then(() => this.refresh(), () => this.refresh());
     }
     return row;
+  }
+
+  /**
+   * Duration, the picture's size, when it was made and changed; projects of the same name also
+   * show their file and id, so two of them are told apart.
+   * @param {import("../data/api.js").Project} p
+   */
+  _meta(p) {
+    const video = p.source && p.source.video;
+    const twins = this.names.get(p.name) > 1;
+    return [
+      p.duration_s ? formatTime(p.duration_s) : "",
+      video ? `${video.width}x${video.height}` : "",
+      twins && p.source && p.source.size_bytes ? formatBytes(p.source.size_bytes) : "",
+      twins && p.created_at ? `created ${formatDate(p.created_at)}` : "",
+      `changed ${formatDate(p.updated_at)}`,
+      twins ? `id ${p.id.slice(0, 6)}` : "",
+    ].filter(Boolean).join(" · ");
   }
 
   /** @param {import("../data/api.js").Project} p */
@@ -245,7 +275,7 @@ export class ProjectsPage {
       // The upload box follows this job; the list row needs no second watcher.
       const rowWatch = this.watchers.get(project.id);
       if (rowWatch) rowWatch.close();
-      const jp = new JobProgress(this.api);
+      const jp = new JobProgress(this.api, { onProgress: (f) => this.rowBars.get(project.id)?.set(f) });
       this.uploadJob = jp;
       this.uploadJobSlot.replaceChildren(h("span", { class: "upload-label" }, "Generation"), jp.el);
       try {

@@ -18,10 +18,13 @@ const STAGES = /** @type {Record<string, string>} */ ({
 export class JobProgress {
   /**
    * @param {import("../data/api.js").Api} api
-   * @param {{label?: string, testid?: string}} [opts]
+   * @param {{label?: string, testid?: string, onProgress?: (fraction: number) => void}} [opts]
+   *   onProgress: every figure this bar shows, for another view of the same job (one figure everywhere)
    */
   constructor(api, opts = {}) {
     this.api = api;
+    this.onProgress = opts.onProgress || (() => {});
+    this.fraction = 0;
     this.bar = progressBar(opts.label || "Generation progress", opts.testid || "generation-progress");
     this.cancelBtn = h("button", { class: "btn btn-small", type: "button", "data-testid": "generation-cancel" }, "Cancel");
     this.status = h("span", { class: "job-status", "data-testid": "generation-status" });
@@ -42,9 +45,9 @@ export class JobProgress {
     this.close();
     this.jobId = job.id;
     this.cancelBtn.disabled = false;
-    this.bar.set(job.progress || 0, STAGES[job.stage || job.status] || job.stage || job.status);
+    this._show(job.progress || 0, STAGES[job.stage || job.status] || job.stage || job.status);
     this.status.textContent = "";
-    this.watch = this.api.watchJob(job.id, (p, stage) => this.bar.set(p, STAGES[stage] || stage));
+    this.watch = this.api.watchJob(job.id, (p, stage) => this._show(p, STAGES[stage] || stage));
     let final;
     try {
       final = await this.watch.promise;
@@ -55,14 +58,23 @@ export class JobProgress {
     }
     this.cancelBtn.disabled = true;
     if (final.status === "done") {
-      this.bar.set(1, "done");
+      this._show(1, "done");
       this.status.textContent = "Generation finished.";
     } else if (final.status === "cancelled") {
+      this.bar.set(this.fraction, "cancelled");
       this.status.textContent = "Generation cancelled; the previous timeline stays.";
     } else {
+      this.bar.set(this.fraction, "failed");
       this.status.textContent = `Generation failed: ${final.error || "unknown error"}`;
     }
     return final;
+  }
+
+  /** @param {number} fraction 0..1 @param {string} note */
+  _show(fraction, note) {
+    this.fraction = fraction;
+    this.bar.set(fraction, note);
+    this.onProgress(fraction);
   }
 
   async cancel() {

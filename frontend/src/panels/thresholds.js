@@ -1,12 +1,13 @@
 /**
  * Threshold sliders, the keyboard-friendly twin of the threshold lines: `input` is the live
- * preview, `change` (release, or a keyboard step) the commit. Beside them the density control
+ * preview, `change` (release, or a keyboard step) the commit; beside each a field to type the value. Beside them the density control
  * (the share of the film that should vibrate: off = the thresholds as they are, on = the server
  * scales the thresholds so about that share vibrates) and the share the current settings give.
  */
 
 import { h } from "../core/dom.js";
 import { FEATURE_LABELS } from "../lanes/features.js";
+import { toast } from "./widgets.js";
 
 /** @param {number} share 0..1 @returns {string} */
 const percent = (share) => `${Math.round(share * 100)} %`;
@@ -18,7 +19,7 @@ export class ThresholdsPanel {
    *   onDensity?: (share: number|null) => void}} hooks
    */
   constructor(names, hooks) {
-    /** @type {Map<string, {input: HTMLInputElement, out: HTMLOutputElement}>} */
+    /** @type {Map<string, {input: HTMLInputElement, out: HTMLInputElement, value: number}>} the slider, the typed value, the value shown */
     this.rows = new Map();
     const list = h("div", { class: "thresholds" });
     for (const name of names) {
@@ -26,14 +27,17 @@ export class ThresholdsPanel {
       const input = h("input", {
         type: "range", min: 0, max: 1, step: 0.01, id, class: "range", "data-testid": `threshold-${name}`,
       });
-      const out = h("output", { class: "range-value", for: id }, "–");
+      const label = FEATURE_LABELS[name] || name;
+      const out = h("input", { type: "number", min: 0, max: 1, step: 0.001, class: "input range-value",
+        "aria-label": `${label} threshold (0 to 1)`, "data-testid": `threshold-value-${name}` });
       input.addEventListener("input", () => {
-        out.textContent = Number(input.value).toFixed(2);
+        out.value = Number(input.value).toFixed(2);
         hooks.onInput(name, Number(input.value));
       });
       input.addEventListener("change", () => hooks.onCommit(name, Number(input.value)));
-      list.append(h("label", { class: "threshold-row", for: id }, h("span", {}, FEATURE_LABELS[name] || name), input, out));
-      this.rows.set(name, { input, out });
+      out.addEventListener("change", () => this._typed(name, out, hooks.onCommit));
+      list.append(h("label", { class: "threshold-row", for: id }, h("span", {}, label), input, out));
+      this.rows.set(name, { input, out, value: 0 });
     }
     const density = this._densityRow(hooks.onDensity || (() => {}));
     this.share = h("p", { class: "params-info", "data-testid": "vibration-share", "aria-live": "polite" }, "");
@@ -65,12 +69,29 @@ export class ThresholdsPanel {
     this.densityOut.textContent = this.densityOn.checked ? percent(Number(this.density.value)) : "off";
   }
 
+  /**
+   * A typed threshold: a number 0..1 is committed as typed (to 0.001); anything else is refused
+   * with a warning and the field shows the value in force again.
+   * @param {string} name @param {HTMLInputElement} out @param {(name: string, value: number) => void} onCommit
+   */
+  _typed(name, out, onCommit) {
+    const row = this.rows.get(name);
+    const v = out.value.trim() === "" ? NaN : Number(out.value);
+    if (!Number.isFinite(v) || v < 0 || v > 1) {
+      toast(`A threshold is a number from 0 to 1; "${out.value}" was not used.`, "warn");
+      this.set(name, row.value);
+      return;
+    }
+    onCommit(name, Math.round(v * 1000) / 1000);
+  }
+
   /** @param {string} name @param {number} value */
   set(name, value) {
     const row = this.rows.get(name);
     if (!row) return;
+    row.value = value;
     row.input.value = String(value);
-    row.out.textContent = value.toFixed(2);
+    row.out.value = String(Math.round(value * 1000) / 1000);
   }
 
   /** The density setting: a share 0..1, or null (off). @param {number|null} share */
@@ -88,7 +109,7 @@ export class ThresholdsPanel {
 
   /** @param {boolean} disabled */
   setDisabled(disabled) {
-    for (const { input } of this.rows.values()) input.disabled = disabled;
+    for (const { input, out } of this.rows.values()) input.disabled = out.disabled = disabled;
     this.densityOn.disabled = disabled;
     this.density.disabled = disabled || !this.densityOn.checked;
   }

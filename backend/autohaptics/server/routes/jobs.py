@@ -41,13 +41,27 @@ def put_params(project_id: str, body: ParamsIn, response: Response, store: Store
 def _put_params(project_id: str, body: ParamsIn, response: Response, store, runner, composer) -> dict:
     project = store.get_project(project_id)
     doc = _resolve(project, body)
+    out = apply_params(project_id, doc, store, runner, composer)
+    if not out["derived"]:
+        response.status_code = 202
+    if project["has_timeline"] and doc != project["params"]:
+        recorded = store.append_edit(project_id, None, {"op": "params", "from": project["params"], "to": doc})
+        out.update(recorded)
+    return out
+
+
+def apply_params(project_id: str, doc: dict, store, runner, composer) -> dict:
+    """Make ``doc`` the project's parameters: re-derived from the cached analysis when it can be
+    (``derived`` true, the revision moves on), else a job analyses the film again (or the running
+    one, when it needs the same analysis, derives with them when it ends). Call it under the
+    project's ``runner.params_lock``. Returns ``{revision, derived, seconds?, job}``."""
     derived = composer.rederive(project_id, doc)
     if derived is not None:
         job = None
         if derived.needs_analysis and runner.active_job(project_id) is None:
             job = runner.submit(store.get_project(project_id), doc)
         return {"revision": derived.revision, "derived": True, "seconds": derived.seconds, "job": job}
-    response.status_code = 202
+    project = store.get_project(project_id)
     running = runner.active_job(project_id)
     if running is not None and same_analysis(running["params"], doc):
         store.set_params(project_id, doc)  # the running job derives with them when it finishes

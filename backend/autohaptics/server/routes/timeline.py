@@ -15,8 +15,9 @@ from fastapi import APIRouter, Query, Request, Response
 from autohaptics.errors import ParameterError
 from autohaptics.formats import export_timeline, get_format
 from autohaptics.layout import FAN_COLS, FAN_ROWS
-from autohaptics.server.deps import ChairDep, SettingsDep, StoreDep, ComposerDep
-from autohaptics.server.schemas import ChairTemperatureOut, EditIn, LaneValuesOut, EditOut, EditsOut, HistoryOut, RevisionIn
+from autohaptics.server.deps import ChairDep, ComposerDep, RunnerDep, SettingsDep, StoreDep
+from autohaptics.server.routes.jobs import apply_params
+from autohaptics.server.schemas import ChairTemperatureOut, EditIn, LaneValuesOut, EditOut, EditsOut, RevisionIn, StepOut
 from autohaptics.server.uploads import display_name, multipart_body, receive_upload
 from autohaptics.timeline import edit_ops
 
@@ -116,16 +117,30 @@ def post_edit(project_id: str, body: EditIn, composer: ComposerDep) -> dict:
     return composer.append(project_id, body.base_revision, body.op)
 
 
-@router.post("/api/projects/{project_id}/undo", response_model=HistoryOut,
+@router.post("/api/projects/{project_id}/undo", response_model=StepOut,
              responses={409: {"description": "stale base_revision, or nothing to undo"}})
-def undo(project_id: str, body: RevisionIn, composer: ComposerDep) -> dict:
-    return composer.undo(project_id, body.base_revision)
+def undo(project_id: str, body: RevisionIn, composer: ComposerDep, store: StoreDep, runner: RunnerDep) -> dict:
+    with runner.params_lock(project_id):
+        res = composer.undo(project_id, body.base_revision)
+        op = store.edits(project_id)["ops"][res["cursor"]]
+        return _params_again(project_id, res, op, "from", store, runner, composer)
 
 
-@router.post("/api/projects/{project_id}/redo", response_model=HistoryOut,
+@router.post("/api/projects/{project_id}/redo", response_model=StepOut,
              responses={409: {"description": "stale base_revision, or nothing to redo"}})
-def redo(project_id: str, body: RevisionIn, composer: ComposerDep) -> dict:
-    return composer.redo(project_id, body.base_revision)
+def redo(project_id: str, body: RevisionIn, composer: ComposerDep, store: StoreDep, runner: RunnerDep) -> dict:
+    with runner.params_lock(project_id):
+        res = composer.redo(project_id, body.base_revision)
+        op = store.edits(project_id)["ops"][res["cursor"] - 1]
+        return _params_again(project_id, res, op, "to", store, runner, composer)
+
+
+def _params_again(project_id: str, res: dict, op: dict, side: str, store, runner, composer) -> dict:
+    """After undo (``side`` "from") or redo ("to") of a ``params`` op, its parameters apply again."""
+    if op.get("op") != "params":
+        return res
+    out = apply_params(project_id, op[side], store, runner, composer)
+    return {**res, "revision": out["revision"], "params": op[side], "job": out["job"]}
 
 
 def content_disposition(filename: str) -> str:

@@ -38,6 +38,7 @@ export class EditorChair {
       this.panel.on("status", ({ status, active }) => {
         this.sync.setActive(active);
         page.header.showChair(status.state);
+        page.timeline?.setChairHead(this.panel.pushPositionS);  // a push plays the chair apart from the player
       }),
       () => this.sync.destroy(),
       () => this.panel.destroy(),

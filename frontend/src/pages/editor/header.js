@@ -22,7 +22,7 @@ export class EditorHeader {
     this.undoBtn = h("button", { class: "btn", type: "button", disabled: true, title: "Undo (Ctrl+Z)", "data-testid": "undo", onclick: () => page.edits.undo() }, "Undo");
     this.redoBtn = h("button", { class: "btn", type: "button", disabled: true, title: "Redo (Ctrl+Shift+Z)", "data-testid": "redo", onclick: () => page.edits.redo() }, "Redo");
     this.regenBtn = h("button", { class: "btn", type: "button", "data-testid": "regenerate", onclick: () => page.params.regenerate() }, "Regenerate…");
-    const importInput = h("input", { type: "file", accept: ".json,.csv,application/json,text/csv", class: "visually-hidden", "data-testid": "import-input", "aria-label": "Timeline file to import" });
+    const importInput = h("input", { type: "file", accept: ".json,.csv,application/json,text/csv", class: "visually-hidden", "data-testid": "import-input", "aria-hidden": "true", tabindex: -1 });  // the Import… button is the control
     importInput.addEventListener("change", () => {
       const f = importInput.files && importInput.files[0];
       importInput.value = "";

@@ -77,8 +77,13 @@ export class JobFollower {
         if (this.progress === progress) this.slot.hidden = true;
       }, DONE_SHOWN_MS);
     } else {
+      // The project is back to the timeline on show (its parameters, read above); the bar says how
+      // the attempt ended, then goes.
       params.panel.setDisabled(!page.project.has_timeline);
       if (final.status === "failed") toast(`Generation failed: ${final.error || "unknown error"}`, "error", 10000);
+      setTimeout(() => {
+        if (this.progress === progress) this.slot.hidden = true;
+      }, DONE_SHOWN_MS);
     }
   }
 

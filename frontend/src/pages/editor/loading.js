@@ -177,9 +177,10 @@ export class TimelineLoader {
     const s = new EditSession(page.api, page.projectId, got.value);
     page.session = s;
     page.cleanups.push(
-      s.on("changed", ({ reason }) => {
+      s.on("changed", ({ reason, params, job }) => {
         page.header.updateHistory();
         page.markers.refresh();
+        if (params) page.params.restored(params, job || null);  // undo / redo of a parameter change
         if (reason !== "params") this.reload();
       }),
       s.on("save", ({ state, message }) => {

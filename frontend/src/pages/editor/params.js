@@ -147,11 +147,11 @@ export class ParamsControl {
     const ok = await page.session.run(async () => {
       const res = await page.api.putParams(page.projectId, body);
       if (res.job) job = res.job;
-      if (res.derived && typeof res.revision === "number") {
-        derived = true;
-        page.session?.setRevision(res.revision);
-      }
+      derived = Boolean(res.derived);
+      // Recorded as an undoable `params` op (cursor), or re-derived (revision) or both.
+      if (typeof res.cursor === "number" || derived) page.session?.setRevision(res.revision, res.cursor ?? null);
     });
+    if (ok && page.project) page.project = { ...page.project, params: { ...page.project.params, ...body } };
     if (!ok) return false;
     if (derived) {
       // Derived from the cache: shown now. A job that came with it refines the ticks the cache could
@@ -186,6 +186,21 @@ export class ParamsControl {
       return;
     }
     await page.jobs.follow(res.job);
+  }
+
+  /**
+   * Undo or redo stepped over a parameter change: its parameters are in force again (and a job
+   * re-analyses the film when they need it).
+   * @param {import("../../data/api.js").Params} params @param {import("../../data/api.js").Job|null} job
+   */
+  restored(params, job) {
+    const page = this.page;
+    if (page.project) page.project = { ...page.project, params };
+    this.thresholds = { ...(params.thresholds || {}) };
+    this.overrides = { ...(params.overrides || {}) };
+    this.showThresholds();
+    this.updateInfo();
+    if (job) page.jobs.follow(job);
   }
 
   /** The preset and mode the timeline was made with. */
