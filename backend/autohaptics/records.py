@@ -89,6 +89,15 @@ def _set_path(obj: Any, path: list[str], value: Any, key: str) -> Any:
     if head not in names:
         raise ParameterError(f"unknown parameter {key!r}; {type(obj).__name__} has {sorted(names)}")
     current = getattr(obj, head)
+    if len(path) == 1 and dataclasses.is_dataclass(current):
+        if not isinstance(value, dict):
+            raise ParameterError(f"{key!r} is a group of parameters: set one of its fields "
+                                 f"({key}.{dataclasses.fields(current)[0].name}=...) or give an object")
+        nested = dict(value)
+        try:
+            return dataclasses.replace(obj, **{head: apply_overrides(current, nested)})
+        except RecursionError:
+            raise ParameterError(f"{key!r} is nested too deeply") from None
     if len(path) > 1:
         if isinstance(current, dict):
             new = dict(current)

@@ -66,7 +66,7 @@ def normalise(op: Any) -> tuple[dict, Any]:
     if not isinstance(op, dict):
         raise ParameterError(f"an operation must be a JSON object, got {type(op).__name__}")
     name = op.get("op")
-    if name not in REQUIRED:
+    if not isinstance(name, str) or name not in REQUIRED:
         raise ParameterError(f"field 'op' must be one of {', '.join(OPS)}; got {name!r}")
     if name == "import" and "ref" in op:
         return _stored_import(op), None
