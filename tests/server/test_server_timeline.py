@@ -137,6 +137,7 @@ def test_an_import_is_stored_as_a_file_and_the_edit_list_stays_light(client, pro
     bad = client.post(f"/api/projects/{pid}/edits", json={"base_revision": again["revision"], "op": {
         "op": "import", "ref": "0" * 32, "name": "x", "n_ticks": 3}})
     assert bad.status_code == 400 and "missing" in bad.json()["detail"]
+    assert str(data_dir) not in bad.json()["detail"]  # never a server path
 
     # A copy of the project and a restarted server compose the same.
     copy = client.post(f"/api/projects/{pid}/duplicate").json()

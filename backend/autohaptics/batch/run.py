@@ -47,6 +47,10 @@ def run_batch(inputs: Iterable[str | os.PathLike], out_dir: str | os.PathLike, p
     if scheduler is not None and not (isinstance(scheduler, str) and "://" in scheduler
                                       and scheduler.split("://", 1)[1]):
         raise ParameterError(f"scheduler must be an address like tcp://HOST:PORT, got {scheduler!r}")
+    if scheduler is not None:
+        from autohaptics.batch.cluster import check_address
+
+        check_address(scheduler)  # a bad address fails at once, before any film is looked at
     sources = collect_inputs(inputs)
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
