@@ -7,7 +7,7 @@ import sys
 
 from autohaptics.errors import ParameterError
 from autohaptics.formats import FORMATS, export_timeline, get_format, write_csv_sidecar
-from autohaptics.formats.common import atomic_output
+from autohaptics.outputs import atomic_output
 from autohaptics.formats.importing import csv_meta_path
 from autohaptics.timeline import Timeline
 
