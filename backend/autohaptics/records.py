@@ -134,6 +134,8 @@ def _convert_hint(value: Any, hint: Any, current: Any, key: str) -> Any:
     if origin in (tuple, list):
         if isinstance(value, str):
             value = [v for v in value.replace("x", ",").split(",") if v.strip()]
+        if not isinstance(value, (list, tuple)):
+            raise ParameterError(f"{key!r} expects a list, got {value!r}"[:300])
         inner = args[0] if args else float
         return (tuple if origin is tuple else list)(_convert(v, inner, key) for v in value)
     if origin is dict or hint is dict:
