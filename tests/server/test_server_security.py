@@ -6,6 +6,7 @@ The same requests from the editor's own origin and from a local program with the
 
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 
@@ -156,3 +157,49 @@ def test_a_lan_name_is_allowed_only_on_purpose(tmp_path):
             else:
                 r = c.patch("/api/projects/nope", json={"name": "x"}, headers={"origin": "http://studio.lan:8000"})
                 assert r.status_code == 404
+
+
+def huge(body: dict) -> dict:
+    """``body`` as raw JSON text: 10**400 written out, and the string "DIGITS" as a 5000-digit integer."""
+    text = json.dumps(body).replace('"DIGITS"', "9" * 5000)
+    return {"content": text.encode(), "headers": {"content-type": "application/json"}}
+
+
+def malformed(pid: str, revision: int) -> list[tuple[str, str, dict, str]]:
+    """(method, path, request keywords, a word of the refusal): the 500s and wrong messages of issue 17."""
+    edit = f"/api/projects/{pid}/edits"
+    span = {"lanes": ["A1"], "t0": 0, "t1": 1}
+    return [
+        ("PUT", "/api/chair/settings", huge({"comfort": {"scale": 10**400}}), "scale"),
+        ("POST", edit, huge({"base_revision": revision, "op": {"op": "scale", **span, "factor": 10**400}}), "factor"),
+        ("POST", edit, huge({"base_revision": revision, "op": {"op": "pencil", "lane": "A1", "t0": 0,
+                                                                "values": [10**400]}}), "values"),
+        ("POST", edit, {"json": {"base_revision": revision, "op": ["set"]}}, "op"),
+        ("POST", edit, {"json": {"base_revision": revision, "op": {"op": {"set": 1}, **span, "value": 1}}}, "op"),
+        ("POST", edit, huge({"base_revision": "DIGITS", "op": {"op": "clear", **span}}), "body"),
+        ("POST", edit, {"json": {"base_revision": revision, "op": {"op": "import", "ref": "0" * 32}}}, "import"),
+        ("POST", f"/api/projects/{pid}/import", {"files": {"file": ("t.json", b'{"format": "autohaptics.timeline", '
+                                                                          b'"version": 1, "n_ticks": 1' + b"0" * 400
+                                                                          + b"}", "application/json")}}, "t.json"),
+        ("PUT", f"/api/projects/{pid}/params", {"json": {"overrides": {"intensity": 5}}}, "intensity"),
+        ("PUT", f"/api/projects/{pid}/params", {"json": {"overrides": {"thermal": {"x": 1}}}}, "x"),
+        ("PUT", f"/api/projects/{pid}/params", {"json": {"overrides": {"flow": "x"}}}, "flow"),
+        ("PUT", f"/api/projects/{pid}/params", {"json": {"overrides": {"depth.onnx_input_size": None}}},
+         "onnx_input_size"),
+        ("POST", "/api/chair/playback", {"json": {"project_id": pid, "state": "play", "position_s": 1e308}},
+         "position_s"),
+        ("POST", "/api/projects", {"files": {"video": ("film.mp4", b"\0" * 70000, "video/mp4")}}, "file"),
+    ]
+
+
+def test_malformed_requests_are_one_sentence_4xx_and_change_nothing(client, root, project):
+    before = snapshot(client, root)
+    params = client.get(f"/api/projects/{project['id']}").json()["params"]
+    for method, path, kwargs, word in malformed(project["id"], project["revision"]):
+        r = client.request(method, path, **kwargs)
+        assert 400 <= r.status_code < 500, (method, path, word, r.status_code, r.text[:300])
+        detail = r.json()["detail"]
+        assert isinstance(detail, str) and word in detail and "\n" not in detail, (word, detail)
+        assert str(root) not in detail and "/tmp" not in detail and "65536" not in detail, detail
+    assert snapshot(client, root) == before
+    assert client.get(f"/api/projects/{project['id']}").json()["params"] == params
