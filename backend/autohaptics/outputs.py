@@ -1,5 +1,6 @@
-"""Writing an output file the user named: atomically (a temporary ``.part`` file renamed into place
-on success), and every failure one ParameterError naming the path as given, never the temporary."""
+"""Writing an output file or folder the user named: a file atomically (a temporary ``.part`` file
+renamed into place on success), and every failure one ParameterError naming the path as given,
+never the temporary."""
 
 from __future__ import annotations
 
@@ -10,6 +11,21 @@ from pathlib import Path
 from typing import IO
 
 from autohaptics.errors import ParameterError
+
+
+def prepare_folder(folder: Path, *, label: str = "folder") -> Path:
+    """``folder`` (a data or output folder), created if missing and writable; else ParameterError
+    naming it as given and ``label`` ("output folder X is not a folder")."""
+    path = Path(folder)
+    if path.exists() and not path.is_dir():
+        raise ParameterError(f"{label} {folder} is not a folder")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ParameterError(f"{label} {folder} cannot be created: {exc.strerror or exc}") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise ParameterError(f"{label} {folder} is not writable")
+    return path
 
 
 def check_output(path: str | os.PathLike) -> Path:

@@ -11,6 +11,7 @@ import threading
 from pathlib import Path
 
 from autohaptics.errors import ParameterError
+from autohaptics.outputs import prepare_folder
 
 LOCK_FILE = "server.lock"
 
@@ -22,25 +23,11 @@ class FolderBusy(ParameterError):
     """Another process holds the data folder."""
 
 
-def prepare_folder(data_dir: Path, *, label: str = "data folder") -> Path:
-    """The folder, created if missing; ParameterError naming ``data_dir`` as given when it cannot be."""
-    path = Path(data_dir)
-    if path.exists() and not path.is_dir():
-        raise ParameterError(f"{label} {data_dir} is not a folder")
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ParameterError(f"{label} {data_dir} cannot be created: {exc.strerror or exc}") from None
-    if not os.access(path, os.W_OK | os.X_OK):
-        raise ParameterError(f"{label} {data_dir} is not writable")
-    return path
-
-
 def acquire(data_dir: Path) -> Path:
     """Hold the folder's lock (once more, when this process holds it already).
 
     Raises FolderBusy naming the folder and the PID that holds it."""
-    folder = prepare_folder(data_dir).resolve()
+    folder = prepare_folder(data_dir, label="data folder").resolve()
     with _guard:
         if folder in _held:
             _held[folder][1] += 1
