@@ -66,9 +66,8 @@ def start_server(data_dir: Path, *, port: int | None = None, jobs: int = 1) -> t
 
 def api_client(url: str, **kwargs) -> httpx.Client:
     """An httpx client on the service that holds its session token (docs/API.md "Security")."""
-    client = httpx.Client(base_url=url, **kwargs)
-    client.get("/api/session").raise_for_status()
-    return client
+    token = httpx.get(f"{url.rstrip('/')}/api/session", timeout=30.0).raise_for_status().json()["token"]
+    return httpx.Client(base_url=url, headers={"x-autohaptics-token": token}, **kwargs)
 
 
 def stop_server(proc: subprocess.Popen) -> None:
