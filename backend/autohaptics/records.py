@@ -140,6 +140,15 @@ def _set_path(obj: Any, path: list[str], value: Any, key: str) -> Any:
     if head not in names:
         raise ParameterError(f"unknown parameter {key!r}; {type(obj).__name__} has {sorted(names)}")
     current = getattr(obj, head)
+    if len(path) == 1 and dataclasses.is_dataclass(current):
+        if not isinstance(value, dict):
+            raise ParameterError(f"{key!r} is a group of parameters: set one of its fields "
+                                 f"({key}.{dataclasses.fields(current)[0].name}=...) or give an object")
+        nested = dict(value)
+        try:
+            return dataclasses.replace(obj, **{head: apply_overrides(current, nested)})
+        except RecursionError:
+            raise ParameterError(f"{key!r} is nested too deeply") from None
     if len(path) > 1:
         if isinstance(current, dict):
             new = dict(current)
@@ -176,6 +185,8 @@ def _convert_hint(value: Any, hint: Any, current: Any, key: str) -> Any:
     if origin in (tuple, list):
         if isinstance(value, str):
             value = [v for v in value.replace("x", ",").split(",") if v.strip()]
+        if not isinstance(value, (list, tuple)):
+            raise ParameterError(f"{key!r} expects a list, got {value!r}"[:300])
         inner = args[0] if args else float
         return (tuple if origin is tuple else list)(_convert(v, inner, key) for v in value)
     if origin is dict or hint is dict:

@@ -39,7 +39,8 @@ import httpx
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from browser_support import (  # noqa: E402
-    CHROMIUM, CHROMIUM_ARGS, REPO, open_editor, start_server, state, stop_server, wait_job, wait_revision_above,
+    CHROMIUM, CHROMIUM_ARGS, REPO, api_client, open_editor, start_server, state, stop_server, wait_job,
+    wait_revision_above,
 )
 
 DURATION_S = 7200.0
@@ -230,7 +231,7 @@ def main(argv: list[str] | None = None) -> int:
 
     proc, url = start_server(BENCH_DIR / "server")
     try:
-        with httpx.Client(base_url=url, timeout=300.0) as api:
+        with api_client(url, timeout=300.0) as api:
             project = ensure_project(api)
         pid = project["id"]
         print(f"project {pid}: {project['n_ticks']} ticks ({project['duration_s'] / 3600:.2f} h)", flush=True)

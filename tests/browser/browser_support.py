@@ -64,6 +64,12 @@ def start_server(data_dir: Path, *, port: int | None = None, jobs: int = 1) -> t
         time.sleep(0.2)
 
 
+def api_client(url: str, **kwargs) -> httpx.Client:
+    """An httpx client on the service that holds its session token (docs/API.md "Security")."""
+    token = httpx.get(f"{url.rstrip('/')}/api/session", timeout=30.0).raise_for_status().json()["token"]
+    return httpx.Client(base_url=url, headers={"x-autohaptics-token": token}, **kwargs)
+
+
 def stop_server(proc: subprocess.Popen) -> None:
     """SIGTERM the server's process group (uvicorn and the job workers), SIGKILL if it lingers."""
     if proc.poll() is not None:

@@ -15,7 +15,9 @@ from __future__ import annotations
 import httpx
 import pytest
 
-from browser_support import CHROMIUM, CHROMIUM_ARGS, ServerError, media_clip, start_server, stop_server, upload
+from browser_support import (
+    CHROMIUM, CHROMIUM_ARGS, ServerError, api_client, media_clip, start_server, stop_server, upload,
+)
 # Whichever conftest module pytest imports first answers ``from conftest import ...``: offer the
 # shared-data names here too (import them from shared_data in new code).
 from shared_data import MEDIA, REPO, SHARED, SHARED_CLIPS, need, shared_clip  # noqa: F401,E402
@@ -35,7 +37,7 @@ def server(tmp_path_factory) -> str:
 
 @pytest.fixture(scope="session")
 def api(server) -> httpx.Client:
-    with httpx.Client(base_url=server, timeout=60.0) as client:
+    with api_client(server, timeout=60.0) as client:
         yield client
 
 

@@ -21,7 +21,9 @@ from autohaptics.chair import VirtualChair
 from autohaptics.server.chair import DRIFT_SEEK_S
 from autohaptics.server.store import Store
 from autohaptics.server.composer import Composer
-from browser_support import ServerError, media_clip, open_editor, start_server, stop_server, upload, wait_until
+from browser_support import (
+    ServerError, api_client, media_clip, open_editor, start_server, stop_server, upload, wait_until,
+)
 
 pytestmark = pytest.mark.browser
 
@@ -43,7 +45,7 @@ def chair_server(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def chair_api(chair_server):
-    with httpx.Client(base_url=chair_server[0], timeout=60.0) as client:
+    with api_client(chair_server[0], timeout=60.0) as client:
         yield client
 
 

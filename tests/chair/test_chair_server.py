@@ -17,13 +17,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fastapi.testclient import TestClient
 
 from autohaptics.chair import VirtualChair
 from autohaptics.server.app import create_app
 from autohaptics.server.settings import Settings
 from autohaptics.testing import Scene, Segment, Tone, write_scene
 from autohaptics.timeline import Timeline
+
+from service_client import LocalClient
 
 DURATION_S = 30.0
 N_TICKS = 300
@@ -91,7 +92,7 @@ def film(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def client(tmp_path_factory):
     data = tmp_path_factory.mktemp("chair-server") / "data"
-    with TestClient(create_app(Settings(data_dir=data, frontend_dir=None))) as c:
+    with LocalClient(create_app(Settings(data_dir=data, frontend_dir=None))) as c:
         yield c
 
 
@@ -209,7 +210,7 @@ def test_settings_validation(client, body, field):
 
 def test_settings_are_stored_and_survive_a_restart(tmp_path):
     settings = Settings(data_dir=tmp_path / "data", frontend_dir=None)
-    with TestClient(create_app(settings)) as c:
+    with LocalClient(create_app(settings)) as c:
         assert c.get("/api/chair/settings").json() == {"latency_ms": 0.0, "comfort": {"scale": 1.0, "mute": {
             "back": False, "armrests": False, "seat": False, "heat": False, "fans": False}}}
         r = c.put("/api/chair/settings", json={"latency_ms": -120, "comfort": {"scale": 0.5, "mute": {"heat": True}}})
@@ -219,7 +220,7 @@ def test_settings_are_stored_and_survive_a_restart(tmp_path):
             "back": False, "armrests": False, "seat": False, "heat": True, "fans": True}}}
         assert r.json() == want
         assert c.get("/api/chair/status").json()["settings"] == want
-    with TestClient(create_app(settings)) as c:
+    with LocalClient(create_app(settings)) as c:
         assert c.get("/api/chair/settings").json() == want
 
 

@@ -13,7 +13,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fastapi.testclient import TestClient
 
 from autohaptics.server.app import create_app
 from autohaptics.timeline.wire import decode
@@ -21,12 +20,13 @@ from autohaptics.server.settings import Settings
 from autohaptics.timeline import Timeline
 
 from shared_data import shared_clip
+from service_client import LocalClient
 
 CLIP = "bbb_1s_1280x720_vp8_vorbis.webm"
 TERMINAL = ("done", "failed", "cancelled")
 
 
-def events_until_end(client: TestClient, job_id: str) -> list[tuple[str, dict]]:
+def events_until_end(client: LocalClient, job_id: str) -> list[tuple[str, dict]]:
     """Read the job's SSE stream to its terminal event."""
     out: list[tuple[str, dict]] = []
     event = None
@@ -43,14 +43,14 @@ def events_until_end(client: TestClient, job_id: str) -> list[tuple[str, dict]]:
     return out
 
 
-def upload(client: TestClient, path: Path, *, filename: str | None = None, **fields) -> dict:
+def upload(client: LocalClient, path: Path, *, filename: str | None = None, **fields) -> dict:
     resp = client.post("/api/projects", files={"file": (filename or path.name, path.read_bytes(), "video/webm")},
                        data={k: str(v) for k, v in fields.items()})
     assert resp.status_code == 201, resp.text
     return resp.json()
 
 
-def ready_project(client: TestClient) -> dict:
+def ready_project(client: LocalClient) -> dict:
     project = upload(client, shared_clip(CLIP))
     assert events_until_end(client, project["job"]["id"])[-1][0] == "done"
     return client.get(f"/api/projects/{project['id']}").json()
@@ -63,7 +63,7 @@ def data_dir(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def client(data_dir):
-    with TestClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as c:
+    with LocalClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as c:
         yield c
 
 
@@ -158,7 +158,7 @@ def test_edit_undo_redo_reload_and_regenerate_keep_edits(client, data_dir):
                      "markers": [{"id": "m1", "t_s": 0.3, "label": "door"}]}
 
     # A new server on the same data folder sees the same history and composition.
-    with TestClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as other:
+    with LocalClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as other:
         doc = other.get(f"/api/projects/{pid}/timeline").json()
         assert other.get(f"/api/projects/{pid}/edits").json() == edits
     vib = np.asarray(doc["tracks"]["vibration"])
@@ -317,7 +317,7 @@ def test_frontend_is_served_without_stale_caches(tmp_path):
     (front / "src" / "app.js").write_text("export const x = 1;")
     (front / "logo.png").write_bytes(b"\x89PNG")
     app = create_app(Settings(data_dir=tmp_path / "data", frontend_dir=front, jobs=1))
-    with TestClient(app) as c:
+    with LocalClient(app) as c:
         index = c.get("/")
         assert index.status_code == 200 and "editor" in index.text
         assert index.headers["cache-control"] == "no-cache"

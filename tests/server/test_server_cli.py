@@ -10,12 +10,19 @@ import subprocess
 import sys
 import time
 import urllib.request
+import wave
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from autohaptics.cli.main import main
+from autohaptics.server.app import create_app
+from autohaptics.server.settings import Settings
+
+from service_client import LocalClient
 from shared_data import REPO
+from test_server_jobs import sse, upload, wait_running
 
 
 
@@ -105,3 +112,60 @@ def test_serve_runs_uvicorn_on_localhost_and_stops_cleanly(tmp_path):
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def _serve(*argv: str, timeout: float = 60) -> subprocess.CompletedProcess:
+    """``autohaptics serve ARGV`` as its own process, expected to exit by itself."""
+    exe = Path(sys.executable).with_name("autohaptics")
+    return subprocess.run([str(exe), "serve", *argv], capture_output=True, text=True, timeout=timeout,
+                          env={**os.environ, "PYTHONUNBUFFERED": "1"})
+
+
+def test_serve_data_that_is_a_file_is_one_line(tmp_path):
+    data = tmp_path / "data.txt"
+    data.write_text("not a folder")
+    done = _serve("--port", str(_free_port()), "--data", str(data))
+    assert done.returncode == 2, done.stderr
+    assert done.stderr == f"autohaptics: error: data folder {data} is not a folder\n", done.stderr
+    assert data.read_text() == "not a folder"
+
+
+def test_a_busy_port_is_one_line_before_anything_is_printed_or_touched(tmp_path):
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen(1)
+        port = busy.getsockname()[1]
+        done = _serve("--port", str(port), "--data", str(tmp_path / "data"))
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+    assert f"port {port}" in done.stderr and "serving" not in done.stderr + done.stdout
+    assert not (tmp_path / "data").exists()
+
+
+@pytest.mark.slow
+def test_a_second_server_on_the_folder_exits_and_the_running_job_completes_untouched(tmp_path):
+    """Server 1 (this process) runs a job; server 2 (a real ``serve``) on the same folder exits with
+    one line naming the folder and this PID, before its recovery: the job ends done with a timeline.
+    The job analyses 15 minutes of noise, so it is still running when server 2 has given up."""
+    data, long_wav = tmp_path / "data", tmp_path / "noise_15min.wav"
+    rate = 8_000
+    with wave.open(str(long_wav), "wb") as w:
+        w.setnchannels(1)
+        w.setsampwidth(2)
+        w.setframerate(rate)
+        w.writeframes((np.random.default_rng(1).standard_normal(900 * rate) * 3000).astype("<i2").tobytes())
+    with LocalClient(create_app(Settings(data_dir=data, frontend_dir=None))) as client:
+        project = upload(client, long_wav)
+        job = project["job"]["id"]
+        wait_running(client, job)
+        work = sorted(p.name for p in (data / "work").iterdir())
+        assert work
+        done = _serve("--port", str(_free_port()), "--data", str(data))
+        assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+        assert f"data folder {data} is in use" in done.stderr and f"PID {os.getpid()}" in done.stderr
+        assert "serving" not in done.stderr
+        assert client.get(f"/api/jobs/{job}").json()["status"] == "running"
+        assert sorted(p.name for p in (data / "work").iterdir()) == work
+        final = sse(client, job)[-1]
+        assert final[0] == "done", final
+        assert client.get(f"/api/projects/{project['id']}").json()["has_timeline"]
+        assert client.get(f"/api/projects/{project['id']}/timeline").status_code == 200

@@ -8,12 +8,12 @@ import uuid
 from pathlib import Path
 
 import pytest
-from fastapi.testclient import TestClient
 
 from autohaptics.server.app import create_app
 from autohaptics.server.settings import Settings
 
 from shared_data import shared_clip
+from service_client import LocalClient
 
 CLIP = "bbb_1s_1280x720_vp8_vorbis.webm"  # 86 kB
 LIMIT = 100_000
@@ -33,7 +33,7 @@ def root(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def client(root):
     settings = Settings(data_dir=root / "data", frontend_dir=None, max_upload_bytes=LIMIT)
-    with TestClient(create_app(settings)) as c:
+    with LocalClient(create_app(settings)) as c:
         yield c
 
 

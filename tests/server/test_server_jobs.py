@@ -13,7 +13,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fastapi.testclient import TestClient
 
 from autohaptics import media
 from autohaptics.server.app import create_app
@@ -21,6 +20,7 @@ from autohaptics.server.settings import Settings
 from autohaptics.server.store import INTERRUPTED, Store
 
 from shared_data import shared_clip
+from service_client import LocalClient
 
 CLIP = "bbb_1s_1280x720_vp8_vorbis.webm"
 TERMINAL = ("done", "failed", "cancelled")
@@ -43,7 +43,7 @@ def settings(data_dir: Path, **kw) -> Settings:
     return Settings(data_dir=data_dir, frontend_dir=None, **kw)
 
 
-def upload(client: TestClient, path: Path, **fields) -> dict:
+def upload(client: LocalClient, path: Path, **fields) -> dict:
     r = client.post("/api/projects", files={"file": (path.name, path.read_bytes())},
                     data={k: str(v) for k, v in fields.items()})
     assert r.status_code == 201, r.text
@@ -64,14 +64,14 @@ def read_events(lines, *, stage: str | None = None) -> list[tuple[str, dict]]:
     return out
 
 
-def sse(client: TestClient, job_id: str, *, stage: str | None = None) -> list[tuple[str, dict]]:
+def sse(client: LocalClient, job_id: str, *, stage: str | None = None) -> list[tuple[str, dict]]:
     """Events of a job's stream up to its terminal event, or the first progress event of ``stage``."""
     with client.stream("GET", f"/api/jobs/{job_id}/events") as resp:
         assert resp.status_code == 200, resp.read()
         return read_events(resp.iter_lines(), stage=stage)
 
 
-def wait_running(client: TestClient, job_id: str) -> None:
+def wait_running(client: LocalClient, job_id: str) -> None:
     """Block until the job reports analysis progress (the worker is inside the pipeline)."""
     events = sse(client, job_id, stage="audio")
     assert events[-1][0] == "progress" and events[-1][1]["progress"] < 1.0, events
@@ -84,7 +84,7 @@ def tree(path: Path) -> dict[str, tuple[int, int]]:
 
 
 def test_queue_cancel_and_conflicts(tmp_path, long_wav):
-    with TestClient(create_app(settings(tmp_path / "data", jobs=1))) as client:
+    with LocalClient(create_app(settings(tmp_path / "data", jobs=1))) as client:
         long_p = upload(client, long_wav)
         short_p = upload(client, shared_clip(CLIP))
         wait_running(client, long_p["job"]["id"])
@@ -116,7 +116,7 @@ def test_queue_cancel_and_conflicts(tmp_path, long_wav):
 
 def test_delete_while_running_touches_nothing_else(tmp_path, long_wav):
     data = tmp_path / "data"
-    with TestClient(create_app(settings(data))) as client:
+    with LocalClient(create_app(settings(data))) as client:
         other = upload(client, shared_clip(CLIP))
         assert sse(client, other["job"]["id"])[-1][0] == "done"
         op = {"op": "set", "lanes": ["A7"], "t0": 1, "t1": 4, "value": 0.6}
@@ -154,13 +154,13 @@ def test_delete_while_running_touches_nothing_else(tmp_path, long_wav):
 @pytest.mark.slow
 def test_restart_while_running_fails_the_job_and_it_can_be_rerun(tmp_path, long_wav):
     data = tmp_path / "data"
-    with TestClient(create_app(settings(data))) as client:
+    with LocalClient(create_app(settings(data))) as client:
         short = upload(client, shared_clip(CLIP))
         assert sse(client, short["job"]["id"])[-1][0] == "done"
         project = upload(client, long_wav)
         wait_running(client, project["job"]["id"])
     # The server stopped while the job ran; a new one starts on the same data folder.
-    with TestClient(create_app(settings(data))) as client:
+    with LocalClient(create_app(settings(data))) as client:
         job = client.get(f"/api/jobs/{project['job']['id']}").json()
         assert job["status"] == "failed" and job["error"] == INTERRUPTED and job["finished_at"]
         p = client.get(f"/api/projects/{project['id']}").json()
@@ -215,7 +215,7 @@ def test_crash_leaves_jobs_that_show_as_interrupted(tmp_path):
     (store.uploads_dir / "deadbeef.part").write_bytes(b"half an upload")
     store.close()
 
-    with TestClient(create_app(settings(data))) as client:
+    with LocalClient(create_app(settings(data))) as client:
         j = client.get(f"/api/jobs/{job['id']}").json()
         assert j["status"] == "failed" and j["error"] == INTERRUPTED and j["started_at"] == "2024-01-01T00:00:00.000Z"
         assert client.get(f"/api/projects/{project['id']}").json()["status"] == "failed"

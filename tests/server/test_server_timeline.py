@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fastapi.testclient import TestClient
 
 from autohaptics.timeline import npz as generated_file
 from autohaptics.server.app import create_app
@@ -22,6 +21,8 @@ from autohaptics.timeline.wire import decode
 from autohaptics.server.settings import Settings
 from autohaptics.testing import Scene, Segment, Tone, write_scene
 from autohaptics.timeline import Timeline
+
+from service_client import LocalClient
 
 DURATION_S = 20.0
 N_TICKS = 200
@@ -35,7 +36,7 @@ def data_dir(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def client(data_dir):
-    with TestClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as c:
+    with LocalClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as c:
         yield c
 
 
@@ -136,11 +137,12 @@ def test_an_import_is_stored_as_a_file_and_the_edit_list_stays_light(client, pro
     bad = client.post(f"/api/projects/{pid}/edits", json={"base_revision": again["revision"], "op": {
         "op": "import", "ref": "0" * 32, "name": "x", "n_ticks": 3}})
     assert bad.status_code == 400 and "missing" in bad.json()["detail"]
+    assert str(data_dir) not in bad.json()["detail"]  # never a server path
 
     # A copy of the project and a restarted server compose the same.
     copy = client.post(f"/api/projects/{pid}/duplicate").json()
     try:
-        with TestClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as restarted:
+        with LocalClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as restarted:
             for p in (pid, copy["id"]):
                 t = restarted.app.state.composer.compose(p).timeline
                 np.testing.assert_array_equal(t.vibration, known().vibration)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-from pathlib import Path
 from typing import Any, Iterable
 
 from autohaptics.batch.films import (
@@ -18,6 +17,7 @@ from autohaptics.batch.films import (
 from autohaptics.batch.local import run_local
 from autohaptics.batch.work import Film, Run
 from autohaptics.errors import ParameterError
+from autohaptics.outputs import prepare_folder
 from autohaptics.progress import ProgressFn, null_progress
 
 
@@ -47,14 +47,12 @@ def run_batch(inputs: Iterable[str | os.PathLike], out_dir: str | os.PathLike, p
     if scheduler is not None and not (isinstance(scheduler, str) and "://" in scheduler
                                       and scheduler.split("://", 1)[1]):
         raise ParameterError(f"scheduler must be an address like tcp://HOST:PORT, got {scheduler!r}")
+    if scheduler is not None:
+        from autohaptics.batch.cluster import check_address
+
+        check_address(scheduler)  # a bad address fails at once, before any film is looked at
     sources = collect_inputs(inputs)
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise ParameterError(f"{out}: exists and is not a folder")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ParameterError(f"{out}: cannot create the output folder ({exc.strerror or exc})") from None
+    out = prepare_folder(out_dir, label="output folder")
     manifest = load_manifest(out)
     names = output_names(sources, manifest)
     digest = params_digest(params, preset)

@@ -17,13 +17,13 @@ The protocol is specified in firmware/PROTOCOL.md; :mod:`autohaptics.chair.proto
 
 from autohaptics.chair.comfort import MUTABLE_ZONES, Comfort, DeviceProfile, compose_frame
 from autohaptics.chair.link import ChairLink, LinkStatus
-from autohaptics.chair.player import ChairPlayer, PlayerStatus, push
+from autohaptics.chair.player import ChairPlayer, PlayerStatus, follow_range, push, start_range
 from autohaptics.chair.ports import PortInfo, list_ports
 from autohaptics.chair.protocol import ChairStatus, Frame, Hello, ProtocolError
 from autohaptics.chair.simulate import VirtualChair, build_simulator
 
 __all__ = [
-    "ChairLink", "LinkStatus", "ChairPlayer", "PlayerStatus", "push", "Comfort", "DeviceProfile", "MUTABLE_ZONES",
+    "ChairLink", "LinkStatus", "ChairPlayer", "PlayerStatus", "push", "start_range", "follow_range", "Comfort", "DeviceProfile", "MUTABLE_ZONES",
     "compose_frame", "PortInfo", "list_ports", "ChairStatus", "Frame", "Hello", "ProtocolError", "VirtualChair",
     "build_simulator",
 ]

@@ -359,12 +359,11 @@ def _raise_thread_priority(nice: int | None) -> str:
     return f"nice {int(nice)}"
 
 
-def push(link: ChairLink, timeline: Timeline, *, start_s: float = 0.0, end_s: float | None = None,
-         comfort: Comfort | None = None, progress: ProgressFn | None = None,
-         cancel: CancelToken | None = None) -> PlayerStatus:
-    """Play ``timeline`` from ``start_s`` to ``end_s`` (default: its end) on a connected chair,
-    paced at 10 Hz; block until done and return the final status. STOP is sent at the end, on
-    cancel (CancelledError) and on any error."""
+def start_range(link: ChairLink, timeline: Timeline, *, start_s: float = 0.0, end_s: float | None = None,
+                comfort: Comfort | None = None) -> tuple[ChairPlayer, float, float]:
+    """A player already playing ``[start_s, end_s)`` of ``timeline`` (end default: the timeline's),
+    with the range it plays. Whoever holds the player can stop it at once (:meth:`ChairPlayer.stop`:
+    no frame of the range follows the STOP)."""
     if not link.connected:
         raise DeviceError(f"chair link {link.port} is not connected")
     timeline.validate()
@@ -373,14 +372,36 @@ def push(link: ChairLink, timeline: Timeline, *, start_s: float = 0.0, end_s: fl
     if start >= end:
         raise ParameterError(f"push range is empty: start {start:g} s, end {end:g} s "
                              f"(timeline is {timeline.duration_s:g} s)")
-    report: Callable[[str, float], None] = progress or (lambda stage, fraction: None)
     player = ChairPlayer(link, timeline, comfort=comfort)
     try:
         player.play(start, until_s=end)
+    except BaseException:
+        player.close()
+        raise
+    return player, start, end
+
+
+def follow_range(player: ChairPlayer, start: float, end: float, *, progress: ProgressFn | None = None,
+                 cancel: CancelToken | None = None) -> PlayerStatus:
+    """Wait for a player of :func:`start_range` to finish, reporting progress; close it (STOP when it
+    was still playing). CancelledError on cancel, also when the player was stopped for it."""
+    report: Callable[[str, float], None] = progress or (lambda stage, fraction: None)
+    try:
         while not player.wait(0.1):
             check_cancel(cancel)
             report("push", min(1.0, (player.position_s - start) / (end - start)))
+        check_cancel(cancel)
         report("push", 1.0)
         return player.status()
     finally:
         player.close()
+
+
+def push(link: ChairLink, timeline: Timeline, *, start_s: float = 0.0, end_s: float | None = None,
+         comfort: Comfort | None = None, progress: ProgressFn | None = None,
+         cancel: CancelToken | None = None) -> PlayerStatus:
+    """Play ``timeline`` from ``start_s`` to ``end_s`` (default: its end) on a connected chair,
+    paced at 10 Hz; block until done and return the final status. STOP is sent at the end, on
+    cancel (CancelledError) and on any error."""
+    player, start, end = start_range(link, timeline, start_s=start_s, end_s=end_s, comfort=comfort)
+    return follow_range(player, start, end, progress=progress, cancel=cancel)

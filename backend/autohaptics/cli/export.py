@@ -33,7 +33,7 @@ def register(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from autohaptics.formats import export_timeline, get_format, write_csv_sidecar
-    from autohaptics.formats.common import atomic_output
+    from autohaptics.outputs import atomic_output
     from autohaptics.formats.importing import csv_meta_path
     from autohaptics.timeline import Timeline
 

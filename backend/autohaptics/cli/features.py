@@ -8,13 +8,10 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import os
 import sys
-import tempfile
-from pathlib import Path
 from typing import TYPE_CHECKING
 
-from autohaptics.errors import ParameterError
+from autohaptics.outputs import atomic_output, check_output
 from autohaptics.progress import ProgressBar
 
 if TYPE_CHECKING:  # imported where used: `autohaptics --help` loads no numpy
@@ -52,6 +49,8 @@ def register(sub) -> None:
     p.add_argument("--frame-loudness", choices=af.FRAME_LOUDNESS, default=d.frame_loudness,
                    help="how a 20 ms loudness value is formed from its ten 2 ms values (default max)")
     p.add_argument("--lfe-gain-db", type=float, default=10.0, help="gain of the LFE channel in the downmix, dB")
+    p.add_argument("--allow-truncated", action="store_true",
+                   help="accept a damaged file that ends before its declared duration (as generate does)")
     p.add_argument("--progress", action="store_true", help="print progress lines even when stderr is not a terminal")
     p.set_defaults(func=run)
 
@@ -65,8 +64,10 @@ def run(args: argparse.Namespace) -> int:
                                    booming_variant=args.booming, low_energy_cutoff_hz=args.low_energy_cutoff,
                                    frame_loudness=args.frame_loudness)
     if args.output != "-":
-        _output_folder(Path(args.output))
+        check_output(args.output)
     info = media.probe(args.input)
+    if not args.allow_truncated:
+        media.check_complete(info)  # as generate: a file cut short is refused, not analysed in part
     report = media.AudioReport()
     chunks = media.iter_audio(info.path, info=info, lfe_gain_db=args.lfe_gain_db, report=report)
     show = args.progress or info.duration_s > _LONG_INPUT_S
@@ -112,26 +113,10 @@ def _floats(x: np.ndarray) -> list[float]:
     return [float(f"{v:.6g}") for v in np.asarray(x, dtype=np.float64).tolist()]
 
 
-def _output_folder(out: Path) -> Path:
-    parent = out.parent if str(out.parent) else Path(".")
-    if not parent.is_dir():
-        raise ParameterError(f"{out}: the output folder {parent} does not exist")
-    return parent
-
-
 def _write_json(doc: dict, output: str) -> None:
     if output == "-":
         json.dump(doc, sys.stdout, separators=(",", ":"))
         sys.stdout.write("\n")
         return
-    out = Path(output)
-    parent = _output_folder(out)
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=parent)
-    try:
-        with os.fdopen(fd, "w") as fh:
-            json.dump(doc, fh, separators=(",", ":"))
-        os.replace(tmp, out)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    with atomic_output(output, binary=False) as fh:
+        json.dump(doc, fh, separators=(",", ":"))

@@ -92,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # an unexpected failure still gets one line, not a traceback
         if debug:
             raise
-        print(f"autohaptics: internal error: {type(exc).__name__}: {exc} "
+        print(f"autohaptics: internal error: {type(exc).__name__}: {(str(exc).strip().splitlines() or [''])[0]} "
               "(set AUTOHAPTICS_DEBUG=1 for the traceback)", file=sys.stderr)
         return EXIT_ERROR
 

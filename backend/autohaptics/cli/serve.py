@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import errno
 import json
+import socket
 import sys
 import tempfile
 import threading
@@ -21,6 +23,9 @@ def register(sub) -> None:
     p.add_argument("--host", default="127.0.0.1",
                    help="address to bind (default 127.0.0.1: the editor has no authentication)")
     p.add_argument("--port", type=int, default=8000, help="TCP port (default 8000)")
+    p.add_argument("--allow-host", action="append", default=None, metavar="NAME",
+                   help="a further Host name the editor may be reached by, e.g. a LAN name (repeatable; "
+                        "default: only 127.0.0.1, localhost and the --host name; docs/API.md 'Security')")
     p.add_argument("--data", type=Path, default=None,
                    help="data folder for projects and the database (default $AUTOHAPTICS_DATA or ./data)")
     p.add_argument("--jobs", type=int, default=None, help="generation jobs running at once (default 1)")
@@ -35,6 +40,7 @@ def register(sub) -> None:
 def run(args) -> int:
     import uvicorn
 
+    from autohaptics.server import folder_lock
     from autohaptics.server.app import create_app
     from autohaptics.server.settings import MIB, Settings
 
@@ -42,21 +48,54 @@ def run(args) -> int:
         raise ParameterError(f"--port must lie in 1..65535, got {args.port}")
     if args.jobs is not None and not 1 <= args.jobs <= 64:
         raise ParameterError(f"--jobs must lie in 1..64, got {args.jobs}")
-    if args.max_upload_mb is not None and args.max_upload_mb <= 0:
-        raise ParameterError(f"--max-upload-mb must be positive, got {args.max_upload_mb}")
+    if args.max_upload_mb is not None and not 0 < args.max_upload_mb < 1e9:
+        raise ParameterError(f"--max-upload-mb must be positive (MiB, below 1e9), got {args.max_upload_mb}")
     settings = Settings.from_env(
-        data_dir=args.data, jobs=args.jobs, frontend_dir=args.frontend,
+        data_dir=args.data, jobs=args.jobs, frontend_dir=args.frontend, bind_host=args.host,
+        allowed_hosts=tuple(args.allow_host) if args.allow_host else None,
         max_upload_bytes=int(args.max_upload_mb * MIB) if args.max_upload_mb is not None else None)
+    sock = bind_port(args.host, args.port)  # the port first: nothing printed or recovered on a busy one
+    try:
+        folder = folder_lock.acquire(settings.data_dir)
+    except BaseException:
+        sock.close()
+        raise
     app = create_app(settings)
     url = f"http://{'127.0.0.1' if args.host in ('0.0.0.0', '::') else args.host}:{args.port}/"
-    print(f"autohaptics: serving {url} (data in {settings.data_dir.resolve()}, API docs at {url}docs)",
-          file=sys.stderr)
+    print(f"autohaptics: serving {url} (data in {folder}, API docs at {url}docs)", file=sys.stderr)
     if args.open_sample:
         threading.Thread(target=_open_sample, args=(url,), name="open-sample", daemon=True).start()
     # Open progress streams would hold a graceful stop until their jobs end: give them 5 s, then the
     # running jobs are recorded as interrupted (re-runnable).
-    uvicorn.run(app, host=args.host, port=args.port, log_level="info", timeout_graceful_shutdown=5)
+    config = uvicorn.Config(app, log_level="info", timeout_graceful_shutdown=5)
+    try:
+        uvicorn.Server(config).run(sockets=[sock])
+    except KeyboardInterrupt:  # uvicorn re-raises the Ctrl+C it has already handled
+        pass
+    finally:
+        folder_lock.release(folder)
     return 0
+
+
+def bind_port(host: str, port: int) -> socket.socket:
+    """A socket bound to ``host:port``; ParameterError in one line when the port is taken."""
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
+    except socket.gaierror as exc:
+        raise ParameterError(f"--host {host}: {exc.strerror}") from None
+    family, kind, proto, _, address = infos[0]
+    sock = socket.socket(family, kind, proto)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind(address)
+        sock.listen(2048)
+    except OSError as exc:
+        sock.close()
+        if exc.errno == errno.EADDRINUSE:
+            raise ParameterError(f"port {port} on {host} is in use (another server?); choose another with --port") \
+                from None
+        raise ParameterError(f"cannot listen on {host}:{port}: {exc.strerror or exc}") from None
+    return sock
 
 
 SAMPLE_NAME = "sample (10 s demo)"

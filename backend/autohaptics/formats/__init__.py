@@ -19,7 +19,8 @@ from pathlib import Path
 from typing import IO, Any
 
 from autohaptics.errors import ParameterError
-from autohaptics.formats.common import atomic_output, ensure_valid
+from autohaptics.formats.common import ensure_valid
+from autohaptics.outputs import atomic_output
 from autohaptics.formats.ahap import write_ahap_zip
 from autohaptics.formats.csv import write_csv, write_csv_sidecar
 from autohaptics.formats.hjif import write_hjif

@@ -8,12 +8,7 @@ sample points (see docs/EXPORT.md, "Keyframes only where the slope changes").
 
 from __future__ import annotations
 
-import contextlib
 import math
-import os
-from collections.abc import Iterator
-from pathlib import Path
-from typing import IO
 
 import numpy as np
 
@@ -121,22 +116,3 @@ def timeline_title(source: dict) -> str:
     return str(name) if name else "untitled timeline"
 
 
-@contextlib.contextmanager
-def atomic_output(path: str | os.PathLike, *, binary: bool) -> Iterator[IO]:
-    """Open ``path`` for writing through a temporary ``.part`` file renamed into place on success.
-
-    A failed export never leaves a truncated file under the final name.
-    """
-    path = Path(path)
-    tmp = path.with_name(path.name + ".part")
-    try:
-        if binary:
-            fh = open(tmp, "wb")
-        else:
-            fh = open(tmp, "w", encoding="utf-8", newline="")
-        with fh:
-            yield fh
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()

@@ -78,6 +78,8 @@ def import_timeline(path: str | os.PathLike, *, fmt: str | None = None,
     a dict gives it explicitly; None ignores it.
     """
     path = Path(path)
+    if path.is_dir():
+        raise ParameterError(f"{path}: is a folder; give a timeline JSON or CSV file")
     if not path.is_file():
         raise ParameterError(f"{path}: no such file")
     fmt = (fmt or _format_from_suffix(path) or _sniff_file(path)).lower()

@@ -13,9 +13,11 @@ from starlette.staticfiles import StaticFiles
 
 from autohaptics import __version__
 from autohaptics.errors import DeviceError, MediaError, ParameterError
+from autohaptics.server import folder_lock
 from autohaptics.server.chair import ChairService
 from autohaptics.server.jobs import JobRunner
 from autohaptics.server.routes import chair, jobs, projects, service, timeline
+from autohaptics.server.security import TrustBoundary, folder_token, host_names
 from autohaptics.server.settings import Settings
 from autohaptics.server.store import Conflict, NotFound, Store
 from autohaptics.server.composer import Composer
@@ -46,28 +48,21 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI):
-        store = Store(settings.data_dir)
-        interrupted = store.recover()
-        if interrupted:
-            log.warning("%d job(s) were interrupted by a server restart", len(interrupted))
-        composer = Composer(store)
-        runner = JobRunner(store, workers=settings.jobs, mp_context=settings.mp_context, composer=composer)
-        await anyio.to_thread.run_sync(runner.start)
-        chair_service = ChairService(store, composer)
-        chair_service.start()
-        app.state.store, app.state.composer, app.state.runner = store, composer, runner
-        app.state.chair = chair_service
+        folder = folder_lock.acquire(settings.data_dir)  # before recovery: one server per folder
         try:
-            yield
+            app.state.token = folder_token(folder)
+            async with _services(app, settings):
+                yield
         finally:
-            await anyio.to_thread.run_sync(chair_service.close)  # STOP before anything else goes
-            await anyio.to_thread.run_sync(runner.stop)
-            store.close()
+            folder_lock.release(folder)
 
     app = FastAPI(title="autohaptics", version=__version__, lifespan=lifespan,
                   description="The editor's HTTP API: projects, generation jobs, timelines and edits "
                               "(docs/API.md).")
     app.state.settings = settings
+    app.state.token = None
+    app.add_middleware(TrustBoundary, names=host_names(settings.bind_host, settings.allowed_hosts),
+                       token_of=lambda: app.state.token)
     _add_error_handlers(app)
     for module in (service, projects, jobs, timeline, chair):
         app.include_router(module.router)
@@ -75,6 +70,29 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     if front is not None and front.is_dir():
         app.mount("/", FrontendFiles(directory=front, html=True), name="frontend")
     return app
+
+
+@asynccontextmanager
+async def _services(app: FastAPI, settings: Settings):
+    """The store (after its start-up recovery), the composer, the job runner and the chair service."""
+    store = Store(settings.data_dir)
+    interrupted = store.recover()
+    if interrupted:
+        log.warning("%d job(s) were interrupted by a server restart", len(interrupted))
+    composer = Composer(store)
+    runner = JobRunner(store, workers=settings.jobs, mp_context=settings.mp_context, composer=composer)
+    await anyio.to_thread.run_sync(runner.start)
+    chair_service = ChairService(store, composer)
+    chair_service.start()
+    app.state.store, app.state.composer, app.state.runner = store, composer, runner
+    app.state.chair = chair_service
+    try:
+        yield
+    finally:
+        await anyio.to_thread.run_sync(chair_service.close)  # STOP before anything else goes
+        await anyio.to_thread.run_sync(runner.stop)
+        store.close()
+
 
 
 def _detail(status: int, message: str, **extra) -> JSONResponse:

@@ -35,7 +35,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from autohaptics.chair import ChairLink, ChairPlayer, Comfort, DeviceProfile, list_ports, push
+from autohaptics.chair import ChairLink, ChairPlayer, DeviceProfile, follow_range, list_ports, start_range
 from autohaptics.errors import AutohapticsError, CancelledError, ParameterError
 from autohaptics.server.chair_settings import (
     SETTINGS_KEY,
@@ -65,6 +65,7 @@ class _Push:
     progress: float = 0.0
     error: str | None = None
     thread: threading.Thread | None = None
+    player: ChairPlayer | None = None  # plays the range; STOP stops it before answering
 
     def to_dict(self) -> dict:
         return {"project_id": self.project_id, "start_s": self.start_s, "end_s": self.end_s, "state": self.state,
@@ -261,12 +262,20 @@ class ChairService:
 
     # -------------------------------------------------------------------- stop
     def stop(self) -> dict:
-        """STOP now: every output off, playback stopped (position kept), a running push cancelled."""
+        """STOP now: every output off, playback stopped (position kept), a running push cancelled.
+
+        Final: when this returns, the push's player has written its STOP after its last frame, so no
+        frame of the push reaches the chair later, and the status says the push is cancelled."""
         with self._lock:
             self._stops += 1
             link, player, pushing = self._link, self._player, self._push
-        if pushing is not None:
-            pushing.cancel.set()
+            if pushing is not None and pushing.state == "running":
+                pushing.state = "cancelled"
+                pushing.cancel.set()
+            else:
+                pushing = None
+        if pushing is not None and pushing.player is not None:
+            pushing.player.stop()
         if player is not None:
             player.stop()
         elif link is not None:
@@ -320,30 +329,34 @@ class ChairService:
                 raise ParameterError(f"push range is empty: start {start_s:g} s, end {end_s:g} s "
                                      f"(the timeline is {duration:g} s)")
             job = _Push(project_id=project_id, start_s=float(start_s), end_s=float(end), cancel=threading.Event())
-            with self._lock:
+            with self._lock:  # a STOP either comes before (nothing starts) or finds job.player to stop
                 if self._stops != stops:
                     return self.status()
                 if player.state == "playing":
                     player.pause()
-                job.thread = threading.Thread(target=self._run_push, args=(job, link, composed.timeline, comfort),
+                job.player, start, end = start_range(link, composed.timeline, start_s=job.start_s, end_s=job.end_s,
+                                                     comfort=comfort)
+                job.thread = threading.Thread(target=self._run_push, args=(job, start, end),
                                               name="chair-push", daemon=True)
                 self._push = job
             job.thread.start()
         self._wake.set()
         return self.status()
 
-    def _run_push(self, job: _Push, link: ChairLink, timeline, comfort: Comfort) -> None:
+    def _run_push(self, job: _Push, start: float, end: float) -> None:
         def progress(stage: str, fraction: float) -> None:
             job.progress = fraction
 
+        outcome, error = "done", None
         try:
-            push(link, timeline, start_s=job.start_s, end_s=job.end_s, comfort=comfort, progress=progress,
-                 cancel=job.cancel)
-            job.state = "done"
+            follow_range(job.player, start, end, progress=progress, cancel=job.cancel)
         except CancelledError:
-            job.state = "cancelled"
-        except Exception as exc:  # reported in the status; the chair got STOP from push()
-            job.state, job.error = "failed", f"{exc}" if isinstance(exc, AutohapticsError) else repr(exc)
+            outcome = "cancelled"
+        except Exception as exc:  # reported in the status; the chair got STOP from follow_range()
+            outcome, error = "failed", f"{exc}" if isinstance(exc, AutohapticsError) else repr(exc)
+        with self._lock:
+            if job.state == "running":  # a STOP has already said "cancelled"
+                job.state, job.error = outcome, error
         self._wake.set()
 
     def _cancel_push(self) -> None:

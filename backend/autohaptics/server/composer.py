@@ -149,8 +149,7 @@ class Composer:
     def _import(self, pid: str, ref: str) -> Timeline:
         tl = self._cached(self.store.import_path(pid, ref), Timeline.load)
         if tl is None:
-            raise ParameterError(f"the imported timeline {ref} of project {pid} is missing "
-                                 f"({self.store.import_path(pid, ref)})")
+            raise ParameterError(f"the imported timeline {ref} of project {pid} is missing")
         return tl
 
     # -------------------------------------------------------------------- derive

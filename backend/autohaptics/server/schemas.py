@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -11,13 +11,24 @@ ProjectStatus = Literal["new", "running", "ready", "failed", "cancelled"]
 
 
 class _In(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    """Every input: unknown fields refused, numbers finite (docs/API.md "Security")."""
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+MAX_SECONDS = 1e7  # a position or range end, s (115 days: beyond any film)
+Revision = Annotated[int, Field(ge=0, le=2**53)]
+Name = Annotated[str, Field(max_length=200)]
+ProjectId = Annotated[str, Field(min_length=1, max_length=200)]
 
 
 # ---------------------------------------------------------------------- service
 class HealthOut(BaseModel):
     status: Literal["ok"] = "ok"
     version: str
+
+
+class SessionOut(BaseModel):
+    token: str
 
 
 class ConfigOut(BaseModel):
@@ -91,8 +102,8 @@ class ProjectPatch(_In):
 
 
 class ParamsIn(_In):
-    preset: str | None = None
-    mode: str | None = None
+    preset: Name | None = None
+    mode: Name | None = None
     thresholds: dict[str, float] | None = None
     overrides: dict[str, Any] | None = None
 
@@ -132,12 +143,12 @@ class LaneValuesOut(BaseModel):
 
 # ------------------------------------------------------------------------ edits
 class EditIn(_In):
-    base_revision: int
+    base_revision: Revision
     op: dict[str, Any]
 
 
 class RevisionIn(_In):
-    base_revision: int
+    base_revision: Revision
 
 
 class RevisionOut(BaseModel):
@@ -188,9 +199,9 @@ class ChairConnectIn(_In):
 
 
 class ChairPlaybackIn(_In):
-    project_id: str
+    project_id: ProjectId
     state: Literal["play", "pause", "seek"]
-    position_s: float = Field(ge=0)
+    position_s: float = Field(ge=0, le=MAX_SECONDS)
     heartbeat: bool = False
 
 
@@ -223,9 +234,9 @@ class ChairSettingsOut(BaseModel):
 
 
 class ChairPushIn(_In):
-    project_id: str
-    start_s: float = Field(ge=0)
-    end_s: float = Field(gt=0)
+    project_id: ProjectId
+    start_s: float = Field(ge=0, le=MAX_SECONDS)
+    end_s: float = Field(gt=0, le=MAX_SECONDS)
 
 
 class ChairPlaybackOut(BaseModel):

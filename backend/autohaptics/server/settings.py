@@ -1,7 +1,8 @@
 """The one typed configuration of the service.
 
 Every knob has a default; :meth:`Settings.from_env` reads the environment (``AUTOHAPTICS_DATA``,
-``AUTOHAPTICS_JOBS``, ``AUTOHAPTICS_MAX_UPLOAD_MB``, ``AUTOHAPTICS_FRONTEND``) and the CLI
+``AUTOHAPTICS_JOBS``, ``AUTOHAPTICS_MAX_UPLOAD_MB``, ``AUTOHAPTICS_FRONTEND``, ``AUTOHAPTICS_ALLOW_HOSTS``,
+comma-separated) and the CLI
 overrides on top. Tests build a ``Settings`` with a temporary ``data_dir``.
 """
 
@@ -35,6 +36,10 @@ class Settings(BaseModel):
     mp_context : start method of the job processes ("spawn" or "forkserver"; never fork, because
         the server process runs threads).
     waveform_max_points : most peaks one waveform request may ask for.
+    bind_host : the address ``serve --host`` binds; a name (not 0.0.0.0 / ::) is also a name the
+        service answers to.
+    allowed_hosts : further Host names the service answers to (e.g. a LAN name, on purpose;
+        docs/API.md "Security"); 127.0.0.1, localhost and ::1 always are.
     """
 
     model_config = ConfigDict(frozen=True)
@@ -46,6 +51,8 @@ class Settings(BaseModel):
     max_import_bytes: int = Field(default=512 * MIB, ge=1)
     mp_context: Literal["spawn", "forkserver"] = "spawn"
     waveform_max_points: int = Field(default=100_000, ge=1)
+    bind_host: str | None = None
+    allowed_hosts: tuple[str, ...] = ()
 
     @classmethod
     def from_env(cls, **overrides) -> "Settings":
@@ -62,6 +69,8 @@ class Settings(BaseModel):
                 env["max_upload_bytes"] = int(float(os.environ["AUTOHAPTICS_MAX_UPLOAD_MB"]) * MIB)
         except ValueError as exc:
             raise ParameterError(f"invalid AUTOHAPTICS_JOBS or AUTOHAPTICS_MAX_UPLOAD_MB: {exc}") from None
+        if os.environ.get("AUTOHAPTICS_ALLOW_HOSTS"):
+            env["allowed_hosts"] = tuple(h for h in os.environ["AUTOHAPTICS_ALLOW_HOSTS"].split(",") if h.strip())
         if os.environ.get("AUTOHAPTICS_FRONTEND"):
             env["frontend_dir"] = Path(os.environ["AUTOHAPTICS_FRONTEND"])
         env.update({k: v for k, v in overrides.items() if v is not None})

@@ -165,6 +165,9 @@ class _Reader:
                 return
             self._part_is_file = True
             self.filename = opts[b"filename"].decode("utf-8", "replace")
+        elif b"filename" in opts:
+            self.error = ParameterError(f"the form sends a file in field {self._part_name!r}; "
+                                        f"send it in field {self.file_field!r}")
 
     def on_part_data(self, data: bytes, start: int, end: int) -> None:
         if self.error is not None:

@@ -69,7 +69,7 @@ def normalise(op: Any) -> tuple[dict, Any]:
     if not isinstance(op, dict):
         raise ParameterError(f"an operation must be a JSON object, got {type(op).__name__}")
     name = op.get("op")
-    if name not in REQUIRED:
+    if not isinstance(name, str) or name not in REQUIRED:
         raise ParameterError(f"field 'op' must be one of {', '.join(OPS)}; got {name!r}")
     if name == "import" and "ref" in op:
         return _stored_import(op), None
@@ -172,15 +172,28 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
+def _finite(value: Any) -> bool:
+    """A JSON number a float holds (an integer like 10**400 is not)."""
+    try:
+        return _is_number(value) and math.isfinite(value)
+    except OverflowError:
+        return False
+
+
+def _brief(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
 def _number(name: str, field: str, value: Any) -> float:
-    if not _is_number(value) or not math.isfinite(value):
-        raise ParameterError(f"op '{name}': field '{field}' must be a finite number, got {value!r}")
+    if not _finite(value):
+        raise ParameterError(f"op '{name}': field '{field}' must be a finite number, got {_brief(value)}")
     return float(value)
 
 
 def _tick(name: str, field: str, value: Any) -> int:
-    if not _is_number(value) or not math.isfinite(value) or float(value) != int(value):
-        raise ParameterError(f"op '{name}': field '{field}' must be an integer tick index, got {value!r}")
+    if not _finite(value) or float(value) != int(value):
+        raise ParameterError(f"op '{name}': field '{field}' must be an integer tick index, got {_brief(value)}")
     tick = int(value)
     if not 0 <= tick <= MAX_TICK:
         raise ParameterError(f"op '{name}': field '{field}' must lie in 0..{MAX_TICK}, got {tick}")
@@ -192,7 +205,7 @@ def _array(name: str, field: str, value: Any, *, ndim: int, inner: tuple[int, ..
         raise ParameterError(f"op '{name}': field '{field}' must be a non-empty list")
     try:
         arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ParameterError(f"op '{name}': field '{field}' must be a rectangular array of numbers") from None
     if arr.ndim != ndim or arr.shape[1:] != inner:
         want = "[n]" + "".join(f"[{d}]" for d in inner)

@@ -39,6 +39,7 @@ from autohaptics.layout import (
     TEMP_NEUTRAL_C,
     layout_dict,
 )
+from autohaptics.outputs import atomic_output
 from autohaptics.timebase import TICK_S
 
 FORMAT = "autohaptics.timeline"
@@ -159,16 +160,9 @@ class Timeline:
 
     def save(self, path: str | os.PathLike) -> Path:
         """Validate and write to ``path`` atomically (a temporary file renamed into place)."""
-        path = Path(path)
-        tmp = path.with_name(path.name + ".part")
-        try:
-            with open(tmp, "w", encoding="utf-8") as fh:
-                self.write(fh)
-            os.replace(tmp, path)
-        finally:
-            if tmp.exists():
-                tmp.unlink()
-        return path
+        with atomic_output(path, binary=False) as fh:
+            self.write(fh)
+        return Path(path)
 
     @classmethod
     def from_dict(cls, doc: dict) -> "Timeline":

@@ -1,15 +1,15 @@
-"""``/health`` and ``/api/config``."""
+"""``/health``, ``/api/config`` and ``/api/session``."""
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Request
 
 from autohaptics import __version__, fusion, intensity, layout
 from autohaptics.formats import FORMATS
 from autohaptics.params import DEFAULT_PRESET, PRESETS
 from autohaptics.timeline import edit_ops as edits
 from autohaptics.server.deps import SettingsDep
-from autohaptics.server.schemas import ConfigOut, HealthOut
+from autohaptics.server.schemas import ConfigOut, HealthOut, SessionOut
 from autohaptics.timebase import TICK_S
 from autohaptics.timeline import NORMALISED_FEATURES
 
@@ -45,3 +45,10 @@ def config(settings: SettingsDep) -> ConfigOut:
                          "description": f.description} for f in FORMATS.values()],
         import_formats=["json", "csv"],
     )
+
+
+@router.get("/api/session", response_model=SessionOut)
+def session(request: Request) -> SessionOut:
+    """The session token for programs that are not the editor (docs/API.md "Security"); a foreign
+    page cannot read it (no CORS) and a rebinding one never gets past the Host check."""
+    return SessionOut(token=request.app.state.token)
