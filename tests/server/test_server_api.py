@@ -210,6 +210,9 @@ def test_params_rederive_from_the_cache_keeps_edits(client):
     assert bad.status_code == 400 and "loudness" in bad.json()["detail"]
     bad = client.put(f"/api/projects/{pid}/params", json={"preset": "nonsense"})
     assert bad.status_code == 400 and "preset" in bad.json()["detail"]
+    for thresholds in ({"loud\nness": 0.1}, {"loudness\r\n": "x"}):  # a name sent with a line break: one line back
+        bad = client.put(f"/api/projects/{pid}/params", json={"thresholds": thresholds})
+        assert bad.status_code == 400 and "\n" not in bad.json()["detail"] and "\\n" in bad.json()["detail"]
 
 
 def test_export_and_import(client):

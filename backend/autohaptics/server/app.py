@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import re
 from contextlib import asynccontextmanager
 
 import anyio
@@ -96,7 +97,13 @@ async def _services(app: FastAPI, settings: Settings):
 
 
 def _detail(status: int, message: str, **extra) -> JSONResponse:
+    """An error answer; control characters a client put in a name it sent are shown escaped, so the
+    message stays one line."""
+    message = _CONTROL.sub(lambda m: ascii(m.group())[1:-1], message)
     return JSONResponse(status_code=status, content={"detail": message, **extra})
+
+
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 
 
 # Every error the application raises on purpose, and its HTTP status (MediaRejected carries its own).
