@@ -1,7 +1,7 @@
 /**
  * The picture and the playhead: the <video> with the fan-grid overlay, the player that clocks the
  * editor, the transport bar (play, time, zoom, follow, overlay, the lane and key menus), and what
- * is shown at the playhead (the time, the chair diagram, the overlay).
+ * is shown at the playhead (the time, the overlay; the chair diagram is ./chair.js's).
  */
 
 import { h } from "../../core/dom.js";
@@ -87,10 +87,10 @@ export class EditorMedia {
     timeline.setPlayhead(timeS, { page: playing });
     this.timeEl.textContent = `${formatTime(timeS)} / ${formatTime(timeline.durationS)}`;
     const tick = data ? data.tickAt(timeS) : -1;
+    chair.showDiagram(timeS, this.lastTick === -1);
     if (data && tick === this.lastTick) return;
     this.lastTick = tick;
     const v = data ? data.valuesAt(tick) : null;
-    chair.diagram.update(v);
     this.fanOverlay.update(v ? v.fan_grid : null);
   }
 
