@@ -1,0 +1,61 @@
+"""The editor walked as a designer (issue 18), what the view keeps and how its popups behave:
+lane heights the user drags, the playhead across a reload, the Keys popup."""
+
+from __future__ import annotations
+
+import pytest
+
+from browser_support import lane_rect, open_editor, state
+
+pytestmark = pytest.mark.browser
+
+
+def canvas_size(pg, lane: str) -> dict:
+    return pg.evaluate("""(id) => { const c = document.querySelector(`canvas[data-lane="${id}"]`);
+        return {pixels: c.height, css: c.getBoundingClientRect().height, dpr: window.devicePixelRatio}; }""", lane)
+
+
+def drag_lower_edge(pg, lane: str, dy: float) -> None:
+    handle = pg.locator(f"[data-testid=lane-resize-{lane}]")
+    handle.scroll_into_view_if_needed()
+    box = handle.bounding_box()
+    x, y = box["x"] + 300, box["y"] + box["height"] / 2
+    pg.mouse.move(x, y)
+    pg.mouse.down()
+    pg.mouse.move(x, y + dy, steps=6)
+    pg.mouse.up()
+
+
+def test_a_lane_dragged_by_its_lower_edge_keeps_its_height_after_reload(page, project_copy):
+    open_editor(page, project_copy["id"])
+    temp0 = lane_rect(page, "temperature")["height"]
+    act0 = lane_rect(page, "actuators")["height"]
+    fans0 = lane_rect(page, "fans")["height"]
+    drag_lower_edge(page, "temperature", 60)
+    drag_lower_edge(page, "actuators", -45)
+    assert lane_rect(page, "temperature")["height"] == pytest.approx(temp0 + 60, abs=1)
+    assert lane_rect(page, "actuators")["height"] == pytest.approx(act0 - 45, abs=1)
+    assert lane_rect(page, "fans")["height"] == fans0, "the other lanes keep theirs"
+    size = canvas_size(page, "temperature")
+    assert size["pixels"] == round(size["css"] * size["dpr"]), "the canvas is drawn at the new height"
+    # The heat map's rows follow its height: a drag over the last row still selects A9.
+    r = lane_rect(page, "actuators")
+    y = r["y"] + r["height"] - 5  # above the resize handle (the lowest 3 px)
+    page.mouse.move(r["x"] + 100, y)
+    page.mouse.down()
+    page.mouse.move(r["x"] + 160, y, steps=3)
+    page.mouse.up()
+    assert state(page)["selection"]["lanes"] == ["A9"]
+    # Kept across a reload (this browser), and the keyboard moves the edge by 8 px.
+    page.reload()
+    open_editor(page, project_copy["id"])
+    assert lane_rect(page, "temperature")["height"] == pytest.approx(temp0 + 60, abs=1)
+    assert lane_rect(page, "actuators")["height"] == pytest.approx(act0 - 45, abs=1)
+    page.focus("[data-testid=lane-resize-temperature]")
+    page.keyboard.press("ArrowUp")
+    assert lane_rect(page, "temperature")["height"] == pytest.approx(temp0 + 52, abs=1)
+    # A double-click gives the lane its own height back; far drags stop at the limits.
+    page.dblclick("[data-testid=lane-resize-temperature]")
+    assert lane_rect(page, "temperature")["height"] == pytest.approx(temp0, abs=1)
+    drag_lower_edge(page, "fans", -200)
+    assert lane_rect(page, "fans")["height"] == 24
