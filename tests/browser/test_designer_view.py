@@ -59,3 +59,46 @@ def test_a_lane_dragged_by_its_lower_edge_keeps_its_height_after_reload(page, pr
     assert lane_rect(page, "temperature")["height"] == pytest.approx(temp0, abs=1)
     drag_lower_edge(page, "fans", -200)
     assert lane_rect(page, "fans")["height"] == 24
+
+
+def keys_open(pg) -> bool:
+    return pg.evaluate("() => document.querySelector('[data-testid=keys-menu]').open")
+
+
+def test_the_keys_popup_closes_on_escape_and_outside_and_lets_the_ruler_be_clicked(page, project_copy):
+    open_editor(page, project_copy["id"])
+    summary = "[data-testid=keys-menu] > summary"
+    # Escape closes it (the focus back on its button) and does nothing else: the selection stays.
+    r = lane_rect(page, "actuators")
+    page.mouse.move(r["x"] + 100, r["y"] + 5)
+    page.mouse.down()
+    page.mouse.move(r["x"] + 200, r["y"] + 5, steps=3)
+    page.mouse.up()
+    selection = state(page)["selection"]
+    assert selection is not None
+    page.click(summary)
+    assert keys_open(page)
+    page.keyboard.press("Escape")
+    assert not keys_open(page)
+    assert page.evaluate("() => document.activeElement.matches('[data-testid=keys-menu] > summary')")
+    assert state(page)["selection"] == selection
+    # A press outside closes it.
+    page.click(summary)
+    assert keys_open(page)
+    page.click("[data-testid=chair-diagram]")
+    assert not keys_open(page)
+    # A click on the ruler where the open list covers it moves the playhead there and closes the list.
+    page.click(summary)
+    spot = page.evaluate("""() => {
+        const a = document.querySelector('.keys-list').getBoundingClientRect();
+        const b = document.querySelector('[data-testid=ruler]').getBoundingClientRect();
+        const x0 = Math.max(a.left, b.left), x1 = Math.min(a.right, b.right);
+        const y0 = Math.max(a.top, b.top), y1 = Math.min(a.bottom, b.bottom);
+        return x1 - x0 > 20 && y1 - y0 > 4 ? {x: (x0 + x1) / 2, y: (y0 + y1) / 2} : null;
+    }""")
+    assert spot is not None, "the open Keys list covers part of the ruler at this size"
+    time_there = page.evaluate(f"() => {{ const r = document.querySelector('[data-testid=ruler]').getBoundingClientRect();"
+                               f" return window.autohaptics.state().startS + ({spot['x']} - r.x) / window.autohaptics.state().pxPerS; }}")
+    page.mouse.click(spot["x"], spot["y"])
+    assert not keys_open(page)
+    page.wait_for_function("(t) => Math.abs(window.autohaptics.state().playheadS - t) < 0.1", arg=time_there)

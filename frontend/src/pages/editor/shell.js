@@ -14,6 +14,7 @@ import { FrameLoop } from "../../core/frameloop.js";
 import { TimelineView } from "../../core/timeline.js";
 import { ApiError, errorText } from "../../data/http.js";
 import { drawnTemperatureRange } from "../../data/layout.js";
+import { closeMenusOutside } from "../../panels/menus.js";
 import { EditorChair } from "./chair.js";
 import { EditActions } from "./edits.js";
 import { EditorHeader } from "./header.js";
@@ -152,6 +153,7 @@ export class EditorPage {
         this.chair.panel.updateRange();
       }),
       tl.on("selection-input", () => this.edits.updateToolbar()),
+      closeMenusOutside(),
     );
     const onKey = (/** @type {KeyboardEvent} */ e) => onEditorKey(this, e);
     document.addEventListener("keydown", onKey);
