@@ -102,3 +102,32 @@ def test_the_keys_popup_closes_on_escape_and_outside_and_lets_the_ruler_be_click
     page.mouse.click(spot["x"], spot["y"])
     assert not keys_open(page)
     page.wait_for_function("(t) => Math.abs(window.autohaptics.state().playheadS - t) < 0.1", arg=time_there)
+
+
+def test_the_playhead_survives_a_reload_per_project(page, api, project_copy):
+    pid = project_copy["id"]
+    other = api.post(f"/api/projects/{pid}/duplicate").json()
+    try:
+        open_editor(page, pid)
+        page.evaluate("() => document.querySelector('[data-testid=video]').currentTime = 7.3")
+        page.wait_for_function("() => Math.abs(window.autohaptics.state().playheadS - 7.3) < 0.01")
+        page.reload()
+        open_editor(page, pid)
+        page.wait_for_function("() => Math.abs(window.autohaptics.state().playheadS - 7.3) < 0.01")
+        assert page.text_content("[data-testid=time]").startswith("0:07.3 /")
+        # Played on and stopped: the reload finds where it stopped.
+        page.click("[data-testid=play]")
+        page.wait_for_function("() => window.autohaptics.state().currentTime > 8.0")
+        page.click("[data-testid=play]")
+        page.wait_for_function("() => !window.autohaptics.state().playing")
+        stopped = state(page)["currentTime"]
+        page.reload()
+        open_editor(page, pid)
+        page.wait_for_function("(t) => Math.abs(window.autohaptics.state().playheadS - t) < 0.01", arg=stopped)
+        # Per project: another project opens at its own (never moved) playhead.
+        page.goto("/#/")
+        open_editor(page, other["id"])
+        page.wait_for_function("() => document.querySelector('[data-testid=video]').readyState >= 1")
+        assert state(page)["playheadS"] == 0
+    finally:
+        api.delete(f"/api/projects/{other['id']}")
