@@ -117,6 +117,7 @@ export class EditorMedia {
     this.timeEl.textContent = `${formatTime(timeS)} / ${formatTime(timeline.durationS)}`;
     const tick = data ? data.tickAt(timeS) : -1;
     chair.showDiagram(timeS, this.lastTick === -1);
+    this.page.laneText.update(tick, playing);
     if (data && tick === this.lastTick) return;
     this.lastTick = tick;
     const v = data ? data.valuesAt(tick) : null;
