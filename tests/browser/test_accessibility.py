@@ -46,3 +46,43 @@ def test_keyboard_focus_is_visible(page, project_copy):
     }""")
     assert focused["tag"] in ("BUTTON", "A", "SUMMARY", "INPUT")
     assert focused["outline"] != "none" and focused["width"] >= 2
+
+
+def described(pg, lane: str) -> str:
+    """The text that describes a lane's canvas to assistive tech (its aria-describedby)."""
+    return pg.evaluate("""(id) => {
+        const c = document.querySelector(`canvas[data-lane="${id}"]`);
+        const ref = c.getAttribute('aria-describedby');
+        return ref ? document.getElementById(ref).textContent : '';
+    }""", lane)
+
+
+def test_every_lane_says_in_words_what_is_on_it_around_the_playhead(page, api, project_copy):
+    pid = project_copy["id"]
+    rev = api.get(f"/api/projects/{pid}").json()["revision"]
+    r = api.post(f"/api/projects/{pid}/edits", json={"base_revision": rev, "op": {
+        "op": "marker_add", "marker": {"id": "m-door", "t_s": 8.0, "label": "Door slam"}}})
+    assert r.status_code == 200, r.text
+    open_editor(page, pid)
+    lanes = page.eval_on_selector_all("canvas[data-lane]", "els => els.map(e => e.dataset.lane)")
+    page.evaluate("() => document.querySelector('[data-testid=video]').currentTime = 7.3")
+    page.wait_for_function("() => /^At 0:07\\.3/.test(document.getElementById('lane-text-actuators').textContent)")
+    page.wait_for_function("() => window.autohaptics.state().played !== null")
+    for lane in lanes:
+        assert described(page, lane).strip(), f"lane {lane} has no text alternative"
+    v = page.evaluate("() => window.autohaptics.valuesAt(73)")
+    ids = page.evaluate("() => Array.from(document.querySelectorAll('[data-testid^=chair-A]')).map(g => g.dataset.testid.slice(6))")
+    text = described(page, "actuators")
+    assert text.startswith("At 0:07.3: " + ", ".join(f"{a} {x:.2f}" for a, x in zip(ids, v["vibration"]))), text
+    assert "strongest 0:05.3–0:09.4: A" in text, text
+    thr = page.evaluate("() => window.autohaptics.state().thresholds.loudness")
+    text = described(page, "feature-loudness")
+    assert text.startswith(f"At 0:07.3: {v['features']['loudness']:.2f} (threshold {thr:.2f})"), text
+    text = described(page, "temperature")
+    assert f"target {v['temperature_c']:.1f} °C, the chair plays {v['played_c']:.1f} °C" in text, text
+    assert f"{v['fans'] * 100:.0f} % of the fans on" in described(page, "fans")
+    assert described(page, "markers") == 'Markers 0:05.3–0:09.4: "Door slam" at 0:08.0; 1 in all.'
+    # Far from the marker the line says so; the lines follow the playhead.
+    page.evaluate("() => document.querySelector('[data-testid=video]').currentTime = 20.0")
+    page.wait_for_function("() => /^At 0:20\\.0/.test(document.getElementById('lane-text-actuators').textContent)")
+    assert described(page, "markers") == "No marker 0:18.0–0:22.1; 1 in all."

@@ -144,6 +144,17 @@ def runs(entries: list[dict]) -> list[list[int]]:
     return out
 
 
+DIAGRAM_SHOWS = """() => {
+    const host = document.querySelector('[data-testid=chair-diagram]');
+    const tick = Number(host.dataset.tick);
+    const ids = Array.from(host.querySelectorAll('[data-testid^=chair-A]')).map((g) => g.dataset.testid.slice(6));
+    const v = window.autohaptics.valuesAt(tick);
+    return {source: host.dataset.source, tick, title: document.querySelector('[data-testid=chair-diagram-title]').textContent,
+            values: Array.from(host.querySelectorAll('[data-testid^=chair-A]')).map((g) => g.dataset.value),
+            expected: ids.map((_, i) => v.vibration[i].toFixed(3))};
+}"""
+
+
 def test_the_editor_plays_on_the_virtual_chair(cpage, chair_api, chair_server, film, chair):
     pg, pid = cpage, film["id"]
     open_editor(pg, pid)
@@ -360,7 +371,46 @@ def test_a_push_shows_where_the_chair_is_and_how_far_it_has_got(cpage, chair_api
         return f"{int(t // 60)}:{t % 60:04.1f}"
 
     assert text.endswith(f"of {clock(t0)}–{clock(t1)}"), text
+    # The "At the playhead" diagram follows the chair, not the player: its values are those at the
+    # chair's tick (inside the pushed range), read in one go with the editor's own values there.
+    shown = pg.evaluate(DIAGRAM_SHOWS)
+    assert shown["source"] == "chair" and shown["title"].startswith("At the chair · "), shown
+    assert sel["t0"] <= shown["tick"] < sel["t1"], (shown, sel)
+    assert shown["values"] == shown["expected"], shown
     chair.wait_for(lambda e: e["ev"] == "stop", timeout_s=15.0)
     pg.wait_for_function("() => document.querySelector('[data-testid=chair-push-text]').textContent.endsWith('done')")
     assert not head.is_visible(), "the chair's playhead goes when the push ends"
+    pg.wait_for_function("() => document.querySelector('[data-testid=chair-diagram]').dataset.source === 'playhead'")
+    shown = pg.evaluate(DIAGRAM_SHOWS)
+    assert shown["title"] == "At the playhead" and shown["values"] == shown["expected"], shown
     assert pg.text_content("[data-testid=chair-frames]") != "–"
+
+
+def test_the_chair_counters_are_the_open_projects_own(cpage, chair_api, film, chair):
+    pg, pid = cpage, film["id"]
+    other = chair_api.post(f"/api/projects/{pid}/duplicate").json()
+    try:
+        open_editor(pg, pid)
+        connect_in_the_panel(pg, chair.device)
+        r = chair_api.post("/api/chair/push", json={"project_id": pid, "start_s": 1.0, "end_s": 1.5})
+        assert r.status_code == 202, r.text
+        chair.wait_for(lambda e: e["ev"] == "stop", timeout_s=10.0)
+        pg.wait_for_function("() => document.querySelector('[data-testid=chair-push-text]').textContent.endsWith('done')")
+        frames = pg.text_content("[data-testid=chair-frames]")
+        assert frames.isdigit() and int(frames) >= 5, frames
+        assert pg.text_content("[data-testid=chair-last-tick]") == "14 (0:01.4)"
+        # Another project opened in the same page: the chair's counters are not its own.
+        pg.goto("/#/")
+        open_editor(pg, other["id"])
+        pg.wait_for_selector("[data-testid=chair-state][data-state=connected]")
+        assert pg.text_content("[data-testid=chair-frames]") == "–"
+        assert pg.text_content("[data-testid=chair-last-tick]") == "–"
+        assert pg.locator("[data-testid=chair-push-text]").is_hidden(), "the other project's push is not shown"
+        # Back on the first project, they are its again.
+        pg.goto("/#/")
+        open_editor(pg, pid)
+        pg.wait_for_selector("[data-testid=chair-state][data-state=connected]")
+        assert pg.text_content("[data-testid=chair-frames]") == frames
+        assert pg.text_content("[data-testid=chair-last-tick]") == "14 (0:01.4)"
+    finally:
+        chair_api.delete(f"/api/projects/{other['id']}")

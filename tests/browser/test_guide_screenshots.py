@@ -385,6 +385,8 @@ def test_guide_screenshots_of_the_workflow(page, api, tmp_path):
         page.click("[data-testid=chair-push]")
         chair.wait_for(lambda e: e["ev"] == "frame", timeout_s=10.0)
         page.wait_for_function("() => Number(document.querySelector('[data-testid=chair-frames]').textContent) > 5")
+        page.wait_for_function("() => document.querySelector('[data-testid=chair-diagram]').dataset.source === 'chair'")
+        _shot(page, "guide_push")
         page.set_viewport_size({"width": 1440, "height": 2000})  # tall enough for the whole panel
         page.wait_for_function("() => { const p = document.querySelector('[data-testid=chair-panel]');"
                                " return p.scrollHeight <= p.clientHeight + 1; }")

@@ -10,6 +10,7 @@
 import { h } from "./dom.js";
 import { Emitter } from "./events.js";
 import { wireGestures } from "./gestures.js";
+import { clampLaneHeight, resizeHandle } from "./lane-resize.js";
 import { RULER_HEIGHT, drawRuler } from "./ruler.js";
 import { drawSelection, normaliseSelection } from "./selection.js";
 
@@ -46,6 +47,7 @@ export const MAX_PX_PER_S = 400; // 40 px per 100 ms tick
  *   "selection-input": {selection: Selection|null},
  *   selection: {selection: Selection|null},
  *   "lanes-visible": {hidden: string[]},
+ *   "lane-height": {id: string, height: number},
  * }} TimelineEvents
  */
 
@@ -237,7 +239,7 @@ export class TimelineView extends Emitter {
     canvas.setAttribute("role", "img");
     canvas.setAttribute("aria-label", lane.title || lane.label);
     canvas.dataset.lane = lane.id;
-    row.append(label, canvas);
+    row.append(label, canvas, resizeHandle(this, lane, lane.height));
     this.lanesEl.append(row);
     const ctx = /** @type {CanvasRenderingContext2D} */ (canvas.getContext("2d"));
     const entry = { lane, row, canvas, ctx };
@@ -250,6 +252,21 @@ export class TimelineView extends Emitter {
   /** @param {string} id */
   laneEntry(id) {
     return this.lanes.find((l) => l.lane.id === id) || null;
+  }
+
+  /**
+   * Give a lane another height (CSS px, clamped to LANE_HEIGHT_RANGE) and redraw it.
+   * @param {string} id
+   * @param {number} px
+   */
+  setLaneHeight(id, px) {
+    const entry = this.laneEntry(id);
+    if (!entry) return;
+    entry.lane.height = clampLaneHeight(px);
+    entry.row.style.height = `${entry.lane.height}px`;
+    this._sizeCanvas(entry);
+    this._resizePlayhead();
+    this.invalidate(id);
   }
 
   /**

@@ -41,7 +41,6 @@ export class ActuatorsLane extends BaseLane {
     for (const a of this.hooks.actuators) {
       const s = document.createElement("span");
       s.textContent = a.id;
-      s.style.height = `${ROW_H}px`;
       const zone = a.body || a.zone;
       if (zone) s.title = `${a.id}: ${zone}`;
       list.append(s);

@@ -1,12 +1,14 @@
 /**
- * The chair in the editor: the diagram of the values at the playhead, the connection panel, the
- * player's reports to a connected chair, and STOP (the button and Escape).
+ * The chair in the editor: the diagram of the values at the playhead (at the chair while a push
+ * plays it apart from the player), the connection panel, the player's reports to a connected
+ * chair, and STOP (the button and Escape).
  */
 
 import { h } from "../../core/dom.js";
 import { ChairDiagram } from "../../chair/diagram.js";
 import { ChairPanel } from "../../chair/panel.js";
 import { ChairSync } from "../../chair/sync.js";
+import { formatTime } from "../../data/format.js";
 import { errorText } from "../../data/http.js";
 import { toast } from "../../panels/widgets.js";
 
@@ -20,13 +22,37 @@ export class EditorChair {
     this.panel = null;
     /** @type {ChairSync|null} */
     this.sync = null;
+    /** what the diagram shows: "chair"|"playhead" and the tick ("" = show again) */
+    this.shown = "";
   }
 
   /** The "At the playhead" panel with the chair diagram. */
   buildDiagram() {
-    const host = h("div", { class: "chair" });
+    const host = h("div", { class: "chair", "data-testid": "chair-diagram" });
     this.diagram = new ChairDiagram(host, { actuators: this.page.layout.actuators, temperature: this.page.tempRange() });
-    return h("section", { class: "panel", "aria-labelledby": "chair-title" }, h("h2", { class: "panel-title", id: "chair-title" }, "At the playhead"), host);
+    this.diagramTitle = h("h2", { class: "panel-title", id: "chair-title", "data-testid": "chair-diagram-title" }, "At the playhead");
+    return h("section", { class: "panel", "aria-labelledby": "chair-title" }, this.diagramTitle, host);
+  }
+
+  /**
+   * Show the values where the chair is on the diagram: during a push of this project the push's
+   * position, else the player's. Redraws only when the tick or the source changes.
+   * @param {number} playerS the player's position (s)
+   * @param {boolean} [force] draw even if the same tick is shown (new data)
+   */
+  showDiagram(playerS, force = false) {
+    const data = this.page.data;
+    const pushS = this.panel ? this.panel.pushPositionS : null;
+    const source = pushS === null ? "playhead" : "chair";
+    const tick = data ? data.tickAt(pushS === null ? playerS : pushS) : -1;
+    const key = `${source}:${tick}`;
+    if (!force && data && key === this.shown) return;
+    this.shown = key;
+    this.diagram.update(data ? data.valuesAt(tick) : null);
+    const host = /** @type {HTMLElement} */ (this.diagram.root.parentElement);
+    host.dataset.source = source;
+    host.dataset.tick = String(tick);
+    this.diagramTitle.textContent = pushS === null ? "At the playhead" : `At the chair · ${formatTime(pushS)}`;
   }
 
   /** The connection panel; while a chair is connected the player reports to it. Needs the player. */
@@ -39,6 +65,7 @@ export class EditorChair {
         this.sync.setActive(active);
         page.header.showChair(status.state);
         page.timeline?.setChairHead(this.panel.pushPositionS);  // a push plays the chair apart from the player
+        this.showDiagram(page.media.player.currentTime);
       }),
       () => this.sync.destroy(),
       () => this.panel.destroy(),

@@ -2,9 +2,11 @@
  * The editor's lanes, top to bottom: audio, one per feature, the actuators' heat map, one
  * actuator's detail, temperature, fans, markers; and the "Lanes" menu that shows or hides them.
  * Each lane reads the current timeline through the page and reports edits back to its parts.
+ * Lane heights the user drags are kept in this browser for every project (data/local-store.js).
  */
 
 import { h } from "../../core/dom.js";
+import { readLocal, writeLocal } from "../../data/local-store.js";
 import { ActuatorsLane } from "../../lanes/actuators.js";
 import { FansLane } from "../../lanes/fans.js";
 import { FeatureLane } from "../../lanes/features.js";
@@ -12,6 +14,8 @@ import { MarkersLane } from "../../lanes/markers.js";
 import { TemperatureLane } from "../../lanes/temperature.js";
 import { VibrationDetailLane } from "../../lanes/vibration-detail.js";
 import { WaveformLane } from "../../lanes/waveform.js";
+
+const HEIGHTS_KEY = "laneHeights";
 
 export class EditorLanes {
   /** @param {import("./shell.js").EditorPage} page */
@@ -69,6 +73,19 @@ export class EditorLanes {
     });
     for (const lane of [this.waveform, ...this.features, this.actuators, this.detail, this.temperature, this.fans, this.markers]) tl.addLane(lane);
     this._fillMenu(tl);
+    this._keepHeights(tl);
+  }
+
+  /** Give the lanes the heights the user set before and keep each new one. @param {import("../../core/timeline.js").TimelineView} tl */
+  _keepHeights(tl) {
+    const saved = /** @type {Record<string, number>} */ (readLocal(HEIGHTS_KEY, {}));
+    for (const { lane } of tl.lanes) {
+      const px = saved && saved[lane.id];
+      if (typeof px === "number" && Number.isFinite(px)) tl.setLaneHeight(lane.id, px);
+    }
+    this.page.cleanups.push(tl.on("lane-height", ({ id, height }) => {
+      writeLocal(HEIGHTS_KEY, { ...readLocal(HEIGHTS_KEY, {}), [id]: height });
+    }));
   }
 
   /** @param {import("../../core/timeline.js").TimelineView} tl */

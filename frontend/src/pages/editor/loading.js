@@ -135,6 +135,7 @@ export class TimelineLoader {
     if (page.disposed || !page.data || page.data.revision !== revision || played.revision !== revision) return;
     page.played = played;
     page.timeline.invalidate("temperature");
+    page.laneText.refresh();
   }
 
   /**

@@ -26,6 +26,7 @@ export class MarkerActions {
     page.lanes.markers.settle();
     page.timeline.invalidate("markers");
     page.edits.updateToolbar();
+    page.laneText.refresh();
   }
 
   /** @param {string|null} id */

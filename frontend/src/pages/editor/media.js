@@ -1,7 +1,8 @@
 /**
  * The picture and the playhead: the <video> with the fan-grid overlay, the player that clocks the
  * editor, the transport bar (play, time, zoom, follow, overlay, the lane and key menus), and what
- * is shown at the playhead (the time, the chair diagram, the overlay).
+ * is shown at the playhead (the time, the overlay; the chair diagram is ./chair.js's). The
+ * playhead is kept per project in this browser (data/local-store.js), so a reload finds it again.
  */
 
 import { h } from "../../core/dom.js";
@@ -9,8 +10,12 @@ import { Player } from "../../core/player.js";
 import { FanOverlay } from "../../chair/fan-overlay.js";
 import { formatTime } from "../../data/format.js";
 import { errorText } from "../../data/http.js";
+import { readLocal, writeLocal } from "../../data/local-store.js";
 import { toast } from "../../panels/widgets.js";
 import { ZOOM_STEP, keysMenu } from "./keys.js";
+
+/** While playing, the kept playhead is written at most this often (ms). */
+const KEEP_PLAYHEAD_MS = 1000;
 
 export class EditorMedia {
   /** @param {import("./shell.js").EditorPage} page */
@@ -22,6 +27,8 @@ export class EditorMedia {
     this.fanOverlay = null;
     /** the tick whose values are shown (-1: show them again) */
     this.lastTick = -1;
+    /** when the playhead was last kept (performance.now(), ms); null until the kept one is restored */
+    this._keptAt = /** @type {number|null} */ (null);
   }
 
   /** The video with the fan overlay over it, and the player. @param {number} durationS */
@@ -66,7 +73,10 @@ export class EditorMedia {
   wire() {
     const player = this.player;
     return [
-      player.on("time", ({ timeS, playing }) => this.showAt(timeS, playing)),
+      player.on("time", ({ timeS, playing }) => {
+        this.showAt(timeS, playing);
+        this._keepPlayhead(timeS, playing);
+      }),
       player.on("state", ({ playing }) => {
         this.playBtn.textContent = playing ? "❚❚" : "▶";
         this.playBtn.setAttribute("aria-label", playing ? "Pause (Space)" : "Play (Space)");
@@ -75,10 +85,29 @@ export class EditorMedia {
     ];
   }
 
-  /** Give the video its source (once). */
+  /** Give the video its source (once), and the playhead kept from the last visit once it can seek. */
   attach() {
     if (this.video.getAttribute("src")) return;
+    const kept = readLocal(this._playheadKey, 0);
+    const restore = () => {
+      if (typeof kept === "number" && Number.isFinite(kept) && kept > 0 && this.player.currentTime === 0) this.seek(kept);
+      this._keptAt = 0;
+    };
+    this.video.addEventListener("loadedmetadata", restore, { once: true });
+    this.player.on("media-error", restore);  // the wall clock stands in: it seeks at once
     this.video.src = this.page.api.mediaUrl(this.page.projectId);
+  }
+
+  get _playheadKey() {
+    return `playhead.${this.page.projectId}`;
+  }
+
+  /** Keep the playhead for the next visit: each seek or stop, and every second while playing. @param {number} timeS @param {boolean} playing */
+  _keepPlayhead(timeS, playing) {
+    const now = performance.now();
+    if (this._keptAt === null || (playing && now - this._keptAt < KEEP_PLAYHEAD_MS)) return;
+    this._keptAt = now;
+    writeLocal(this._playheadKey, Math.round(timeS * 1000) / 1000);
   }
 
   /** Move the playhead and show the values at it. @param {number} timeS @param {boolean} playing */
@@ -87,10 +116,11 @@ export class EditorMedia {
     timeline.setPlayhead(timeS, { page: playing });
     this.timeEl.textContent = `${formatTime(timeS)} / ${formatTime(timeline.durationS)}`;
     const tick = data ? data.tickAt(timeS) : -1;
+    chair.showDiagram(timeS, this.lastTick === -1);
+    this.page.laneText.update(tick, playing);
     if (data && tick === this.lastTick) return;
     this.lastTick = tick;
     const v = data ? data.valuesAt(tick) : null;
-    chair.diagram.update(v);
     this.fanOverlay.update(v ? v.fan_grid : null);
   }
 

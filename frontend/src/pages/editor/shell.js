@@ -14,11 +14,13 @@ import { FrameLoop } from "../../core/frameloop.js";
 import { TimelineView } from "../../core/timeline.js";
 import { ApiError, errorText } from "../../data/http.js";
 import { drawnTemperatureRange } from "../../data/layout.js";
+import { closeMenusOutside } from "../../panels/menus.js";
 import { EditorChair } from "./chair.js";
 import { EditActions } from "./edits.js";
 import { EditorHeader } from "./header.js";
 import { JobFollower } from "./jobs.js";
 import { onEditorKey } from "./keys.js";
+import { LaneText } from "./lane-text.js";
 import { EditorLanes } from "./lanes.js";
 import { TimelineLoader, startEditorLoads } from "./loading.js";
 import { MarkerActions } from "./markers.js";
@@ -68,6 +70,7 @@ export class EditorPage {
     this.params = new ParamsControl(this);
     this.jobs = new JobFollower(this);
     this.lanes = new EditorLanes(this);
+    this.laneText = new LaneText(this);
     this.edits = new EditActions(this);
     this.markers = new MarkerActions(this);
     this.view = new ViewSettings(this);
@@ -133,6 +136,7 @@ export class EditorPage {
     );
     this.timeline = new TimelineView(this.timelineHost, { durationS, tickS: this.tickS, frameLoop: this.loop, defaultLanes: this.layout.actuatorIds });
     this.lanes.add(this.timeline, features);
+    this.laneText.attach(this.timeline);
     this._wireEvents();
     this.edits.updateToolbar();
     this.params.updateInfo();
@@ -152,6 +156,7 @@ export class EditorPage {
         this.chair.panel.updateRange();
       }),
       tl.on("selection-input", () => this.edits.updateToolbar()),
+      closeMenusOutside(),
     );
     const onKey = (/** @type {KeyboardEvent} */ e) => onEditorKey(this, e);
     document.addEventListener("keydown", onKey);
