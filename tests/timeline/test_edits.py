@@ -11,7 +11,8 @@ from hypothesis import strategies as st
 
 from autohaptics.errors import ParameterError
 from autohaptics.layout import FAN_COLS, FAN_ROWS, TEMP_NEUTRAL_C
-from autohaptics.timeline.edit_ops import LANES, OPS
+from autohaptics.timeline.edit_ops import OPS
+from autohaptics.timeline.op_fields import LANES
 from autohaptics.timeline.edits import apply_ops, validate_op
 from autohaptics.timeline import Timeline
 

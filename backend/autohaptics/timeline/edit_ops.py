@@ -5,7 +5,6 @@ composes them; docs/API.md ("Edit operations") lists every operation and its fie
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -15,13 +14,10 @@ import numpy as np
 
 from autohaptics.errors import ParameterError
 from autohaptics.layout import ACTUATOR_IDS, FAN_COLS, FAN_ROWS, TEMP_NEUTRAL_C
+from autohaptics.timeline import op_fields as fields
 from autohaptics.timeline.model import Timeline
 
-VIBRATION_LANES: tuple[str, ...] = ACTUATOR_IDS
-LANES: tuple[str, ...] = (*ACTUATOR_IDS, "temperature", "fans")
-MAX_TICK = 10**8  # ~115 days of 100 ms ticks: a structural bound, not the timeline's length
-MAX_MARKER_ID = 64
-MAX_MARKER_LABEL = 200
+
 
 REQUIRED: dict[str, tuple[str, ...]] = {
     "set": ("lanes", "t0", "t1", "value"),
@@ -83,37 +79,37 @@ def normalise(op: Any) -> tuple[dict, Any]:
     out: dict[str, Any] = {"op": name}
     parsed: Any = None
     if "lanes" in required:
-        out["lanes"] = _lanes(name, op["lanes"])
+        out["lanes"] = fields.lanes(name, op["lanes"])
     if "lane" in required:
-        out["lane"] = _lane(name, "lane", op["lane"])
+        out["lane"] = fields.lane(name, "lane", op["lane"])
     if "t0" in required:
-        out["t0"] = _tick(name, "t0", op["t0"])
+        out["t0"] = fields.tick(name, "t0", op["t0"])
     if "t1" in required:
-        out["t1"] = _tick(name, "t1", op["t1"])
+        out["t1"] = fields.tick(name, "t1", op["t1"])
         if out["t1"] <= out["t0"]:
             raise ParameterError(f"op '{name}': field 't1' ({out['t1']}) must be greater than t0 ({out['t0']})")
     if "cells" in op:
-        out["cells"] = _cells(name, op["cells"], out["lanes"])
+        out["cells"] = fields.cells(name, op["cells"], out["lanes"])
     if name == "set":
-        out["value"] = _number(name, "value", op["value"])
+        out["value"] = fields.number(name, "value", op["value"])
     elif name == "scale":
-        out["factor"] = _number(name, "factor", op["factor"])
+        out["factor"] = fields.number(name, "factor", op["factor"])
         if out["factor"] < 0:
             raise ParameterError(f"op 'scale': field 'factor' must be >= 0, got {out['factor']}")
     elif name == "paste":
-        out["values"], parsed = _paste_values(op["values"])
+        out["values"], parsed = fields.paste_values(op["values"])
     elif name == "pencil":
-        arr = _array(name, "values", op["values"], ndim=1)
+        arr = fields.array(name, "values", op["values"], ndim=1)
         out["values"] = arr.tolist()
         parsed = arr
     elif name == "temp_points":
-        out["points"], parsed = _points(op["points"])
+        out["points"], parsed = fields.points(op["points"])
     elif name == "marker_add":
-        out["marker"] = _marker(name, op["marker"], full=True)
+        out["marker"] = fields.marker(name, op["marker"], full=True)
     elif name == "marker_update":
-        out["marker"] = _marker(name, op["marker"], full=False)
+        out["marker"] = fields.marker(name, op["marker"], full=False)
     elif name == "marker_delete":
-        out["id"] = _marker_id(name, "id", op["id"])
+        out["id"] = fields.marker_id(name, "id", op["id"])
     elif name == "import":
         doc = op["timeline"]
         if not isinstance(doc, dict):
@@ -154,139 +150,6 @@ def _stored_import(op: dict) -> dict:
     return {"op": "import", "ref": ref, "name": name, "n_ticks": n}
 
 
-def _lane(name: str, field: str, value: Any) -> str:
-    if value not in LANES:
-        raise ParameterError(f"op '{name}': field '{field}' has unknown lane {value!r}; "
-                             f"expected one of {', '.join(LANES)}")
-    return value
-
-
-def _lanes(name: str, value: Any) -> list[str]:
-    if not isinstance(value, list) or not value:
-        raise ParameterError(f"op '{name}': field 'lanes' must be a non-empty list of lane ids")
-    lanes = [_lane(name, "lanes", v) for v in value]
-    return list(dict.fromkeys(lanes))  # duplicates would apply twice (scale, fade)
-
-
-def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
-def _finite(value: Any) -> bool:
-    """A JSON number a float holds (an integer like 10**400 is not)."""
-    try:
-        return _is_number(value) and math.isfinite(value)
-    except OverflowError:
-        return False
-
-
-def _brief(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
-def _number(name: str, field: str, value: Any) -> float:
-    if not _finite(value):
-        raise ParameterError(f"op '{name}': field '{field}' must be a finite number, got {_brief(value)}")
-    return float(value)
-
-
-def _tick(name: str, field: str, value: Any) -> int:
-    if not _finite(value) or float(value) != int(value):
-        raise ParameterError(f"op '{name}': field '{field}' must be an integer tick index, got {_brief(value)}")
-    tick = int(value)
-    if not 0 <= tick <= MAX_TICK:
-        raise ParameterError(f"op '{name}': field '{field}' must lie in 0..{MAX_TICK}, got {tick}")
-    return tick
-
-
-def _array(name: str, field: str, value: Any, *, ndim: int, inner: tuple[int, ...] = ()) -> np.ndarray:
-    if not isinstance(value, list) or not value:
-        raise ParameterError(f"op '{name}': field '{field}' must be a non-empty list")
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError, OverflowError):
-        raise ParameterError(f"op '{name}': field '{field}' must be a rectangular array of numbers") from None
-    if arr.ndim != ndim or arr.shape[1:] != inner:
-        want = "[n]" + "".join(f"[{d}]" for d in inner)
-        raise ParameterError(f"op '{name}': field '{field}' has shape {list(arr.shape)}, expected {want}")
-    if not np.isfinite(arr).all():
-        raise ParameterError(f"op '{name}': field '{field}' holds a non-finite value")
-    if arr.shape[0] > MAX_TICK:
-        raise ParameterError(f"op '{name}': field '{field}' is longer than {MAX_TICK} ticks")
-    return arr
-
-
-def _paste_values(value: Any) -> tuple[dict, dict[str, np.ndarray]]:
-    if not isinstance(value, dict) or not value:
-        raise ParameterError("op 'paste': field 'values' must be a non-empty object {lane: per-tick values}")
-    out, parsed = {}, {}
-    for lane, vals in value.items():
-        _lane("paste", "values", lane)
-        if lane == "fans":
-            arr = _array("paste", "values.fans", vals, ndim=3, inner=(FAN_ROWS, FAN_COLS))
-        else:
-            arr = _array("paste", f"values.{lane}", vals, ndim=1)
-        out[lane] = arr.tolist()
-        parsed[lane] = arr
-    return out, parsed
-
-
-def _points(value: Any) -> tuple[list, tuple[np.ndarray, np.ndarray]]:
-    arr = _array("temp_points", "points", value, ndim=2, inner=(2,))
-    order = np.argsort(arr[:, 0], kind="stable")
-    arr = arr[order]
-    return arr.tolist(), (arr[:, 0], arr[:, 1])
-
-
-def _cells(name: str, value: Any, lanes: list[str]) -> list[list[int]]:
-    """A region of the fan grid: distinct [row, col] pairs, sorted; only for the lanes ["fans"]."""
-    if lanes != ["fans"]:
-        raise ParameterError(f"op '{name}': field 'cells' picks fans, so 'lanes' must be [\"fans\"] alone")
-    if not isinstance(value, list) or not value:
-        raise ParameterError(f"op '{name}': field 'cells' must be a non-empty list of [row, col] pairs")
-    cells = set()
-    for cell in value:
-        if (not isinstance(cell, list) or len(cell) != 2 or not all(isinstance(v, int) and not isinstance(v, bool)
-                                                                    for v in cell)
-                or not (0 <= cell[0] < FAN_ROWS and 0 <= cell[1] < FAN_COLS)):
-            raise ParameterError(f"op '{name}': field 'cells' holds {cell!r}; each cell is [row 0..{FAN_ROWS - 1}, "
-                                 f"col 0..{FAN_COLS - 1}]")
-        cells.add((cell[0], cell[1]))
-    return [list(c) for c in sorted(cells)]
-
-
-def _marker_id(name: str, field: str, value: Any) -> str:
-    if not isinstance(value, str) or not value or len(value) > MAX_MARKER_ID:
-        raise ParameterError(f"op '{name}': field '{field}' must be a string of 1..{MAX_MARKER_ID} characters")
-    return value
-
-
-def _marker(name: str, value: Any, *, full: bool) -> dict:
-    if not isinstance(value, dict):
-        raise ParameterError(f"op '{name}': field 'marker' must be an object {{id, t_s, label}}")
-    unknown = sorted(set(value) - {"id", "t_s", "label"})
-    if unknown:
-        raise ParameterError(f"op '{name}': field 'marker.{unknown[0]}' is unknown (fields: id, t_s, label)")
-    out = {"id": _marker_id(name, "marker.id", value.get("id"))}
-    if "t_s" in value or full:
-        if "t_s" not in value:
-            raise ParameterError(f"op '{name}': field 'marker.t_s' is required")
-        t = _number(name, "marker.t_s", value["t_s"])
-        if t < 0:
-            raise ParameterError(f"op '{name}': field 'marker.t_s' must be >= 0, got {t}")
-        out["t_s"] = t
-    if "label" in value or full:
-        label = value.get("label", "")
-        if not isinstance(label, str) or len(label) > MAX_MARKER_LABEL:
-            raise ParameterError(f"op '{name}': field 'marker.label' must be a string of at most "
-                                 f"{MAX_MARKER_LABEL} characters")
-        out["label"] = label
-    if not full and len(out) == 1:
-        raise ParameterError(f"op '{name}': give 'marker.t_s' or 'marker.label' to change")
-    return out
-
-
 # ------------------------------------------------------------------- application
 def neutral(tl: Timeline) -> float:
     lo, hi = tl.temp_range
@@ -313,7 +176,7 @@ def lane_values(tl: Timeline, lanes: list[str], t0: int, t1: int) -> dict[str, l
     """Per-tick values of lanes over [t0, t1) at full precision, in the shape ``paste`` takes (what
     the editor's Copy holds): vibration 0..1 and temperature C as (m,), fans as (m, 9, 17)."""
     for lane in lanes:
-        _lane("copy", "lanes", lane)
+        fields.lane("copy", "lanes", lane)
     if not 0 <= t0 < t1 <= tl.n_ticks:
         raise ParameterError(f"the range must satisfy 0 <= t0 < t1 <= {tl.n_ticks} ticks, got {t0}..{t1}")
     return {lane: _lane_view(tl, lane, t0, t1).tolist() for lane in dict.fromkeys(lanes)}

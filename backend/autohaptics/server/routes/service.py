@@ -8,6 +8,7 @@ from autohaptics import __version__, fusion, intensity, layout
 from autohaptics.formats import FORMATS
 from autohaptics.params import DEFAULT_PRESET, PRESETS
 from autohaptics.timeline import edit_ops as edits
+from autohaptics.timeline import op_fields
 from autohaptics.server.deps import SettingsDep
 from autohaptics.server.schemas import ConfigOut, HealthOut, SessionOut
 from autohaptics.timebase import TICK_S
@@ -31,8 +32,8 @@ def config(settings: SettingsDep) -> ConfigOut:
         default_thresholds=dict(intensity.DEFAULT_THRESHOLDS),
         features=list(intensity.FEATURES),
         normalised_features=sorted(NORMALISED_FEATURES),
-        lanes=list(edits.LANES),
-        vibration_lanes=list(edits.VIBRATION_LANES),
+        lanes=list(op_fields.LANES),
+        vibration_lanes=list(op_fields.VIBRATION_LANES),
         edit_ops=list(edits.OPS),
         tick_s=TICK_S,
         upload_limit_bytes=settings.max_upload_bytes,
