@@ -133,7 +133,7 @@ class GenerateParams:
 
 # The dotted overrides that make every stage follow the thesis's own rule where the default
 # differs from it (ALGORITHM.md; docs/GUIDE.md says what each default does instead).
-THESIS_RULES: dict[str, Any] = {}
+THESIS_RULES: dict[str, Any] = {"thermal.mapping": "thesis"}
 
 PRESETS: dict[str, dict[str, Any]] = {
     "reference": {

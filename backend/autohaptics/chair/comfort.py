@@ -8,7 +8,9 @@ Quantisation (what the chair receives for a timeline value; the tests rely on it
 - a muted zone sends 0 for its motors (back, armrests, seat) or fans; muted heat sends the
   device's neutral temperature.
 
-The chair clamps and slew-limits the temperature again on its side (firmware/PROTOCOL.md).
+The chair clamps and slew-limits the temperature again on its side (firmware/PROTOCOL.md); what it
+then plays (at full intensity, heat not muted) is :func:`autohaptics.temperature.played_curve`
+of the timeline's curve.
 """
 
 from __future__ import annotations
@@ -18,9 +20,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from autohaptics.chair.protocol import N_FANS, Frame, Hello
+from autohaptics.chair.protocol import N_FANS, Frame
 from autohaptics.errors import ParameterError
-from autohaptics.layout import ACTUATORS, DEVICE_TEMP_MAX_C, DEVICE_TEMP_MIN_C, TEMP_NEUTRAL_C, ZONES
+from autohaptics.layout import ACTUATORS, ZONES
+from autohaptics.temperature.device import DeviceProfile
 from autohaptics.timeline import Timeline
 from autohaptics.timeline.quantise import to_u8
 
@@ -60,24 +63,6 @@ class Comfort:
     @classmethod
     def from_dict(cls, d: dict) -> "Comfort":
         return cls(intensity=d.get("intensity", 1.0), mute=frozenset(d.get("mute", ())))
-
-
-@dataclass(frozen=True)
-class DeviceProfile:
-    """The chair's safe temperature range and neutral point, degrees C (from its HELLO)."""
-
-    temp_min_c: float = DEVICE_TEMP_MIN_C
-    temp_max_c: float = DEVICE_TEMP_MAX_C
-    temp_neutral_c: float = TEMP_NEUTRAL_C
-
-    def __post_init__(self) -> None:
-        lo, hi, neu = self.temp_min_c, self.temp_max_c, self.temp_neutral_c
-        if not all(math.isfinite(v) for v in (lo, hi, neu)) or not lo <= neu <= hi:
-            raise ParameterError(f"device profile needs finite temp_min <= neutral <= temp_max, got {lo}, {neu}, {hi}")
-
-    @classmethod
-    def from_hello(cls, hello: Hello) -> "DeviceProfile":
-        return cls(hello.temp_min_c, hello.temp_max_c, hello.temp_neutral_c)
 
 
 _ZONE_OF_MOTOR = tuple(a.zone for a in ACTUATORS)
