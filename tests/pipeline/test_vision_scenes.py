@@ -102,11 +102,12 @@ def test_dark_frame_with_a_loud_sound_vibrates_a5_only(generated):
 
 def test_red_is_hotter_than_neutral_is_hotter_than_green(generated):
     _, tl = generated["colours"]
-    t = tl.temperature_c
+    t = tl.features["temperature_target_c"]  # the mapping, before the chair's slew limit
     red, grey, green = t[1:9], t[11:19], t[21:29]  # away from the cuts at 1 s and 2 s
     assert red.min() > grey.max() and grey.min() > green.max()
-    np.testing.assert_allclose(grey, 42.5, atol=0.5)  # grey is equidistant from red and green
-    assert red.min() > 50.0 and green.max() < 36.0
+    np.testing.assert_allclose(grey, 33.0, atol=1.0)  # grey is skin-neutral
+    assert red.min() > 37.0 and green.max() < 29.0
+    assert np.abs(np.diff(tl.temperature_c)).max() <= 0.1 + 2e-4  # the chair's curve: 1 C/s
 
 
 def test_object_rushing_at_the_camera_on_the_right_blows_only_right_fans(generated):
@@ -217,7 +218,7 @@ def test_resolution_and_frame_rate_invariance(invariance_pair):
     # not vacuous: both vibrate, change temperature and blow
     for tl in (small, large):
         assert active(tl).size >= 20
-        assert np.ptp(tl.temperature_c) > 10.0
+        assert np.ptp(tl.temperature_c) > 2.0
         assert tl.fans.any(axis=(1, 2)).sum() >= 5
     assert r["vibration_mae"] <= 0.02
     assert r["temperature_mae"] <= 0.5
@@ -242,7 +243,7 @@ def test_every_shared_clip_generates_a_valid_timeline(clip_timelines, name):
     tl = clip_timeline(clip_timelines, name)
     n = math.ceil(tl.source["duration_s"] / 0.1 - 1e-6)
     assert tl.vibration.shape == (n, 9) and tl.fans.shape == (n, 9, FAN_COLS) and tl.temperature_c.shape == (n,)
-    for arr, lo, hi in ((tl.vibration, 0, 1), (tl.fans, 0, 1), (tl.temperature_c, 30, 55)):
+    for arr, lo, hi in ((tl.vibration, 0, 1), (tl.fans, 0, 1), (tl.temperature_c, 18, 40)):
         assert np.isfinite(arr).all() and arr.min() >= lo and arr.max() <= hi
     assert tl.generator["mode"] == "multimodal"
     Timeline.from_json(tl.to_json()).validate()

@@ -23,11 +23,12 @@ import numpy as np
 
 from autohaptics.errors import ParameterError
 
-# sRGB (D65) -> CIE XYZ, rows X, Y, Z (IEC 61966-2-1), and the D65 white point
+# sRGB (D65) -> CIE XYZ, rows X, Y, Z (IEC 61966-2-1); the white point is its row sums (D65 to
+# 7 digits), so every grey has a* = b* = 0 to rounding
 _SRGB_TO_XYZ = np.array([[0.4124564, 0.3575761, 0.1804375],
                          [0.2126729, 0.7151522, 0.0721750],
                          [0.0193339, 0.1191920, 0.9503041]])
-_D65 = np.array([0.95047, 1.0, 1.08883])
+_D65 = _SRGB_TO_XYZ.sum(axis=1)
 _WARM_HUE = np.deg2rad(50.0)
 
 

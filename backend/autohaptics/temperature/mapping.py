@@ -44,7 +44,8 @@ MAPPINGS = ("warmcool", "thesis")
 
 @dataclass(frozen=True)
 class ThermalParams:
-    """Colour-to-temperature mapping (module docstring).
+    """Colour-to-temperature mapping: the default warm-cool mapping around a skin-neutral
+    temperature in the device's range, or the thesis's red/green rule (GUIDE section 4, Temperature).
 
     mapping : "warmcool" (default: warm-cool around ``neutral_c`` in the device's range) or
         "thesis" (the thesis's red/green rule between ``temp_low`` and ``temp_high``).
