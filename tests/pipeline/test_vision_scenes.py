@@ -269,6 +269,16 @@ def test_sintel_encodes_agree_on_vibration_and_temperature(sintel):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("name", SINTEL)
+def test_sintel_temperature_uses_the_device_range_without_sitting_at_a_limit(clip_timelines, name):
+    """Snow and fire: the chair's curve spans >= 4 C with < 10 % of ticks within 0.1 C of 18 or 40 C."""
+    t = clip_timeline(clip_timelines, name).temperature_c
+    at_limit = float(np.mean((t <= 18.1) | (t >= 39.9)))
+    print(name, f"{t.min():.2f}..{t.max():.2f} C, {100 * at_limit:.1f} % of ticks at a limit")
+    assert np.ptp(t) >= 4.0 and at_limit < 0.10
+
+
+@pytest.mark.slow
 def test_sintel_encodes_agree_on_which_ticks_blow(sintel, clip_timelines):
     a, b = (clip_timelines[name] for name in SINTEL)
     n = sintel["ticks"]

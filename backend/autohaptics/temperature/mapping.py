@@ -69,13 +69,16 @@ class ThermalParams:
 
     mapping: str = "warmcool"
     neutral_c: float = TEMP_NEUTRAL_C
+    # the device profile (temperature.DeviceProfile's fields, named for the generator)
     device_min_c: float = DEVICE_TEMP_MIN_C
     device_max_c: float = DEVICE_TEMP_MAX_C
     device_rate_c_per_s: float = DEVICE_TEMP_RATE_C_PER_S
+    # the warm-cool measure and the film's scaling
     fill: float = 0.85
     quantile: float = 0.95
     min_scale: float = 0.5
     hue_offset: float = 0.25
+    # the thesis mapping
     temp_low: float = TEMP_LOW_C
     temp_high: float = TEMP_HIGH_C
     neutral_aware: bool = False
