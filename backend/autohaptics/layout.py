@@ -70,7 +70,7 @@ TEMP_HIGH_C = 55.0
 TEMP_NEUTRAL_C = 33.0  # skin-neutral; what a chair returns to when idle or in safe state
 DEVICE_TEMP_MIN_C = 18.0
 DEVICE_TEMP_MAX_C = 40.0
-DEVICE_TEMP_RATE_C_PER_S = 1.0  # how fast a chair's element may change, C per second (PROTOCOL.md HELLO)
+DEVICE_TEMP_RATE_C_PER_S = 1.0  # the setpoint's slew limit (firmware AH_TEMP_RATE_CC_PER_S = 100)
 
 
 def layout_dict() -> dict:

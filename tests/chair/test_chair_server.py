@@ -98,9 +98,12 @@ def client(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def project(client, film) -> dict:
-    """A generated project whose tracks are then replaced by ``known_timeline()`` (an import op)."""
+    """A generated project whose tracks are then replaced by ``known_timeline()`` (an import op).
+
+    Generated with the thesis preset: its temperature range is 30..55 C, so the imported sweep keeps
+    values above the chair's 40 C (the default mapping's range is the device's own, 18..40 C)."""
     r = client.post("/api/projects", files={"file": ("film.mp4", film.read_bytes(), "video/mp4")},
-                    data={"mode": "audio"})
+                    data={"mode": "audio", "preset": "thesis"})
     assert r.status_code == 201, r.text
     pid = r.json()["id"]
     job = wait_until(lambda: (j := client.get(f"/api/jobs/{r.json()['job']['id']}").json())["status"] in TERMINAL

@@ -116,7 +116,8 @@ def test_exported_csv_imports_back_within_1e3(tmp_path, seed):
 
 def test_round_trip_through_bytes_restores_metadata_from_the_sidecar():
     tl = _timeline(60)
-    tl.generator["params"] = {"temp_low": 20.0, "temp_high": 40.0}
+    # a device whose neutral point is 25 C: the chair plays 25 C from the first tick
+    tl.generator["params"] = {"temp_low": 20.0, "temp_high": 40.0, "thermal": {"neutral_c": 25.0}}
     tl.temperature_c[:] = 25.0  # inside 20..40 but outside the default 30..55
     side = io.StringIO()
     write_csv_sidecar(tl, side)

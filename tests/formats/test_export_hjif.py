@@ -204,7 +204,7 @@ def test_two_hour_effects_fit_the_binary_form_and_still_decode_exactly():
     tl.vibration[:, 4] = 0.4  # constant for the whole film
     tl.vibration[1000:2500, 0] = np.round(np.random.default_rng(3).uniform(0.05, 1.0, 1500), 4)  # 150 s busy
     tl.vibration[5000:70_000, 8] = np.round(np.linspace(0.1, 0.9, 65_000), 4)  # a 108-minute ramp
-    tl.temperature_c[:] = np.round(40.0 + 8.0 * np.sin(np.arange(n) / 9000.0), 4)  # drifts all film
+    tl.temperature_c[:] = np.round(36.5 - 3.5 * np.cos(np.arange(n) / 9000.0), 4)  # drifts all film, 33..40 C
     tl.fans[:, 4, 8] = 0.7  # one fan on for the whole film
     doc = _export(tl)
     spans = list(_effect_spans(doc))

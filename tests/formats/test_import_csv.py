@@ -93,8 +93,8 @@ def test_columns_in_another_order_bom_crlf_and_blank_lines_are_accepted():
 def test_sidecar_next_to_the_csv_is_picked_up(tmp_path):
     tl = _timeline(50)
     tl.source = {"name": "trailer.webm", "duration_s": 5.0, "video": None, "audio": None}
-    tl.generator["params"] = {"temp_low": 20.0, "temp_high": 45.0}
-    tl.temperature_c[:10] = 21.5
+    tl.generator["params"] = {"temp_low": 20.0, "temp_high": 45.0, "thermal": {"neutral_c": 21.5}}
+    tl.temperature_c[:10] = 21.5  # the device's neutral point: the chair plays it from tick 0
     path = export_timeline(tl, "csv", tmp_path / "trailer.csv")
     with open(csv_meta_path(path), "w", encoding="utf-8") as fh:
         write_csv_sidecar(tl, fh)

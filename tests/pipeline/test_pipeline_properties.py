@@ -200,7 +200,7 @@ def test_calibration_is_a_gain(x, gain_db):
 colour = hnp.arrays(np.float64, 3, elements=st.floats(0.0, 255.0))
 thermal_params = st.builds(
     lambda lo, span, neutral_at, aware: T.ThermalParams(
-        temp_low=lo, temp_high=lo + span, neutral_c=lo + neutral_at * span, neutral_aware=aware),
+        mapping="thesis", temp_low=lo, temp_high=lo + span, neutral_c=lo + neutral_at * span, neutral_aware=aware),
     st.floats(-20.0, 40.0), st.floats(1.0, 40.0), unit, st.booleans())
 
 

@@ -22,7 +22,8 @@ import psutil
 from autohaptics.bench.common import measure, table
 from autohaptics.errors import AutohapticsError
 from autohaptics.formats import FORMATS, export_timeline, get_format
-from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS, TEMP_HIGH_C, TEMP_LOW_C
+from autohaptics.layout import DEVICE_TEMP_MAX_C, FAN_COLS, FAN_ROWS, N_ACTUATORS, TEMP_LOW_C
+from autohaptics.temperature import played_curve
 from autohaptics.timebase import n_ticks as ticks_for
 from autohaptics.timeline import Timeline
 
@@ -31,7 +32,8 @@ def synthetic_timeline(n_ticks: int, *, seed: int = 0) -> Timeline:
     """A deterministic film-like timeline of ``n_ticks`` ticks (values rounded to 4 decimals).
 
     Scenes of 1..90 s, each one of: silence, a held level, a ramp, or busy per-tick action on a
-    random subset of motors; the temperature ramps to a new target each scene and holds; about a
+    random subset of motors; the temperature ramps to a new target each scene and holds, as a chair
+    plays it (:func:`~autohaptics.temperature.played_curve`: from 33 C, at most 1 C/s); about a
     third of the scenes carry a burst of fans over a random block of cells.
     """
     rng = np.random.default_rng(seed)
@@ -56,7 +58,7 @@ def synthetic_timeline(n_ticks: int, *, seed: int = 0) -> Timeline:
             env = rng.random(m)
             env[env < 0.4] = 0.0
             vib[a:b] = env[:, None] * weights
-        target = rng.uniform(TEMP_LOW_C, TEMP_HIGH_C)
+        target = rng.uniform(TEMP_LOW_C, DEVICE_TEMP_MAX_C)
         ramp = min(m, int(rng.integers(20, 200)))
         temp[a:a + ramp] = np.linspace(current_t, target, ramp)
         temp[a + ramp:b] = target
@@ -69,7 +71,7 @@ def synthetic_timeline(n_ticks: int, *, seed: int = 0) -> Timeline:
             fans[s:e, r0:r1, c0:c1] = rng.uniform(0.3, 1.0, size=(e - s, 1, 1))
         a = b
     tl.vibration = np.round(np.clip(vib, 0, 1), 4).astype(np.float32)
-    tl.temperature_c = np.round(np.clip(temp, TEMP_LOW_C, TEMP_HIGH_C), 4).astype(np.float32)
+    tl.temperature_c = np.round(played_curve(temp), 4).astype(np.float32)
     tl.fans = np.round(np.clip(fans, 0, 1), 4).astype(np.float32)
     return tl.validate()
 

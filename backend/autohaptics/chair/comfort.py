@@ -8,7 +8,9 @@ Quantisation (what the chair receives for a timeline value; the tests rely on it
 - a muted zone sends 0 for its motors (back, armrests, seat) or fans; muted heat sends the
   device's neutral temperature.
 
-The chair clamps and slew-limits the temperature again on its side (firmware/PROTOCOL.md).
+The chair clamps and slew-limits the temperature again on its side (firmware/PROTOCOL.md); what it
+then plays (at full intensity, heat not muted) is :func:`autohaptics.temperature.played_curve`
+of the timeline's curve.
 """
 
 from __future__ import annotations
@@ -18,11 +20,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from autohaptics.chair.protocol import N_FANS, Frame, Hello
+from autohaptics.chair.protocol import N_FANS, Frame
 from autohaptics.errors import ParameterError
-from autohaptics.layout import (ACTUATORS, DEVICE_TEMP_MAX_C, DEVICE_TEMP_MIN_C, DEVICE_TEMP_RATE_C_PER_S, TEMP_NEUTRAL_C,
-                                ZONES)
-from autohaptics.temperature.device import chair_curve
+from autohaptics.layout import ACTUATORS, ZONES
+from autohaptics.temperature.device import DeviceProfile
 from autohaptics.timeline import Timeline
 from autohaptics.timeline.quantise import to_u8
 
@@ -62,34 +63,6 @@ class Comfort:
     @classmethod
     def from_dict(cls, d: dict) -> "Comfort":
         return cls(intensity=d.get("intensity", 1.0), mute=frozenset(d.get("mute", ())))
-
-
-@dataclass(frozen=True)
-class DeviceProfile:
-    """The chair's safe temperature range, neutral point (degrees C) and the rate its element may
-    change (C per second), from its HELLO."""
-
-    temp_min_c: float = DEVICE_TEMP_MIN_C
-    temp_max_c: float = DEVICE_TEMP_MAX_C
-    temp_neutral_c: float = TEMP_NEUTRAL_C
-    temp_rate_c_per_s: float = DEVICE_TEMP_RATE_C_PER_S
-
-    def __post_init__(self) -> None:
-        lo, hi, neu = self.temp_min_c, self.temp_max_c, self.temp_neutral_c
-        if not all(math.isfinite(v) for v in (lo, hi, neu)) or not lo <= neu <= hi:
-            raise ParameterError(f"device profile needs finite temp_min <= neutral <= temp_max, got {lo}, {neu}, {hi}")
-        if not (math.isfinite(self.temp_rate_c_per_s) and self.temp_rate_c_per_s > 0):
-            raise ParameterError(f"device profile needs a positive temperature rate, got {self.temp_rate_c_per_s}")
-
-    @classmethod
-    def from_hello(cls, hello: Hello) -> "DeviceProfile":
-        return cls(hello.temp_min_c, hello.temp_max_c, hello.temp_neutral_c, hello.temp_rate_c_per_s)
-
-    def played_temperature(self, temps: np.ndarray, *, tick_s: float) -> np.ndarray:
-        """What this chair's element plays for a timeline's temperature track (C per tick, at full
-        comfort intensity): clamped to the safe range, slew-limited from neutral."""
-        return chair_curve(temps, min_c=self.temp_min_c, max_c=self.temp_max_c, rate_c_per_s=self.temp_rate_c_per_s,
-                           tick_s=tick_s, start_c=self.temp_neutral_c)
 
 
 _ZONE_OF_MOTOR = tuple(a.zone for a in ACTUATORS)

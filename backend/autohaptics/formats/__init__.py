@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from autohaptics.errors import ParameterError
-from autohaptics.formats.common import ensure_valid
+from autohaptics.formats.common import as_played, ensure_valid
 from autohaptics.outputs import atomic_output
 from autohaptics.formats.ahap import write_ahap_zip
 from autohaptics.formats.csv import write_csv, write_csv_sidecar
@@ -69,12 +69,13 @@ def export_timeline(tl: Timeline, fmt: str, out: str | os.PathLike | IO, **optio
     """Export ``tl`` in format ``fmt`` to ``out``: a path (written atomically, returned) or a stream.
 
     A text format accepts a text stream or a binary one (written as UTF-8); ``ahap`` needs a binary
-    stream. ``options`` go to the format's writer (e.g. ``sharpness=`` for ahap, ``date=`` for
+    stream. Every format carries the temperature the chair plays (:func:`~autohaptics.formats.common.as_played`).
+    ``options`` go to the format's writer (e.g. ``sharpness=`` for ahap, ``date=`` for
     hjif); an option the writer does not take is a ParameterError.
     """
     spec = get_format(fmt)
     _check_options(spec, options)
-    tl = ensure_valid(tl)
+    tl = as_played(ensure_valid(tl))
     if isinstance(out, (str, os.PathLike)):
         path = Path(out)
         with atomic_output(path, binary=spec.binary) as fh:

@@ -8,11 +8,13 @@ sample points (see docs/EXPORT.md, "Keyframes only where the slope changes").
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
 from autohaptics.layout import ACTUATORS, FAN_COLS, FAN_ROWS, N_ACTUATORS
+from autohaptics.temperature.device import played_curve, profile_of
 from autohaptics.timebase import TICK_S
 from autohaptics.timeline import NORMALISED_FEATURES, Timeline
 
@@ -108,6 +110,19 @@ def ensure_valid(tl: Timeline) -> Timeline:
         and bool(np.isfinite(a).all()) and (a.size == 0 or (float(a.min()) >= a_lo and float(a.max()) <= a_hi))
         for a, shape, a_lo, a_hi in checks)
     return tl if fast else tl.validate()
+
+
+def as_played(tl: Timeline) -> Timeline:
+    """``tl`` with its temperature as the chair plays it: clamped to the device's range and
+    slew-limited from its neutral point (:func:`~autohaptics.temperature.played_curve`, with the
+    profile in ``generator.params.thermal``), kept inside the timeline's own range. A timeline of the
+    default mapping already is that curve and comes back as it is; the other tracks are shared."""
+    played = played_curve(tl.temperature_c, profile_of(tl.generator.get("params") or {}), tick_s=tl.tick_s)
+    lo, hi = tl.temp_range
+    played = np.clip(played, lo, hi).astype(np.float32)
+    if np.array_equal(played, tl.temperature_c):
+        return tl
+    return dataclasses.replace(tl, temperature_c=played)
 
 
 def timeline_title(source: dict) -> str:

@@ -13,7 +13,6 @@ import numpy as np
 from autohaptics import intensity as inten
 from autohaptics.airflow import fan_track
 from autohaptics.fusion import vibration_track
-from autohaptics.layout import TEMP_NEUTRAL_C
 from autohaptics.media import source_block
 from autohaptics.params import DEFAULT_PRESET, GenerateParams
 from autohaptics.pipeline.cache import Analysis
@@ -46,10 +45,13 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
             stats["fusion"] = vstats
             if vstats.get("ticks_estimated"):
                 stats["needs_analysis"] = True
-    temp_low, temp_high = float(params.thermal.temp_low), float(params.thermal.temp_high)
-    tl.temperature_c[:] = float(np.clip(TEMP_NEUTRAL_C, temp_low, temp_high))
+    temp_low, temp_high = params.thermal.range_c
+    tl.temperature_c[:] = float(np.clip(params.thermal.neutral_c, temp_low, temp_high))
     if "temperature" in params.tracks and video is not None:
-        tl.temperature_c[:] = temperature_track(video.mean_rgb, params=params.thermal, tick_s=TICK_S)
+        tl.temperature_c[:], target, stats["temperature"] = temperature_track(video.mean_rgb, params=params.thermal,
+                                                                              tick_s=TICK_S)
+        if params.thermal.mapping != "thesis":
+            tl.features["temperature_target_c"] = target
     if video is not None:
         peak = float(video.motion.max()) if video.motion.size else 0.0
         tl.features["motion"] = np.clip(video.motion / peak, 0.0, 1.0) if peak > 0 else np.zeros(n)

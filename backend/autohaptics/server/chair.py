@@ -368,10 +368,10 @@ class ChairService:
                 job.thread.join(5.0)
 
     # ------------------------------------------------------------------ status
-    def profile(self) -> DeviceProfile:
-        """The connected chair's temperature profile (its HELLO), the layout's defaults when none is."""
+    def profile(self) -> DeviceProfile | None:
+        """The connected chair's temperature profile (its HELLO); None when no chair is connected."""
         link = self._link
-        return link.profile if link is not None else DeviceProfile()
+        return link.profile if link is not None else None
 
     def status(self) -> dict:
         with self._lock:

@@ -1,23 +1,22 @@
-"""Colour -> temperature (ALGORITHM.md section 4, thesis 5.2).
+"""Colour -> temperature (ALGORITHM.md section 4): the default warm-cool mapping and the thesis's rule.
 
-Mean RGB of the frame; DisR = distance to pure red (255, 0, 0), DisG = distance to pure green
-(0, 255, 0). The thesis's ratio DisR / DisG is unbounded (a pure green frame divides by zero) and
-overshoots 55 C; we use the bounded, order-preserving r = DisR / (DisR + DisG) in [0, 1] (the
-denominator is never below the red-green distance, 360.6) and
-T = temp_high - (temp_high - temp_low) * r: red -> temp_high, green -> temp_low.
+``mapping="warmcool"`` (default): the warm-cool value of each tick's mean colour mapped around a
+skin-neutral ``neutral_c`` into the device's range, scaled to the film (:mod:`.warmcool`), then
+slew-limited at the device's rate: the curve IS what the chair plays (:func:`played_curve`).
 
-The curve is a TARGET. 55 C on skin burns: the device profile clamps it to its own safe range
-(:func:`clamp_to_device`, default at most 40 C) and real thermal elements need a rate limit
-(:func:`slew_limit`). Neutral colours (black, white, grey) land mid-range under the formula; the
-``neutral_aware`` option pulls desaturated colours to a skin-neutral ``neutral_c``.
+``mapping="thesis"`` (thesis 5.2, ``params.THESIS_RULES``): mean RGB of the frame; DisR = distance
+to pure red (255, 0, 0), DisG = distance to pure green (0, 255, 0). The thesis's ratio DisR / DisG
+is unbounded (a pure green frame divides by zero) and overshoots 55 C; we use the bounded,
+order-preserving r = DisR / (DisR + DisG) in [0, 1] (the denominator is never below the red-green
+distance, 360.6) and T = temp_high - (temp_high - temp_low) * r: red -> temp_high, green ->
+temp_low. Neutral colours land mid-range (42.5 C) and films at 41-45 C, above a 40 C device: the
+chair plays its limit. The ``neutral_aware`` option pulls desaturated colours to ``neutral_c``.
 
 neutral_aware (decision): r = 1/2 exactly when green = red (DisR^2 - DisG^2 = 510 (G - R)), which
 includes every grey. The option first re-maps r piecewise-linearly so that r = 1/2 lands on
 ``neutral_c`` (r = 0 -> temp_high, r = 1 -> temp_low), then pulls towards ``neutral_c`` by chroma.
 Then adding red never cools: it raises the re-mapped temperature and, when the colour is on the
-cold side (R < G), it can only lower the chroma, i.e. pull a cold value up. Pulling the plain
-formula (greys at 42.5 C) towards 33 C broke that: light cyan (200, 255, 255) read 37.4 C and
-white, one step redder, 33 C.
+cold side (R < G), it can only lower the chroma, i.e. pull a cold value up.
 """
 
 from __future__ import annotations
@@ -30,51 +29,106 @@ import numpy as np
 
 from autohaptics.errors import ParameterError
 from autohaptics.records import DERIVE
-from autohaptics.layout import TEMP_HIGH_C, TEMP_LOW_C, TEMP_NEUTRAL_C
-from autohaptics.temperature.device import slew_limit
+from autohaptics.layout import (DEVICE_TEMP_MAX_C, DEVICE_TEMP_MIN_C, DEVICE_TEMP_RATE_C_PER_S, TEMP_HIGH_C,
+                                TEMP_LOW_C, TEMP_NEUTRAL_C)
+from autohaptics.temperature.colour import warmth
+from autohaptics.temperature.device import DeviceProfile, played_curve, slew_limit
+from autohaptics.temperature.warmcool import warmcool_target
 
 _RED = np.array([255.0, 0.0, 0.0])
 _GREEN = np.array([0.0, 255.0, 0.0])
 
 
+MAPPINGS = ("warmcool", "thesis")
+
+
 @dataclass(frozen=True)
 class ThermalParams:
-    """Colour-to-temperature mapping.
+    """Colour-to-temperature mapping: the default warm-cool mapping around a skin-neutral
+    temperature in the device's range, or the thesis's red/green rule (GUIDE section 4, Temperature).
 
-    temp_low, temp_high : target temperatures (C) of pure green and pure red (thesis: 30 and 55).
-    neutral_aware : greys map to ``neutral_c`` and desaturated colours are pulled towards it
-        (module docstring).
-    neutral_c : skin-neutral temperature, C (default 33).
-    chroma_low, chroma_high : chroma (max - min channel, 0..255) below which a colour is fully
-        neutral and above which it keeps its full temperature (linear between), neutral_aware only.
-    slew_c_per_s : rate limit of the generated curve, C per second (None = no limit; the device
-        applies its own limit too).
+    mapping : "warmcool" (default: warm-cool around ``neutral_c`` in the device's range) or
+        "thesis" (the thesis's red/green rule between ``temp_low`` and ``temp_high``).
+    neutral_c : skin-neutral temperature, C (default 33): greys, black and white map here.
+    device_min_c, device_max_c, device_rate_c_per_s : the device profile the curve is made for
+        (safe range, C, and setpoint rate, C/s; defaults 18, 40, 1 as the chair's firmware).
+    fill : share of the warm (cool) headroom that the film's strong warm (cool) scenes reach, 0..1.
+    quantile : which of a side's ticks set its scale (0.95: the strongest 5 % reach ``fill`` or more).
+    min_scale : smallest scale (warm-cool units; sRGB red is 2.1): paler films stay nearer neutral.
+    hue_offset : moves the warm/cool hue boundary (0 = Ou et al.'s model; 0.25 makes green cool).
+    temp_low, temp_high : thesis mapping, target temperatures (C) of pure green and pure red.
+    neutral_aware : thesis mapping, greys map to ``neutral_c`` and desaturated colours are pulled
+        towards it.
+    chroma_low, chroma_high : thesis mapping with neutral_aware, chroma (max - min channel,
+        0..255) below which a colour is fully neutral and above which it keeps its full temperature.
+    slew_c_per_s : thesis mapping, rate limit of the generated curve, C per second (None = none;
+        the warmcool curve is always limited at ``device_rate_c_per_s``).
     """
 
     STAGE: ClassVar[str] = DERIVE
 
+    mapping: str = "warmcool"
+    neutral_c: float = TEMP_NEUTRAL_C
+    # the device profile (temperature.DeviceProfile's fields, named for the generator)
+    device_min_c: float = DEVICE_TEMP_MIN_C
+    device_max_c: float = DEVICE_TEMP_MAX_C
+    device_rate_c_per_s: float = DEVICE_TEMP_RATE_C_PER_S
+    # the warm-cool measure and the film's scaling
+    fill: float = 0.85
+    quantile: float = 0.95
+    min_scale: float = 0.5
+    hue_offset: float = 0.25
+    # the thesis mapping
     temp_low: float = TEMP_LOW_C
     temp_high: float = TEMP_HIGH_C
     neutral_aware: bool = False
-    neutral_c: float = TEMP_NEUTRAL_C
     chroma_low: float = 20.0
     chroma_high: float = 90.0
     slew_c_per_s: float | None = None
 
     def __post_init__(self):
-        for name in ("temp_low", "temp_high", "neutral_c", "chroma_low", "chroma_high"):
+        if self.mapping not in MAPPINGS:
+            raise ParameterError(f"thermal.mapping must be one of {MAPPINGS}, got {self.mapping!r}")
+        for name in ("temp_low", "temp_high", "neutral_c", "chroma_low", "chroma_high", "device_min_c",
+                     "device_max_c", "device_rate_c_per_s", "fill", "quantile", "min_scale", "hue_offset"):
             if not math.isfinite(float(getattr(self, name))):
                 raise ParameterError(f"thermal.{name} must be finite, got {getattr(self, name)!r}")
         if not (-20.0 <= self.temp_low < self.temp_high <= 80.0):
             raise ParameterError(f"thermal needs -20 <= temp_low < temp_high <= 80 C, got {self.temp_low}, {self.temp_high}")
-        if not (self.temp_low <= self.neutral_c <= self.temp_high):
-            raise ParameterError(f"thermal.neutral_c must lie in [temp_low, temp_high], got {self.neutral_c}")
         if not (0.0 <= self.chroma_low < self.chroma_high <= 255.0):
             raise ParameterError("thermal needs 0 <= chroma_low < chroma_high <= 255")
         if self.slew_c_per_s is not None and not (0.0 < float(self.slew_c_per_s) < 1e6):
             raise ParameterError(f"thermal.slew_c_per_s must be positive (C/s) or None, got {self.slew_c_per_s!r}")
+        self._check_warmcool()
 
+    def _check_warmcool(self) -> None:
+        if not (-20.0 <= self.device_min_c < self.device_max_c <= 80.0):
+            raise ParameterError("thermal needs -20 <= device_min_c < device_max_c <= 80 C, "
+                                 f"got {self.device_min_c}, {self.device_max_c}")
+        lo, hi = self.range_c
+        if not (lo <= self.neutral_c <= hi):
+            raise ParameterError(f"thermal.neutral_c must lie in [{lo:g}, {hi:g}] C (the {self.mapping} mapping's "
+                                 f"range), got {self.neutral_c}")
+        if not (0.0 < self.device_rate_c_per_s <= 100.0):
+            raise ParameterError(f"thermal.device_rate_c_per_s must lie in (0, 100] C/s, got {self.device_rate_c_per_s}")
+        if not (0.0 < self.fill < 1.0 and 0.5 <= self.quantile <= 1.0 and self.min_scale > 0.0):
+            raise ParameterError("thermal needs 0 < fill < 1, 0.5 <= quantile <= 1 and min_scale > 0, got "
+                                 f"{self.fill}, {self.quantile}, {self.min_scale}")
+        if not (-1.0 < self.hue_offset < 1.0):
+            raise ParameterError(f"thermal.hue_offset must lie in (-1, 1), got {self.hue_offset}")
 
+    @property
+    def range_c(self) -> tuple[float, float]:
+        """(low, high) C that the generated curve stays in: the device's range (warmcool) or
+        temp_low..temp_high (thesis); the timeline records it as ``temp_low``/``temp_high``."""
+        if self.mapping == "thesis":
+            return float(self.temp_low), float(self.temp_high)
+        return float(self.device_min_c), float(self.device_max_c)
+
+    @property
+    def device(self) -> DeviceProfile:
+        """The device profile the curve is made for."""
+        return DeviceProfile(self.device_min_c, self.device_max_c, self.neutral_c, self.device_rate_c_per_s)
 
 
 def warmth_ratio(mean_rgb: np.ndarray) -> np.ndarray:
@@ -86,7 +140,7 @@ def warmth_ratio(mean_rgb: np.ndarray) -> np.ndarray:
 
 
 def temperature_target(mean_rgb: np.ndarray, *, params: ThermalParams = ThermalParams()) -> np.ndarray:
-    """Target temperature per tick, C. mean_rgb float [shape=(n, 3)] (or (3,)) -> [shape=(n,)] (or scalar).
+    """The thesis mapping's target temperature per tick, C (whatever ``params.mapping`` says). mean_rgb float [shape=(n, 3)] (or (3,)) -> [shape=(n,)] (or scalar).
 
     Always within [temp_low, temp_high]; a brighter red is never colder.
     """
@@ -104,10 +158,23 @@ def temperature_target(mean_rgb: np.ndarray, *, params: ThermalParams = ThermalP
     return np.clip(t, params.temp_low, params.temp_high)
 
 
-def temperature_track(mean_rgb: np.ndarray, *, params: ThermalParams = ThermalParams(), tick_s: float = 0.1) -> np.ndarray:
-    """The generated temperature curve, C [shape=(n,)]: the target of each tick's mean colour
-    [shape=(n, 3)], rate-limited when ``params.slew_c_per_s`` is set, within [temp_low, temp_high]."""
-    target = temperature_target(np.asarray(mean_rgb, dtype=np.float64), params=params)
+def temperature_track(mean_rgb: np.ndarray, *, params: ThermalParams = ThermalParams(),
+                      tick_s: float = 0.1) -> tuple[np.ndarray, np.ndarray, dict]:
+    """The generated temperature curve of each tick's mean colour [shape=(n, 3)], 0..255.
+
+    Returns (curve, target, stats): curve C [shape=(n,)] within ``params.range_c``; target, the
+    mapping before any rate limit; stats {"mapping", and for warmcool "warm_scale", "cool_scale"}.
+    warmcool: the curve is what the chair plays (slew-limited from neutral at the device's rate);
+    thesis: rate-limited only when ``params.slew_c_per_s`` is set.
+    """
+    rgb = np.asarray(mean_rgb, dtype=np.float64)
+    if params.mapping == "warmcool":
+        target, stats = warmcool_target(warmth(rgb, hue_offset=params.hue_offset), neutral_c=params.neutral_c,
+                                        min_c=params.device_min_c, max_c=params.device_max_c, fill=params.fill,
+                                        quantile=params.quantile, min_scale=params.min_scale)
+        return played_curve(target, params.device, tick_s=tick_s), target, {"mapping": "warmcool", **stats}
+    target = temperature_target(rgb, params=params)
+    curve = target
     if params.slew_c_per_s:
-        target = slew_limit(target, max_rate_c_per_s=params.slew_c_per_s, tick_s=tick_s)
-    return np.clip(target, float(params.temp_low), float(params.temp_high))
+        curve = slew_limit(target, max_rate_c_per_s=params.slew_c_per_s, tick_s=tick_s)
+    return np.clip(curve, float(params.temp_low), float(params.temp_high)), target, {"mapping": "thesis"}

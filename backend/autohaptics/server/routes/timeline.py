@@ -19,6 +19,7 @@ from autohaptics.server.deps import ChairDep, ComposerDep, RunnerDep, SettingsDe
 from autohaptics.server.routes.jobs import apply_params
 from autohaptics.server.schemas import ChairTemperatureOut, EditIn, LaneValuesOut, EditOut, EditsOut, RevisionIn, StepOut
 from autohaptics.server.uploads import display_name, multipart_body, receive_upload
+from autohaptics.temperature.device import played_curve, profile_of
 from autohaptics.timeline import edit_ops
 
 router = APIRouter(tags=["timeline"])
@@ -60,10 +61,11 @@ def get_timeline_bin(project_id: str, request: Request, composer: ComposerDep,
 @router.get("/api/projects/{project_id}/timeline/chair-temperature", response_model=ChairTemperatureOut)
 def get_chair_temperature(project_id: str, composer: ComposerDep, chair: ChairDep) -> dict:
     """The composed temperature track as the chair plays it (the connected chair's profile, else the
-    default one): clamped to its safe range and slew-limited from neutral, C per tick."""
+    one the timeline was made for): clamped to its safe range and slew-limited from neutral, C per tick."""
     composed = composer.compose(project_id)
-    tl, profile = composed.timeline, chair.profile()
-    played = profile.played_temperature(tl.temperature_c, tick_s=tl.tick_s)
+    tl = composed.timeline
+    profile = chair.profile() or profile_of(tl.generator.get("params") or {})
+    played = played_curve(tl.temperature_c, profile, tick_s=tl.tick_s)
     return {"revision": composed.revision, "tick_s": tl.tick_s, "min_c": profile.temp_min_c,
             "max_c": profile.temp_max_c, "neutral_c": profile.temp_neutral_c,
             "rate_c_per_s": profile.temp_rate_c_per_s, "values": np.round(played, 3).tolist()}
