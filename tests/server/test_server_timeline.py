@@ -237,6 +237,9 @@ def test_npz_round_trip_and_errors(tmp_path):
 # ------------------------------------------------------------------- chair temperature
 def test_the_chair_temperature_is_the_target_clamped_and_slew_limited(client, project):
     pid = project["id"]
+    # the thesis's colour rule: a timeline range of 30..55 C, wider than the device's 18..40 C
+    r = client.put(f"/api/projects/{pid}/params", json={"overrides": {"thermal.mapping": "thesis"}})
+    assert r.status_code == 200 and r.json()["job"] is None, r.text
     edit(client, pid, {"op": "set", "lanes": ["temperature"], "t0": 0, "t1": 100, "value": 45.0})
     edit(client, pid, {"op": "set", "lanes": ["temperature"], "t0": 100, "t1": N_TICKS, "value": 20.0})
     target = np.asarray(client.get(f"/api/projects/{pid}/timeline").json()["tracks"]["temperature_c"])
