@@ -72,6 +72,9 @@ def test_enter_submits_and_escape_cancels_every_dialog(page, api, project_copy):
 
 def test_the_temperature_lane_shows_what_the_chair_plays(page, api, project_copy):
     pid = project_copy["id"]
+    # the thesis's colour rule: a timeline range of 30..55 C, wider than the device's 18..40 C
+    r = api.put(f"/api/projects/{pid}/params", json={"overrides": {"thermal.mapping": "thesis"}})
+    assert r.status_code == 200 and r.json()["job"] is None, r.text
     rev = api.get(f"/api/projects/{pid}").json()["revision"]
     r = api.post(f"/api/projects/{pid}/edits", json={"base_revision": rev, "op": {
         "op": "set", "lanes": ["temperature"], "t0": 100, "t1": 200, "value": 45.0}})
