@@ -17,6 +17,7 @@ from autohaptics.layout import TEMP_NEUTRAL_C
 from autohaptics.media import source_block
 from autohaptics.params import DEFAULT_PRESET, GenerateParams
 from autohaptics.pipeline.cache import Analysis
+from autohaptics.pipeline.refine import lacking_saliency
 from autohaptics.records import params_to_dict
 from autohaptics.temperature import temperature_track
 from autohaptics.timebase import TICK_S, frames_to_ticks
@@ -26,8 +27,8 @@ from autohaptics.timeline import Timeline, default_generator
 def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: str = DEFAULT_PRESET) -> Timeline:
     """Turn a feature cache into a timeline (no decoding; milliseconds for a feature film).
 
-    ``stats["needs_analysis"]`` is set when vibrating ticks lack saliency of their own (their
-    weights were borrowed or fell back to A5): analysing them would refine the timeline.
+    ``stats["needs_analysis"]`` is set when vibrating ticks lack saliency of their own that their
+    frames could give (their weights were borrowed or fell back to A5): :func:`refine` computes it.
     """
     params = params or GenerateParams()
     t0 = time.perf_counter()
@@ -44,7 +45,7 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
         tl.vibration[:] = vib
         if params.mode == "multimodal":
             stats["fusion"] = vstats
-            if vstats.get("ticks_estimated"):
+            if lacking_saliency(video, intensity > 0).any():
                 stats["needs_analysis"] = True
     temp_low, temp_high = float(params.thermal.temp_low), float(params.thermal.temp_high)
     tl.temperature_c[:] = float(np.clip(TEMP_NEUTRAL_C, temp_low, temp_high))
