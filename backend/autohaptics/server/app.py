@@ -48,11 +48,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     async def lifespan(app: FastAPI):
         store = Store(settings.data_dir)
         interrupted = store.recover()
-        if interrupted:
-            log.warning("%d job(s) were interrupted by a server restart", len(interrupted))
         composer = Composer(store)
         runner = JobRunner(store, workers=settings.jobs, mp_context=settings.mp_context, composer=composer)
         await anyio.to_thread.run_sync(runner.start)
+        if interrupted:
+            log.warning("%d job(s) interrupted by a server restart are queued again", len(interrupted))
+            await anyio.to_thread.run_sync(runner.resume, interrupted)
         chair_service = ChairService(store, composer)
         chair_service.start()
         app.state.store, app.state.composer, app.state.runner = store, composer, runner
