@@ -63,6 +63,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         finally:
             await anyio.to_thread.run_sync(chair_service.close)  # STOP before anything else goes
             await anyio.to_thread.run_sync(runner.stop)
+            await anyio.to_thread.run_sync(composer.writer.close)  # the last re-derive reaches the disk
             store.close()
 
     app = FastAPI(title="autohaptics", version=__version__, lifespan=lifespan,

@@ -349,6 +349,8 @@ class JobRunner:
                     status, error = "failed", f"{type(exc).__name__}: {exc}"
             if error:
                 error = error.replace(live.media_path, live.name)
+            if self.composer is not None:  # a re-derived layer still being written goes first
+                self.composer.flush(live.project_id)
             try:
                 job = self.store.finish_job(job_id, status, error=error, params=params,
                                             started_at=(result or {}).get("started_at") or live.started_at)

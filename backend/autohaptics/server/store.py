@@ -305,21 +305,26 @@ class Store:
                 self._all(f"SELECT id FROM jobs WHERE status IN {ACTIVE_JOB_STATES} ORDER BY created_at")]
 
     # ------------------------------------------------------------ generated data
-    def replace_generated(self, pid: str, write_to: Path, *, params: dict) -> tuple[int, tuple]:
+    def rederived(self, pid: str, *, params: dict) -> int:
+        """Record a re-derive of ``pid``'s generated layer with ``params`` (its file is written after,
+        :meth:`place_generated`): store the parameters and bump the revision; returns the new one."""
+        with self._tx() as db:
+            self._require(db, pid)
+            db.execute("UPDATE projects SET revision=revision+1, has_timeline=1, params=?, updated_at=?,"
+                       " status=CASE WHEN status='running' THEN status ELSE 'ready' END WHERE id=?",
+                       (json.dumps(params), now_iso(), pid))
+            return int(db.execute("SELECT revision FROM projects WHERE id=?", (pid,)).fetchone()[0])
+
+    def place_generated(self, pid: str, write_to: Path) -> tuple:
         """Move a freshly written ``generated.npz`` (``write_to``, on the data folder's file system) into
-        place, store ``params`` and bump the revision; returns the new revision and the new file's
-        identity (inode, mtime, size), for caches keyed by it."""
+        place; returns the new file's identity (inode, mtime, size), for caches keyed by it.
+        NotFound when the project is gone."""
         with self._tx() as db:
             self._require(db, pid)
             path = self.generated_path(pid)
             os.replace(write_to, path)
             st = path.stat()
-            stamp = now_iso()
-            db.execute("UPDATE projects SET revision=revision+1, has_timeline=1, params=?, updated_at=?,"
-                       " status=CASE WHEN status='running' THEN status ELSE 'ready' END WHERE id=?",
-                       (json.dumps(params), stamp, pid))
-            revision = int(db.execute("SELECT revision FROM projects WHERE id=?", (pid,)).fetchone()[0])
-            return revision, (st.st_ino, st.st_mtime_ns, st.st_size)
+            return (st.st_ino, st.st_mtime_ns, st.st_size)
 
     def edits(self, pid: str) -> dict:
         """``{revision, cursor, ops}``: ops[:cursor] are applied, ops[cursor:] can be redone."""
