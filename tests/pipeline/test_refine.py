@@ -16,7 +16,6 @@ from autohaptics import pipeline
 from autohaptics import testing as synth
 from autohaptics.layout import ACTUATOR_IDS
 from autohaptics.params import params_from_doc, resolve_doc
-from autohaptics.testing import Scene, Segment, Shape, Texture, Tone
 
 IDX = {a: i for i, a in enumerate(ACTUATOR_IDS)}
 RIGHT = [IDX[a] for a in ("A2", "A6", "A7", "A9")]
@@ -24,14 +23,7 @@ HIGH = {"sharpness": 0.95, "booming": 0.95, "low_energy": 0.95, "loudness": 0.95
 LOW = {"sharpness": 0.3, "booming": 0.3, "low_energy": 0.3, "loudness": 0.3}
 HUM = range(91, 109)  # ticks well inside the hum (9-11 s)
 
-SCENE = Scene(
-    14.0,
-    background=(Segment(0, 7, (50, 55, 70), texture=Texture("noise", 0.08, 0.3, seed=1)),
-                Segment(7, 14, (70, 50, 45), texture=Texture("noise", 0.07, 0.3, seed=2))),
-    shapes=(Shape("circle", (255, 255, 240), t_on=2, t_off=5, xy0=(0.2, 0.5), size0=(0.2, 0.35)),
-            Shape("rect", (250, 250, 250), t_on=8, t_off=12, xy0=(0.8, 0.5), size0=(0.2, 0.35))),
-    audio=(Tone(3, 4, 50.0, level_dbfs=-10.0, ramp_s=0.02), Tone(9, 11, 60.0, level_dbfs=-26.0, ramp_s=0.02)),
-)
+SCENE = synth.left_boom_right_hum_scene()
 
 
 def params(thresholds: dict, preset: str = "balanced"):

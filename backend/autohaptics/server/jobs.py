@@ -18,12 +18,12 @@ Life of a job:
    message) or ``cancelled`` (the pipeline raised CancelledError, or the job was cancelled while
    queued; a job whose cancel was requested never replaces the timeline).
 
-If the parameters of a project changed while its job ran and they need no other analysis, the
-finisher derives the timeline again with the current ones. Deleting a project cancels its job;
-the job's outputs are then dropped. On shutdown running jobs are cancelled and left queued; at
-the next start (as after a crash) :meth:`Store.recover` re-queues them with their project's current
-parameters and :meth:`JobRunner.resume` runs them again: a refinement of the feature cache where it
-serves those parameters, else a new analysis from the start.
+Parameters changed while a job ran and needing no other analysis are derived with at its end (and
+refined again if they lack saliency). Deleting a project cancels its job;
+the job's outputs are then dropped. On shutdown running jobs are cancelled and left queued; the
+next start (as after a crash) re-queues them with their project's latest parameters
+(:meth:`Store.recover`) and runs them again (:meth:`JobRunner.resume`: a refinement where the cache
+serves those parameters, else a new analysis).
 """
 
 from __future__ import annotations
