@@ -8,9 +8,9 @@ Life of a job:
    or forkserver context). Waiting here rather than in the pool makes cancelling a queued job
    immediate.
 2. In the worker, :func:`run_job` sends ``("started", id, time)`` then ``("progress", id, stage,
-   fraction)`` messages on the Manager queue, runs :func:`pipeline.analyse` with the job's Manager
-   Event as the cancel token, derives the timeline, and writes ``analysis.npz`` and
-   ``generated.npz`` into the work folder (never into the project folder).
+   fraction)`` messages, runs :func:`pipeline.analyse` (or :func:`pipeline.refine`) with the job's
+   Manager Event as the cancel token, derives, and writes ``analysis.npz`` and ``generated.npz``
+   into the work folder (never into the project folder).
 3. A reader thread turns queue messages into the job's live state (``running``, progress, stage),
    stores them and forwards them to SSE subscribers.
 4. When the future completes, a finisher thread moves the outputs into the project
@@ -19,8 +19,7 @@ Life of a job:
    queued; a job whose cancel was requested never replaces the timeline).
 
 Parameters changed while a job ran and needing no other analysis are derived with at its end (and
-refined again if they lack saliency). Deleting a project cancels its job;
-the job's outputs are then dropped. On shutdown running jobs are cancelled and left queued; the
+refined again if they lack saliency). Deleting a project cancels its job. On shutdown running jobs are cancelled and left queued; the
 next start (as after a crash) re-queues them with their project's latest parameters
 (:meth:`Store.recover`) and runs them again (:meth:`JobRunner.resume`: a refinement where the cache
 serves those parameters, else a new analysis).
