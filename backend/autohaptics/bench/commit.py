@@ -14,9 +14,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import signal
-import socket
 import statistics
 import subprocess
 import sys
@@ -27,6 +24,8 @@ import httpx
 import psutil
 
 from autohaptics.bench.common import table
+from autohaptics.bench.serve import start_server as serve
+from autohaptics.bench.serve import stop_server
 
 NAME = "bench commit"
 RAISE = {"loudness": 0.95, "sharpness": 0.95, "booming": 0.95, "low_energy": 0.95}
@@ -72,39 +71,9 @@ def write_film(path: Path, duration_s: float = 7200.0) -> Path:
 
 
 def start_server(data: Path) -> tuple[subprocess.Popen, str]:
-    """``autohaptics serve`` on a free port with ``data`` (its log in ``data/server.log``)."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
+    """``autohaptics serve`` on a free port with ``data`` (its log appended to ``data/server.log``)."""
     data.mkdir(parents=True, exist_ok=True)
-    with open(data / "server.log", "a") as log:
-        proc = subprocess.Popen([sys.executable, "-m", "autohaptics.cli.main", "serve", "--host", "127.0.0.1",
-                                 "--port", str(port), "--data", str(data)],
-                                stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
-    url = f"http://127.0.0.1:{port}"
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline:
-        if proc.poll() is not None:
-            raise SystemExit(f"autohaptics serve exited with {proc.returncode}; see {data / 'server.log'}")
-        try:
-            if httpx.get(f"{url}/health", timeout=1.0).status_code == 200:
-                return proc, url
-        except httpx.HTTPError:
-            pass
-        time.sleep(0.2)
-    stop_server(proc)
-    raise SystemExit(f"autohaptics serve did not answer within 120 s; see {data / 'server.log'}")
-
-
-def stop_server(proc: subprocess.Popen) -> None:
-    """SIGTERM the server's process group, SIGKILL if it lingers."""
-    if proc.poll() is None:
-        os.killpg(proc.pid, signal.SIGTERM)
-        try:
-            proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+    return serve(data, log_path=data / "server.log", timeout_s=120.0)
 
 
 def wait_job(api: httpx.Client, job_id: str, timeout_s: float = 3600.0) -> dict:
