@@ -72,3 +72,23 @@ def test_raising_the_thresholds_leaves_nothing_to_refine(tmp_path):
     tl = pipeline.derive(analysis, params(HIGH))
     assert (tl.vibration.max(axis=1) > 0).any() and not tl.stats.get("needs_analysis")
     assert not pipeline.lacking_saliency(analysis.video, tl.features["intensity"] > 0).any()
+
+
+def test_a_rederive_that_keeps_the_fan_rule_gives_the_fans_a_fresh_derive_gives(tmp_path):
+    """The fan track is kept from an earlier derive of the same cache when only the thresholds
+    changed, and computed again when the fan rule changed: either way as a fresh derive has it."""
+    import copy
+    import dataclasses
+
+    path = synth.write_scene(tmp_path / "film.mp4", synth.sample_scene(8.0), width=96, height=54, fps=12)
+    analysis = pipeline.analyse(path, params(HIGH))
+    first = pipeline.derive(analysis, params(HIGH))
+    assert first.fans.max() > 0  # the scene's moving shapes blow
+    again = pipeline.derive(analysis, params(LOW))  # kept from the first derive
+    other = dataclasses.replace(analysis, video=copy.deepcopy(analysis.video))  # a cache never derived
+    np.testing.assert_array_equal(again.fans, pipeline.derive(other, params(LOW)).fans)
+    assert again.stats["airflow"] == first.stats["airflow"]
+    stricter = dataclasses.replace(params(LOW), airflow=dataclasses.replace(params(LOW).airflow, strong_rel=0.9))
+    changed = pipeline.derive(analysis, stricter)  # another fan rule: computed again
+    np.testing.assert_array_equal(changed.fans, pipeline.derive(other, stricter).fans)
+    assert not np.array_equal(changed.fans, again.fans)
