@@ -58,7 +58,7 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
         tl.features["motion"] = np.clip(video.motion / peak, 0.0, 1.0) if peak > 0 else np.zeros(n)
         tl.features["motion_fw_per_s"] = video.motion.astype(np.float64)
         if "fans" in params.tracks:
-            stats["airflow"] = _fans(video, params, tl.fans)
+            stats["airflow"] = _fans(video, params, tl)
     gen_params = params_to_dict(params)
     gen_params["thresholds"] = dict(params.intensity.thresholds)
     gen_params["temp_low"], gen_params["temp_high"] = temp_low, temp_high
@@ -72,24 +72,24 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
 # The fan track of recent derives, per video analysis (held weakly) and airflow parameters: the
 # fans depend on nothing else, and recomputing them is most of a threshold commit's derive.
 _FANS: dict[int, tuple] = {}
-_FANS_KEPT = 4
+_FANS_KEPT = 2
 _FANS_LOCK = threading.Lock()
 
 
-def _fans(video, params: GenerateParams, out: np.ndarray) -> dict:
-    """Write the fan track into ``out`` (all zeros, float32 [shape=(n, 9, 17)]) and return its
-    stats; the track of an earlier derive from the same ``video`` with the same ``params.airflow``
-    is copied instead of recomputed (stored sparse: the ticks where a fan blows)."""
+def _fans(video, params: GenerateParams, tl: Timeline) -> dict:
+    """Set ``tl.fans`` and return its stats. The track of an earlier derive from the same ``video``
+    with the same ``params.airflow`` is shared, not recomputed: it is read-only (float32
+    [shape=(n, 9, 17)]), like every track of a derived timeline that is not copied first."""
     with _FANS_LOCK:
         hit = _FANS.get(id(video))
     if hit is not None and hit[0]() is video and hit[1] == params.airflow:
-        out[hit[2]] = hit[3]
-        return json.loads(json.dumps(hit[4]))
+        tl.fans = hit[2]
+        return json.loads(json.dumps(hit[3]))
     _, stats = fan_track(video.motion, video.cell_motion, video.nearness, video.cut, video.depth_mask,
-                         params=params.airflow, out=out)
-    on = np.flatnonzero(out.reshape(out.shape[0], -1).any(axis=1))
+                         params=params.airflow, out=tl.fans)
+    tl.fans.flags.writeable = False
     with _FANS_LOCK:
-        _FANS[id(video)] = (weakref.ref(video), params.airflow, on, out[on].copy(), json.loads(json.dumps(stats)))
+        _FANS[id(video)] = (weakref.ref(video), params.airflow, tl.fans, json.loads(json.dumps(stats)))
         while len(_FANS) > _FANS_KEPT:
             _FANS.pop(next(iter(_FANS)))
     return stats
