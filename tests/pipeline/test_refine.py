@@ -84,7 +84,8 @@ def test_a_rederive_that_keeps_the_fan_rule_gives_the_fans_a_fresh_derive_gives(
     analysis = pipeline.analyse(path, params(HIGH))
     first = pipeline.derive(analysis, params(HIGH))
     assert first.fans.max() > 0  # the scene's moving shapes blow
-    again = pipeline.derive(analysis, params(LOW))  # kept from the first derive
+    again = pipeline.derive(analysis, params(LOW))  # kept from the first derive: shared, read-only
+    assert first.fans.flags.writeable and not again.fans.flags.writeable
     other = dataclasses.replace(analysis, video=copy.deepcopy(analysis.video))  # a cache never derived
     np.testing.assert_array_equal(again.fans, pipeline.derive(other, params(LOW)).fans)
     assert again.stats["airflow"] == first.stats["airflow"]

@@ -77,9 +77,9 @@ _FANS_LOCK = threading.Lock()
 
 
 def _fans(video, params: GenerateParams, tl: Timeline) -> dict:
-    """Set ``tl.fans`` and return its stats. The track of an earlier derive from the same ``video``
-    with the same ``params.airflow`` is shared, not recomputed: it is read-only (float32
-    [shape=(n, 9, 17)]), like every track of a derived timeline that is not copied first."""
+    """Set ``tl.fans`` and return its stats. A later derive from the same ``video`` with the same
+    ``params.airflow`` shares a read-only copy of the track (float32 [shape=(n, 9, 17)]) instead of
+    recomputing it; the first one's own track stays writable."""
     with _FANS_LOCK:
         hit = _FANS.get(id(video))
     if hit is not None and hit[0]() is video and hit[1] == params.airflow:
@@ -87,9 +87,10 @@ def _fans(video, params: GenerateParams, tl: Timeline) -> dict:
         return json.loads(json.dumps(hit[3]))
     _, stats = fan_track(video.motion, video.cell_motion, video.nearness, video.cut, video.depth_mask,
                          params=params.airflow, out=tl.fans)
-    tl.fans.flags.writeable = False
+    kept = tl.fans.copy()
+    kept.flags.writeable = False
     with _FANS_LOCK:
-        _FANS[id(video)] = (weakref.ref(video), params.airflow, tl.fans, json.loads(json.dumps(stats)))
+        _FANS[id(video)] = (weakref.ref(video), params.airflow, kept, json.loads(json.dumps(stats)))
         while len(_FANS) > _FANS_KEPT:
             _FANS.pop(next(iter(_FANS)))
     return stats
