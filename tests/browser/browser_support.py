@@ -5,15 +5,15 @@ from __future__ import annotations
 
 import os
 import shutil
-import signal
-import socket
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import httpx
 import pytest
+
+from autohaptics.bench.serve import ServerError, free_port, stop_server  # noqa: F401 (the tests import them from here)
+from autohaptics.bench.serve import start_server as serve
 
 REPO = Path(__file__).resolve().parents[2]
 SHARED = Path(os.environ.get("AUTOHAPTICS_SHARED", REPO.parent / "shared")).resolve()
@@ -26,60 +26,21 @@ CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networki
                  "--disable-sync", "--no-first-run", "--disable-quic"]
 
 
-class ServerError(RuntimeError):
-    """``autohaptics serve`` did not come up; the message holds the end of its log."""
-
-
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def start_server(data_dir: Path, *, port: int | None = None, jobs: int = 1) -> tuple[subprocess.Popen, str]:
-    """Start ``autohaptics serve`` on ``port`` (a free one by default) with ``data_dir``; returns
-    (process, base URL) once /health answers. Its output goes to ``data_dir/server.log``."""
+    """Start ``autohaptics serve`` on ``port`` (a free one by default) with ``data_dir/data`` and the
+    repository's frontend; returns (process, base URL) once /health answers. Its output goes to
+    ``data_dir/server.log``."""
     data_dir.mkdir(parents=True, exist_ok=True)
-    port = port or free_port()
     log_path = data_dir / "server.log"
-    with open(log_path, "w") as log:
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "autohaptics.cli.main", "serve", "--host", "127.0.0.1", "--port", str(port),
-             "--data", str(data_dir / "data"), "--frontend", str(REPO / "frontend"), "--jobs", str(jobs)],
-            stdout=log, stderr=subprocess.STDOUT, cwd=REPO, start_new_session=True)
-    url = f"http://127.0.0.1:{port}"
-    deadline = time.monotonic() + SERVER_START_S
-    while True:
-        if proc.poll() is not None:
-            raise ServerError(f"autohaptics serve exited with {proc.returncode}:\n{log_path.read_text()[-3000:]}")
-        try:
-            if httpx.get(f"{url}/health", timeout=1.0).status_code == 200:
-                return proc, url
-        except httpx.HTTPError:
-            pass
-        if time.monotonic() > deadline:
-            stop_server(proc)
-            raise ServerError(f"autohaptics serve did not answer /health within {SERVER_START_S} s:\n"
-                              f"{log_path.read_text()[-3000:]}")
-        time.sleep(0.2)
+    log_path.write_text("")
+    return serve(data_dir / "data", log_path=log_path, port=port, jobs=jobs, frontend=REPO / "frontend",
+                 timeout_s=SERVER_START_S, cwd=REPO)
 
 
 def api_client(url: str, **kwargs) -> httpx.Client:
     """An httpx client on the service that holds its session token (docs/API.md "Security")."""
     token = httpx.get(f"{url.rstrip('/')}/api/session", timeout=30.0).raise_for_status().json()["token"]
     return httpx.Client(base_url=url, headers={"x-autohaptics-token": token}, **kwargs)
-
-
-def stop_server(proc: subprocess.Popen) -> None:
-    """SIGTERM the server's process group (uvicorn and the job workers), SIGKILL if it lingers."""
-    if proc.poll() is not None:
-        return
-    os.killpg(proc.pid, signal.SIGTERM)
-    try:
-        proc.wait(timeout=15)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait()
 
 
 def media_clip(name: str) -> Path:

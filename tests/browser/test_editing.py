@@ -82,6 +82,8 @@ def test_threshold_drag_previews_live_then_rederives_the_vibration(page, api, pr
     vib_after = lane_pixels(page, "actuators")
     assert vib_after["hash"] != vib_before["hash"]
     assert vib_after["lit"] > vib_before["lit"], "a lower threshold should switch on more vibration"
+    # Only the changed curves' pyramids were rebuilt (the temperature, fans and sound features were kept).
+    assert 0 < s1["pyramidsBuilt"] < s0["pyramidsBuilt"], (s0["pyramidsBuilt"], s1["pyramidsBuilt"])
 
 
 def test_threshold_slider_commits_from_the_keyboard(page, api, project_copy):

@@ -24,7 +24,7 @@ SPARSE_MIN_FPS = 40.0
 
 
 def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefetch: int = 0,
-               decode: str = "full") -> Iterator[Frame]:
+               decode: str = "full", start_s: float = 0.0) -> Iterator[Frame]:
     """Decode the video stream frame by frame (presentation order); nothing is converted here.
 
     decode : "full" decodes every frame exactly; "nonref" asks FFmpeg to skip non-reference
@@ -40,6 +40,8 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
     prefetch : when > 0, decode in a background thread up to this many frames ahead, so FFmpeg's
         decoder threads keep working while the caller analyses a frame (PyAV releases the GIL
         while decoding). Frames stay valid after the step that yielded them in this mode.
+    start_s : when > 0, seek to the keyframe at or before this time (s) first; the frames then
+        decode exactly as in a pass from the start, but ``Frame.index`` counts from the seek.
     Raises MediaError when there is no video stream or no frame decodes.
     """
     info = info or probe(path)
@@ -48,12 +50,12 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
     if decode not in DECODE_MODES:
         raise ParameterError(f"decode must be one of {DECODE_MODES}, got {decode!r}")
     if prefetch > 0:
-        yield from _prefetched(lambda: _iter_video(info, decode), prefetch)
+        yield from _prefetched(lambda: _iter_video(info, decode, start_s), prefetch)
     else:
-        yield from _iter_video(info, decode)
+        yield from _iter_video(info, decode, start_s)
 
 
-def _iter_video(info: MediaInfo, decode: str = "full") -> Iterator[Frame]:
+def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0) -> Iterator[Frame]:
     report = AudioReport()
     n = 0
     with open_container(info.path) as c:
@@ -69,6 +71,8 @@ def _iter_video(info: MediaInfo, decode: str = "full") -> Iterator[Frame]:
                 stream.thread_type = "SLICE"
         if decode in ("fast", "sparse"):
             stream.codec_context.options = {"skip_loop_filter": "all"}
+        if start_s > 0 and stream.time_base:
+            c.seek(int((start_s + info.start_s) / stream.time_base), backward=True, any_frame=False, stream=stream)
         last_t = -math.inf
         for frame in decode_tolerant(c, stream, report, info.path):
             t = float(frame.time) - info.start_s if frame.time is not None else n / max(info.video.fps, 1e-9)

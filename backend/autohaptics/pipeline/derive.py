@@ -6,7 +6,9 @@ film). Each track comes from its stage: intensity and fusion (vibration), temper
 from __future__ import annotations
 
 import json
+import threading
 import time
+import weakref
 
 import numpy as np
 
@@ -16,6 +18,7 @@ from autohaptics.fusion import vibration_track
 from autohaptics.media import source_block
 from autohaptics.params import DEFAULT_PRESET, GenerateParams
 from autohaptics.pipeline.cache import Analysis
+from autohaptics.pipeline.refine import lacking_saliency
 from autohaptics.records import params_to_dict
 from autohaptics.temperature import temperature_track
 from autohaptics.timebase import TICK_S
@@ -25,8 +28,8 @@ from autohaptics.timeline import Timeline, default_generator
 def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: str = DEFAULT_PRESET) -> Timeline:
     """Turn a feature cache into a timeline (no decoding; milliseconds for a feature film).
 
-    ``stats["needs_analysis"]`` is set when vibrating ticks lack saliency of their own (their
-    weights were borrowed or fell back to A5): analysing them would refine the timeline.
+    ``stats["needs_analysis"]`` is set when vibrating ticks lack saliency of their own that their
+    frames could give (their weights were borrowed or fell back to A5): :func:`refine` computes it.
     """
     params = params or GenerateParams()
     t0 = time.perf_counter()
@@ -43,7 +46,7 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
         tl.vibration[:] = vib
         if params.mode == "multimodal":
             stats["fusion"] = vstats
-            if vstats.get("ticks_estimated"):
+            if lacking_saliency(video, intensity > 0).any():
                 stats["needs_analysis"] = True
     temp_low, temp_high = params.thermal.range_c
     tl.temperature_c[:] = float(np.clip(params.thermal.neutral_c, temp_low, temp_high))
@@ -57,8 +60,7 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
         tl.features["motion"] = np.clip(video.motion / peak, 0.0, 1.0) if peak > 0 else np.zeros(n)
         tl.features["motion_fw_per_s"] = video.motion.astype(np.float64)
         if "fans" in params.tracks:
-            _, stats["airflow"] = fan_track(video.motion, video.cell_motion, video.nearness, video.cut,
-                                            video.depth_mask, params=params.airflow, out=tl.fans)
+            stats["airflow"] = _fans(video, params, tl)
     gen_params = params_to_dict(params)
     gen_params["thresholds"] = dict(params.intensity.thresholds)
     gen_params["temp_low"], gen_params["temp_high"] = temp_low, temp_high
@@ -69,6 +71,33 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
                           **stats.pop("intensity_rule", {})}
     tl.stats = stats
     return tl.validate()
+
+
+# The fan track of recent derives, per video analysis (held weakly) and airflow parameters: the
+# fans depend on nothing else, and recomputing them is most of a threshold commit's derive.
+_FANS: dict[int, tuple] = {}
+_FANS_KEPT = 2
+_FANS_LOCK = threading.Lock()
+
+
+def _fans(video, params: GenerateParams, tl: Timeline) -> dict:
+    """Set ``tl.fans`` and return its stats. A later derive from the same ``video`` with the same
+    ``params.airflow`` shares a read-only copy of the track (float32 [shape=(n, 9, 17)]) instead of
+    recomputing it; the first one's own track stays writable."""
+    with _FANS_LOCK:
+        hit = _FANS.get(id(video))
+    if hit is not None and hit[0]() is video and hit[1] == params.airflow:
+        tl.fans = hit[2]
+        return json.loads(json.dumps(hit[3]))
+    _, stats = fan_track(video.motion, video.cell_motion, video.nearness, video.cut, video.depth_mask,
+                         params=params.airflow, out=tl.fans)
+    kept = tl.fans.copy()
+    kept.flags.writeable = False
+    with _FANS_LOCK:
+        _FANS[id(video)] = (weakref.ref(video), params.airflow, kept, json.loads(json.dumps(stats)))
+        while len(_FANS) > _FANS_KEPT:
+            _FANS.pop(next(iter(_FANS)))
+    return stats
 
 
 def _intensity(analysis: Analysis, params: GenerateParams, tl: Timeline, stats: dict) -> np.ndarray:

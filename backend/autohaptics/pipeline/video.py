@@ -143,6 +143,10 @@ class _Pass:
         self.rgb_width = max(sal_width, params.depth.proxy_width if need_flow else 0)
         self.every = params.video.analysis == "every"
         self.stride = int(params.video.stride)
+        # an analysed frame's saliency is decided when the next analysed frame arrives: the ticks
+        # between them (without a frame of their own) hold its values, so it runs when any of them
+        # vibrates; (tick, width, rgb, luma) of the frame waiting for that decision
+        self.sal_pending = None
         self.out = VideoAnalysis.empty(n)
         self.acc = _Accumulator(self.out)
         self.prev_sig = None  # signature of the previous analysed frame (cut detection)
@@ -171,11 +175,12 @@ class _Pass:
         if centre_tick is not None:
             k = centre_tick
         want_sal = centre_tick is not None and bool(self.need_saliency[k:k + self.stride].any())
-        rgb, gray, luma, sig = self._proxies(frame, analyse_this, want_sal)
+        keep = want_sal or (centre_tick is not None and self.sal_backend is not None)
+        rgb, gray, luma, sig = self._proxies(frame, analyse_this, keep)
         if is_successor:
             self._pair(frame, gray, sig, analyse_this)
         if analyse_this:
-            self._analyse(frame, k, rgb, gray, luma, sig, want_sal)
+            self._analyse(frame, k, rgb, gray, luma, sig, want_sal, centre=centre_tick is not None)
 
     def _proxies(self, frame, analyse_this: bool, want_sal: bool):
         st, fw = self.stages, self.flow_params.proxy_width
@@ -224,7 +229,7 @@ class _Pass:
             self.acc.add_near(pk, res.near)
             self.out.depth_mask[pk] = True
 
-    def _analyse(self, frame, k: int, rgb, gray, luma, sig, want_sal: bool) -> None:
+    def _analyse(self, frame, k: int, rgb, gray, luma, sig, want_sal: bool, *, centre: bool) -> None:
         """Colour, the cut against the previous analysed frame, saliency, and the flow pair to come."""
         out, st, params = self.out, self.stages, self.params
         out.frame_mask[k] = True
@@ -236,21 +241,40 @@ class _Pass:
         self.prev_sig = sig
         if self.need_colour:
             self.acc.add_colour(k, st["colour"].run(mean_colour, rgb))
-        if want_sal:
-            # no wider than the picture itself: upsampling a 64 px film to a 256 px map adds
-            # nothing but work (16x the pixels on each of a 2-hour film's 72,000 ticks)
-            sal_rgb = resized(rgb, min(params.saliency.proxy_width, max(1, frame.width)))
-            sal_gray = cv2.cvtColor(sal_rgb, cv2.COLOR_RGB2GRAY) if params.saliency.motion_weight > 0 else None
-            smap = st["saliency"].run(saliency.saliency_map, sal_rgb, params=params.saliency,
-                                      backend=self.sal_backend, prev_gray=self.prev_sal_gray, luma=luma)
-            self.prev_sal_gray = sal_gray
-            self.acc.add_beta(k, fusion.actuator_weights(smap, params=params.fusion))
+        if centre and self.sal_backend is not None:
+            self.flush_saliency(k)
+            if want_sal:
+                self.acc.add_beta(k, self.weights(frame.width, rgb, luma))
+            else:
+                self.sal_pending = (k, frame.width, rgb, luma)
         if self.need_flow:
             self.pending = (k, gray, rgb, sig, frame.time_s)
+
+    def flush_saliency(self, upto: int) -> None:
+        """The waiting frame's weights, when a tick from it up to ``upto`` (excluded) vibrates."""
+        if self.sal_pending is not None:
+            k, width, rgb, luma = self.sal_pending
+            self.sal_pending = None
+            if self.need_saliency[k:upto].any():
+                self.acc.add_beta(k, self.weights(width, rgb, luma))
+
+    def weights(self, width: int, rgb, luma) -> np.ndarray:
+        """The actuator weights of a frame ``width`` px wide from its saliency map (``rgb``, ``luma``:
+        its proxies)."""
+        params = self.params
+        # no wider than the picture itself: upsampling a 64 px film to a 256 px map adds
+        # nothing but work (16x the pixels on each of a 2-hour film's 72,000 ticks)
+        sal_rgb = resized(rgb, min(params.saliency.proxy_width, max(1, width)))
+        sal_gray = cv2.cvtColor(sal_rgb, cv2.COLOR_RGB2GRAY) if params.saliency.motion_weight > 0 else None
+        smap = self.stages["saliency"].run(saliency.saliency_map, sal_rgb, params=params.saliency,
+                                           backend=self.sal_backend, prev_gray=self.prev_sal_gray, luma=luma)
+        self.prev_sal_gray = sal_gray
+        return fusion.actuator_weights(smap, params=params.fusion)
 
     def finish(self) -> VideoAnalysis:
         """The per-tick results with their stats (ticks held, skipped, computed per stage)."""
         out, n = self.out, self.n
+        self.flush_saliency(n)
         self.acc.finish()
         if self.pending is not None and self.pending[0] > 0 and self.acc.motion_n[self.pending[0]] == 0:
             # the clip ended before the last analysed frame's successor: its motion is unknown, so the
@@ -275,6 +299,41 @@ class _Pass:
         out.stats["frames"] = {"ticks_with_frame": int(out.frame_mask.sum()), "ticks": n,
                                "last_time_s": round(self.last_time, 6)}
         return out
+
+
+def frame_weights(info: media.MediaInfo, n: int, ticks: np.ndarray, *, params: GenerateParams,
+                  need_flow: bool, need_colour: bool, cancel: CancelToken | None = None,
+                  group_s: float = 10.0) -> dict[int, np.ndarray]:
+    """The actuator weights of the frames the video pass analyses for ``ticks`` (ticks with a frame
+    of their own: the first of a ``video.stride`` group), decoding only around them.
+
+    Each run of ticks (runs less than ``group_s`` seconds apart share one) is decoded from the
+    keyframe before it; the proxies are made as in :func:`video_pass` with the same ``need_flow``
+    and ``need_colour``, so the weights are the ones a full pass computes (with
+    ``saliency.motion_weight`` 0: the motion cue depends on the frame analysed before).
+    Returns {tick: float32 [shape=(9,)]}.
+    """
+    targets = np.unique(np.asarray(ticks, dtype=np.int64))
+    mask = np.zeros(n, bool)
+    mask[targets] = True
+    vp = _Pass(info, n, params, mask, need_flow, need_colour)
+    out: dict[int, np.ndarray] = {}
+    breaks = np.flatnonzero(np.diff(targets) * TICK_S > group_s) + 1
+    for run in np.split(targets, breaks) if targets.size else []:
+        first, last = int(run[0]), int(run[-1])
+        stream = media.iter_video(info.path, info=info, decode=params.video.decode,
+                                  start_s=max(0.0, (first - vp.stride - 1) * TICK_S))
+        try:
+            for frame, k in centre_frames(stream, n, vp.stride):
+                if frame.time_s > (last + vp.stride + 2) * TICK_S:
+                    break
+                if k is not None and mask[k] and k not in out:
+                    rgb, _, luma, _ = vp._proxies(frame, True, True)
+                    out[k] = vp.weights(frame.width, rgb, luma).astype(np.float32)
+                    check_cancel(cancel)
+        finally:
+            stream.close()
+    return out
 
 
 def centre_frames(frames, n: int, stride: int = 1):

@@ -78,11 +78,12 @@ async def _services(app: FastAPI, settings: Settings):
     """The store (after its start-up recovery), the composer, the job runner and the chair service."""
     store = Store(settings.data_dir)
     interrupted = store.recover()
-    if interrupted:
-        log.warning("%d job(s) were interrupted by a server restart", len(interrupted))
     composer = Composer(store)
     runner = JobRunner(store, workers=settings.jobs, mp_context=settings.mp_context, composer=composer)
     await anyio.to_thread.run_sync(runner.start)
+    if interrupted:
+        log.warning("%d job(s) interrupted by a server restart are queued again", len(interrupted))
+        await anyio.to_thread.run_sync(runner.resume, interrupted)
     chair_service = ChairService(store, composer)
     chair_service.start()
     app.state.store, app.state.composer, app.state.runner = store, composer, runner
@@ -92,6 +93,7 @@ async def _services(app: FastAPI, settings: Settings):
     finally:
         await anyio.to_thread.run_sync(chair_service.close)  # STOP before anything else goes
         await anyio.to_thread.run_sync(runner.stop)
+        await anyio.to_thread.run_sync(composer.writer.close)  # the last re-derive reaches the disk
         store.close()
 
 

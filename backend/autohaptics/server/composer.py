@@ -31,9 +31,10 @@ from autohaptics.errors import ParameterError
 from autohaptics.formats.importing import parse_timeline
 from autohaptics.timeline import edits as edit_ops
 from autohaptics.timeline import wire as binary
-from autohaptics.timeline.npz import load_npz, save_npz
+from autohaptics.timeline.npz import load_npz
 from autohaptics.server.store import Conflict, NotFound, Store, new_id
 from autohaptics.server.waveform import cached_peaks
+from autohaptics.server.writer import LayerWriter
 from autohaptics.timebase import TICK_S
 from autohaptics.timeline import Timeline
 
@@ -84,6 +85,7 @@ class Composer:
         self._bins: OrderedDict[tuple, bytes] = OrderedDict()
         self._waveform_locks: dict[str, threading.Lock] = {}
         self._size = cache_size
+        self.writer = LayerWriter(store, self._written)
 
     # -------------------------------------------------------------------- loading
     def _cached(self, path: Path, load) -> Any:
@@ -112,8 +114,21 @@ class Composer:
                 self._files.popitem(last=False)
 
     def generated(self, pid: str) -> Timeline | None:
-        """The generated timeline of ``pid``, or None before the first successful job."""
-        return self._cached(self.store.generated_path(pid), load_npz)
+        """The generated timeline of ``pid`` (the latest re-derive, even before its file is written),
+        or None before the first successful job."""
+        pending = self.writer.pending(pid)
+        return pending if pending is not None else self._cached(self.store.generated_path(pid), load_npz)
+
+    def flush(self, pid: str | None = None) -> None:
+        """Wait until ``pid``'s (None: every project's) re-derived layer is written (before a job's
+        outputs replace it, a duplicate copies it, or the server stops)."""
+        self.writer.flush(pid)
+
+    def _written(self, pid: str, revision: int, key: tuple, tl: Timeline) -> None:
+        """The writer stored ``tl``: the file's new identity keeps it in memory (unless a newer
+        re-derive waits to be written)."""
+        if self.writer.pending(pid) is tl:
+            self._remember(self.store.generated_path(pid), key, tl)
 
     def analysis(self, pid: str) -> pipeline.Analysis | None:
         return self._cached(self.store.analysis_path(pid), pipeline.Analysis.load)
@@ -154,11 +169,11 @@ class Composer:
 
     # -------------------------------------------------------------------- derive
     def rederive(self, pid: str, doc: dict) -> Derived | None:
-        """Derive from the cached analysis with parameters ``doc`` and store the result (.npz);
-        the derived timeline stays in memory, so the next composition does not read it back.
+        """Derive from the cached analysis with parameters ``doc``; the derived timeline is the
+        project's generated layer at once (in memory) and its .npz is written in the background.
 
         Returns None when there is no cache or ``doc`` changes analysis parameters (a job is
-        needed). ``seconds`` covers loading the cache, deriving and writing the timeline.
+        needed). ``seconds`` covers loading the cache and deriving.
         """
         t0 = time.perf_counter()
         analysis = self.analysis(pid)
@@ -169,13 +184,8 @@ class Composer:
             return None
         project = self.store.get_project(pid)
         tl = derive_timeline(analysis, doc, name=project["name"])
-        tmp = self.store.work_dir / f"derive-{new_id()}.npz"
-        try:
-            save_npz(tl, tmp)
-            revision, key = self.store.replace_generated(pid, tmp, params=doc)
-        finally:
-            tmp.unlink(missing_ok=True)
-        self._remember(self.store.generated_path(pid), key, tl)
+        revision = self.store.rederived(pid, params=doc)
+        self.writer.put(pid, revision, tl)  # answered now, written after (.writer)
         return Derived(revision=revision, seconds=time.perf_counter() - t0,
                        needs_analysis=bool(tl.stats.get("needs_analysis")))
 

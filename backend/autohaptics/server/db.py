@@ -12,7 +12,6 @@ from autohaptics.errors import AutohapticsError
 DB_NAME = "autohaptics.sqlite3"
 GENERATED = "generated.npz"
 ACTIVE_JOB_STATES = ("queued", "running")
-INTERRUPTED = "interrupted by a server restart"
 ID_PATTERN = re.compile(r"^[0-9a-f]{32}$")
 
 SCHEMA = """

@@ -8,9 +8,9 @@ Life of a job:
    or forkserver context). Waiting here rather than in the pool makes cancelling a queued job
    immediate.
 2. In the worker, :func:`run_job` sends ``("started", id, time)`` then ``("progress", id, stage,
-   fraction)`` messages on the Manager queue, runs :func:`pipeline.analyse` with the job's Manager
-   Event as the cancel token, derives the timeline, and writes ``analysis.npz`` and
-   ``generated.npz`` into the work folder (never into the project folder).
+   fraction)`` messages, runs :func:`pipeline.analyse` (or :func:`pipeline.refine`) with the job's
+   Manager Event as the cancel token, derives, and writes ``analysis.npz`` and ``generated.npz``
+   into the work folder (never into the project folder).
 3. A reader thread turns queue messages into the job's live state (``running``, progress, stage),
    stores them and forwards them to SSE subscribers.
 4. When the future completes, a finisher thread moves the outputs into the project
@@ -18,11 +18,11 @@ Life of a job:
    message) or ``cancelled`` (the pipeline raised CancelledError, or the job was cancelled while
    queued; a job whose cancel was requested never replaces the timeline).
 
-If the parameters of a project changed while its job ran and they need no other analysis, the
-finisher derives the timeline again with the current ones. Deleting a project cancels its job;
-the job's outputs are then dropped. On shutdown running jobs are cancelled and recorded as
-interrupted by a server restart (as :meth:`Store.recover` does after a crash), so they can be
-re-run.
+Parameters changed while a job ran and needing no other analysis are derived with at its end (and
+refined again if they lack saliency). Deleting a project cancels its job. On shutdown running jobs are cancelled and left queued; the
+next start (as after a crash) re-queues them with their project's latest parameters
+(:meth:`Store.recover`) and runs them again (:meth:`JobRunner.resume`: a refinement where the cache
+serves those parameters, else a new analysis).
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ from autohaptics.errors import AutohapticsError, CancelledError
 from autohaptics.progress import check_cancel
 from autohaptics.runner import Reporter, WorkerPool, queue_sender
 from autohaptics.server.sse import Subscribers, Subscription
-from autohaptics.server.store import GENERATED, INTERRUPTED, Conflict, NotFound, Store, now_iso
+from autohaptics.server.store import GENERATED, Conflict, NotFound, Store, now_iso
 
 log = logging.getLogger("autohaptics.server.jobs")
 
@@ -52,7 +52,8 @@ TERMINAL = ("done", "failed", "cancelled")
 def run_job(spec: dict, events, cancel) -> dict:
     """Worker entry point: analyse the media, derive the timeline, write both into ``spec["work_dir"]``.
 
-    spec : {job_id, media_path, work_dir, params (stored parameters), name (display name)}.
+    spec : {job_id, media_path, work_dir, params (stored parameters), name (display name), refine
+    (optional: refine the project's cache at ``analysis_path`` instead of analysing again)}.
     Raises CancelledError when ``cancel`` is set, MediaError / ParameterError for unusable input.
     """
     from autohaptics import pipeline
@@ -65,8 +66,15 @@ def run_job(spec: dict, events, cancel) -> dict:
     started = now_iso()
     reporter.event("started", started)
     params, _ = params_from_doc(spec["params"])
-    analysis = pipeline.analyse(spec["media_path"], params, progress=reporter, cancel=cancel,
-                                between_passes=release_between_passes)
+    cached = spec.get("refine") and Path(spec["analysis_path"]).is_file()
+    if cached:  # the cache serves these parameters: only the saliency the derive lacks is computed
+        analysis = pipeline.Analysis.load(spec["analysis_path"])
+        estimate = derive_timeline(analysis, spec["params"], name=spec["name"])
+        analysis = pipeline.refine(spec["media_path"], analysis, params, estimate.features["intensity"] > 0,
+                                   progress=reporter, cancel=cancel)
+    else:
+        analysis = pipeline.analyse(spec["media_path"], params, progress=reporter, cancel=cancel,
+                                    between_passes=release_between_passes)
     check_cancel(cancel)
     work = Path(spec["work_dir"])
     if not work.is_dir():  # the project was deleted meanwhile
@@ -74,7 +82,7 @@ def run_job(spec: dict, events, cancel) -> dict:
     analysis.save(work / "analysis.npz")
     tl = derive_timeline(analysis, spec["params"], name=spec["name"])
     save_npz(tl, work / GENERATED)
-    return {"started_at": started, "n_ticks": tl.n_ticks}
+    return {"started_at": started, "n_ticks": tl.n_ticks, "needs_analysis": bool(tl.stats.get("needs_analysis"))}
 
 
 # ------------------------------------------------------------------- server side
@@ -126,7 +134,7 @@ class JobRunner:
 
     def stop(self) -> None:
         """Cancel every job, stop the pool, the threads and the Manager; jobs that did not complete
-        are recorded as interrupted by a server restart (re-runnable)."""
+        stay queued in the store, and the next start resumes them."""
         with self._lock:
             self._stopping = True
             live = list(self._live.values())
@@ -149,31 +157,55 @@ class JobRunner:
         with self._lock:
             left = list(self._live.values())
             self._live.clear()
-        for job in left:
-            self._publish_final(job, self.store.finish_job(job.job_id, "failed", error=INTERRUPTED,
-                                                           started_at=job.started_at))
+        for job in left:  # stays queued in the store: the next start resumes it (Store.recover)
+            job.subscribers.close_all()
         if self._started:
             self.pool.shutdown()
             self._started = False
 
     # ------------------------------------------------------------------ actions
-    def submit(self, project: dict, params: dict) -> dict:
-        """Queue a generation job for ``project`` with stored parameters ``params``; Conflict when one runs."""
+    def submit(self, project: dict, params: dict, *, refine: bool = False) -> dict:
+        """Queue a generation job for ``project`` with stored parameters ``params``; Conflict when one runs.
+
+        refine : the project's feature cache serves ``params``: compute only the saliency a derive
+        lacks (:func:`pipeline.refine`), not the whole analysis."""
         if not self._started or self._stopping:
             raise Conflict("the job runner is not running")
-        cancel = self.pool.cancel_event()
         job = self.store.create_job(project["id"], params)
+        self._queue(project, job, refine=refine)
+        return job
+
+    def resume(self, jobs: list[dict]) -> None:
+        """Queue again the jobs a restart interrupted (:meth:`Store.recover`), each with its project's
+        current parameters: a refinement where the feature cache serves them, else a new analysis."""
+        from autohaptics import pipeline
+        from autohaptics.params import params_from_doc
+
+        for job in jobs:
+            try:
+                project = self.store.get_project(job["project_id"])
+                cache = self.store.analysis_path(project["id"])
+                refine = cache.is_file() and pipeline.reusable(pipeline.Analysis.load(cache),
+                                                               params_from_doc(job["params"])[0])
+                self._queue(project, job, refine=refine)
+            except Exception as exc:  # that one project's files are unusable: say so, resume the others
+                log.exception("resuming job %s", job["id"])
+                self.store.finish_job(job["id"], "failed", error=f"could not be resumed: {exc}")
+
+    def _queue(self, project: dict, job: dict, *, refine: bool) -> None:
+        cancel = self.pool.cancel_event()
+        params = job["params"]
         media_path = str(self.store.media_path(project))
         live = _Live(job_id=job["id"], project_id=project["id"], params=params, name=project["name"],
                      media_path=media_path, cancel=cancel,
                      previous=project["params"] if project.get("has_timeline") else None)
         spec = {"job_id": job["id"], "media_path": media_path, "work_dir": str(self.store.job_work_dir(job["id"])),
-                "params": params, "name": project["name"]}
+                "params": params, "name": project["name"], "refine": refine,
+                "analysis_path": str(self.store.analysis_path(project["id"]))}
         with self._lock:
             self._live[job["id"]] = live
             self._pending.append((live, spec))
             self._dispatch()
-        return job
 
     def _dispatch(self) -> None:
         """Hand waiting jobs to the pool while fewer than ``workers`` are in it (call with the lock held).
@@ -308,15 +340,18 @@ class JobRunner:
             return  # stop() records it as interrupted
         # Under the project's parameter lock: a parameter change either lands before the current
         # parameters are read here (and is derived with), or after the job is gone.
+        more = False
         with self.params_lock(live.project_id):
             params = live.params if status == "done" else live.previous  # a stopped job: back to the timeline's
             if status == "done":
                 try:
-                    params = self._current_params(live)
+                    params, more = self._current_params(live, result)
                 except Exception as exc:  # the outputs are unusable: report, keep the previous timeline
                     status, error = "failed", f"{type(exc).__name__}: {exc}"
             if error:
                 error = error.replace(live.media_path, live.name)
+            if self.composer is not None:  # a re-derived layer still being written goes first
+                self.composer.flush(live.project_id)
             try:
                 job = self.store.finish_job(job_id, status, error=error, params=params,
                                             started_at=(result or {}).get("started_at") or live.started_at)
@@ -327,6 +362,19 @@ class JobRunner:
                 live.status = job["status"] if job else "cancelled"
                 self._live.pop(job_id, None)
         self._publish_final(live, job)
+        if more and job is not None and job["status"] == "done" and not self._stopping:
+            self._refine_again(live.project_id, params)
+
+    def _refine_again(self, project_id: str, params: dict) -> None:
+        """A refinement for parameters whose derive still lacks saliency (they changed during the job)."""
+        from autohaptics import pipeline
+        from autohaptics.params import params_from_doc
+
+        try:
+            self.submit(self.store.get_project(project_id), params,
+                        refine=pipeline.refinable(params_from_doc(params)[0]))
+        except (Conflict, NotFound):  # a job of the project started meanwhile, or it was deleted
+            pass
 
     def params_lock(self, project_id: str) -> threading.Lock:
         """Held while a project's parameters are changed (PUT params) and while its job finishes,
@@ -334,15 +382,17 @@ class JobRunner:
         with self._lock:
             return self._params_locks.setdefault(project_id, threading.Lock())
 
-    def _current_params(self, live: _Live) -> dict:
+    def _current_params(self, live: _Live, result: dict | None) -> tuple[dict, bool]:
         """Parameters to derive with at the end of a job: the project's current ones when they changed
-        meanwhile and need no other analysis (the timeline is derived again), else the job's."""
+        meanwhile and need no other analysis (the timeline is derived again), else the job's; and
+        whether the timeline derived with them still lacks saliency (a refinement should follow)."""
+        more = bool((result or {}).get("needs_analysis"))
         try:
             current = self.store.get_project(live.project_id)["params"]
         except NotFound:
-            return live.params
+            return live.params, False
         if current == live.params or self.composer is None:
-            return live.params
+            return live.params, more
         from autohaptics import pipeline
         from autohaptics.params import params_from_doc
         from autohaptics.server.composer import derive_timeline
@@ -352,9 +402,10 @@ class JobRunner:
         analysis = pipeline.Analysis.load(work / "analysis.npz")
         p, _ = params_from_doc(current)
         if not pipeline.reusable(analysis, p):
-            return live.params
-        save_npz(derive_timeline(analysis, current, name=live.name), work / GENERATED)
-        return current
+            return live.params, more
+        tl = derive_timeline(analysis, current, name=live.name)
+        save_npz(tl, work / GENERATED)
+        return current, bool(tl.stats.get("needs_analysis"))
 
 
 def _outcome(future: Future | None, live: _Live) -> tuple[str, str | None, dict | None]:

@@ -34,7 +34,6 @@ from autohaptics.server.db import (  # noqa: F401  the store's own errors and id
     ACTIVE_JOB_STATES,
     DB_NAME,
     GENERATED,
-    INTERRUPTED,
     SCHEMA,
     Conflict,
     NotFound,
@@ -110,24 +109,30 @@ class Store:
         return self.work_dir / check_id(job_id, "job")
 
     # ------------------------------------------------------------------ recovery
-    def recover(self) -> list[str]:
-        """After a (re)start: jobs left queued/running failed as interrupted; stray uploads and work
-        folders removed. Returns the ids of the interrupted jobs."""
-        with self._tx() as db:
-            rows = db.execute(f"SELECT id, project_id FROM jobs WHERE status IN {ACTIVE_JOB_STATES}").fetchall()
-            stamp = now_iso()
-            for r in rows:
-                db.execute("UPDATE jobs SET status='failed', error=?, finished_at=? WHERE id=?",
-                           (INTERRUPTED, stamp, r["id"]))
-                db.execute("UPDATE projects SET status='failed', updated_at=? WHERE id=? AND job_id=?",
-                           (stamp, r["project_id"], r["id"]))
+    def recover(self) -> list[dict]:
+        """After a (re)start: stray uploads and work folders removed; jobs left queued or running
+        queued again from the start (progress 0) with their project's current parameters (the
+        designer's latest), their projects shown as running, never as failed. Returns those jobs,
+        oldest first, for :meth:`JobRunner.resume`."""
         for d in (self.uploads_dir, self.work_dir):
             for p in d.iterdir():
                 if p.is_dir():
                     shutil.rmtree(p, ignore_errors=True)
                 else:
                     p.unlink(missing_ok=True)
-        return [r["id"] for r in rows]
+        with self._tx() as db:
+            rows = db.execute(f"SELECT j.id, j.project_id, p.params FROM jobs j JOIN projects p ON"
+                              f" p.id = j.project_id WHERE j.status IN {ACTIVE_JOB_STATES}"
+                              f" ORDER BY j.created_at").fetchall()
+            stamp = now_iso()
+            for r in rows:
+                db.execute("UPDATE jobs SET status='queued', progress=0, stage='', started_at=NULL, params=?"
+                           " WHERE id=?", (r["params"], r["id"]))
+                db.execute("UPDATE projects SET status='running', job_id=?, updated_at=? WHERE id=?",
+                           (r["id"], stamp, r["project_id"]))
+        for r in rows:
+            self.job_work_dir(r["id"]).mkdir(exist_ok=True)
+        return [self.get_job(r["id"]) for r in rows]
 
     # ------------------------------------------------------------------ projects
     def create_project(self, upload: Path, *, media_file: str, media_type: str, name: str, source: dict,
@@ -303,21 +308,26 @@ class Store:
                 self._all(f"SELECT id FROM jobs WHERE status IN {ACTIVE_JOB_STATES} ORDER BY created_at")]
 
     # ------------------------------------------------------------ generated data
-    def replace_generated(self, pid: str, write_to: Path, *, params: dict) -> tuple[int, tuple]:
+    def rederived(self, pid: str, *, params: dict) -> int:
+        """Record a re-derive of ``pid``'s generated layer with ``params`` (its file is written after,
+        :meth:`place_generated`): store the parameters and bump the revision; returns the new one."""
+        with self._tx() as db:
+            self._require(db, pid)
+            db.execute("UPDATE projects SET revision=revision+1, has_timeline=1, params=?, updated_at=?,"
+                       " status=CASE WHEN status='running' THEN status ELSE 'ready' END WHERE id=?",
+                       (json.dumps(params), now_iso(), pid))
+            return int(db.execute("SELECT revision FROM projects WHERE id=?", (pid,)).fetchone()[0])
+
+    def place_generated(self, pid: str, write_to: Path) -> tuple:
         """Move a freshly written ``generated.npz`` (``write_to``, on the data folder's file system) into
-        place, store ``params`` and bump the revision; returns the new revision and the new file's
-        identity (inode, mtime, size), for caches keyed by it."""
+        place; returns the new file's identity (inode, mtime, size), for caches keyed by it.
+        NotFound when the project is gone."""
         with self._tx() as db:
             self._require(db, pid)
             path = self.generated_path(pid)
             os.replace(write_to, path)
             st = path.stat()
-            stamp = now_iso()
-            db.execute("UPDATE projects SET revision=revision+1, has_timeline=1, params=?, updated_at=?,"
-                       " status=CASE WHEN status='running' THEN status ELSE 'ready' END WHERE id=?",
-                       (json.dumps(params), stamp, pid))
-            revision = int(db.execute("SELECT revision FROM projects WHERE id=?", (pid,)).fetchone()[0])
-            return revision, (st.st_ino, st.st_mtime_ns, st.st_size)
+            return (st.st_ino, st.st_mtime_ns, st.st_size)
 
     def edits(self, pid: str) -> dict:
         """``{revision, cursor, ops}``: ops[:cursor] are applied, ops[cursor:] can be redone."""

@@ -216,6 +216,26 @@ def sample_scene(duration_s: float = 10.0) -> Scene:
     )
 
 
+def left_boom_right_hum_scene() -> Scene:
+    """Two sounds at very different levels, each with a bright object (14 s; the refinement tests):
+
+    - 3-4 s a loud 50 Hz boom (-10 dBFS) while a bright disc sits on the LEFT (x = 0.2, 2-5 s);
+    - 9-11 s a quiet 60 Hz hum (-26 dBFS) while a bright square sits on the RIGHT (x = 0.8, 8-12 s);
+    - a textured blue-grey shot, a hard cut at 7 s to a brown one.
+
+    At thresholds near 1 only the boom vibrates; at 0.3 the hum does too, on the right actuators.
+    """
+    return Scene(
+        14.0,
+        name="left_boom_right_hum",
+        background=(Segment(0, 7, (50, 55, 70), texture=Texture("noise", 0.08, 0.3, seed=1)),
+                    Segment(7, 14, (70, 50, 45), texture=Texture("noise", 0.07, 0.3, seed=2))),
+        shapes=(Shape("circle", (255, 255, 240), t_on=2, t_off=5, xy0=(0.2, 0.5), size0=(0.2, 0.35)),
+                Shape("rect", (250, 250, 250), t_on=8, t_off=12, xy0=(0.8, 0.5), size0=(0.2, 0.35))),
+        audio=(Tone(3, 4, 50.0, level_dbfs=-10.0, ramp_s=0.02), Tone(9, 11, 60.0, level_dbfs=-26.0, ramp_s=0.02)),
+    )
+
+
 def check_interval(t0: float, t1: float, what: str) -> None:
     """ParameterError unless 0 <= t0 < t1, both finite (seconds of a ``what``)."""
     if not (math.isfinite(t0) and t0 >= 0 and t1 > t0):

@@ -4,7 +4,9 @@
  *
  * The fan grid (the `fans` block, 153 bytes a tick: 11 MB for two hours) may come after the rest
  * (`?blocks=`): the lanes only draw `fan_activity`; the grid is for the overlay and copying.
- * `withFans()` returns the same timeline with it.
+ * `withFans()` returns the same timeline with it. Built with the timeline it replaces, it keeps
+ * that one's pyramids for the curves whose samples did not change (a threshold commit changes the
+ * vibration, not the temperature, fans or features): only the changed lanes are rebuilt.
  */
 
 /** The blocks of the first request: everything but the fan grid. */
@@ -23,8 +25,9 @@ export class TimelineData {
   /**
    * @param {import("./binary.js").ParsedBin} parsed
    * @param {GridShape} shape the chair's actuators and fan grid (data/layout.js)
+   * @param {TimelineData|null} [previous] the timeline this one replaces (its unchanged pyramids are kept)
    */
-  constructor(parsed, shape) {
+  constructor(parsed, shape, previous = null) {
     const { header, blocks } = parsed;
     this.shape = shape;
     const nAct = shape.actuatorIds.length;
@@ -61,13 +64,21 @@ export class TimelineData {
       if (name.startsWith("features.") && b.data instanceof Uint8Array) this.features.set(name.slice(9), b.data);
     }
 
+    /** how many curves' pyramids this timeline built (the others were kept from `previous`) */
+    this.pyramidsBuilt = 0;
+    const pyramid = (/** @type {any} */ samples, /** @type {MinMaxPyramid|undefined} */ before) => {
+      if (before && sameSamples(before.levels[0].min, samples)) return before;
+      this.pyramidsBuilt += 1;
+      return new MinMaxPyramid(samples);
+    };
     /** @type {MinMaxPyramid[]} */
-    this.vibrationPyr = shape.actuatorIds.map((_, i) => new MinMaxPyramid(channel(this.vibration, n, nAct, i)));
-    this.temperaturePyr = new MinMaxPyramid(this.temperature);
-    this.fanActivityPyr = new MinMaxPyramid(this.fanActivity);
+    this.vibrationPyr = shape.actuatorIds.map((_, i) =>
+      pyramid(channel(this.vibration, n, nAct, i), previous?.vibrationPyr[i]));
+    this.temperaturePyr = pyramid(this.temperature, previous?.temperaturePyr);
+    this.fanActivityPyr = pyramid(this.fanActivity, previous?.fanActivityPyr);
     /** @type {Map<string, MinMaxPyramid>} */
     this.featurePyr = new Map();
-    for (const [name, data] of this.features) this.featurePyr.set(name, new MinMaxPyramid(data));
+    for (const [name, data] of this.features) this.featurePyr.set(name, pyramid(data, previous?.featurePyr.get(name)));
     let tmin = Infinity;
     let tmax = -Infinity;
     for (let i = 0; i < n; i++) {
@@ -79,9 +90,9 @@ export class TimelineData {
     this.temperatureMax = tmax;
   }
 
-  /** @param {ArrayBuffer} buf @param {GridShape} shape */
-  static fromBuffer(buf, shape) {
-    return new TimelineData(parseTimelineBin(buf), shape);
+  /** @param {ArrayBuffer} buf @param {GridShape} shape @param {TimelineData|null} [previous] */
+  static fromBuffer(buf, shape, previous = null) {
+    return new TimelineData(parseTimelineBin(buf), shape, previous);
   }
 
   /** The fan grid is here (or not yet). */
@@ -150,6 +161,13 @@ export class TimelineData {
 function fansOf(block, n, shape) {
   checkShape(block.info, [n, shape.fanRows, shape.fanCols]);
   return /** @type {Uint8Array} */ (block.data);
+}
+
+/** Same length and values. @param {ArrayLike<number>} a @param {ArrayLike<number>} b */
+function sameSamples(a, b) {
+  if (a.length !== b.length || a.constructor !== b.constructor) return false;
+  for (let i = 0; i < a.length; i++) if (a[i] !== b[i]) return false;
+  return true;
 }
 
 /**

@@ -9,7 +9,7 @@ from autohaptics.server.sse import event_stream
 from autohaptics.server.deps import RunnerDep, StoreDep, ComposerDep
 from autohaptics.server.jobs import TERMINAL
 from autohaptics.server.schemas import JobAccepted, JobOut, ParamsIn, ParamsOut
-from autohaptics.params import resolve_doc, same_analysis
+from autohaptics.params import params_from_doc, resolve_doc, same_analysis
 
 router = APIRouter(tags=["jobs"])
 
@@ -59,7 +59,11 @@ def apply_params(project_id: str, doc: dict, store, runner, composer) -> dict:
     if derived is not None:
         job = None
         if derived.needs_analysis and runner.active_job(project_id) is None:
-            job = runner.submit(store.get_project(project_id), doc)
+            # the ticks that now vibrate lack saliency: compute just theirs (a running job derives
+            # with these parameters when it ends, and refines again if they still lack some)
+            from autohaptics.pipeline.refine import refinable  # the pipeline loads on first use
+
+            job = runner.submit(store.get_project(project_id), doc, refine=refinable(params_from_doc(doc)[0]))
         return {"revision": derived.revision, "derived": True, "seconds": derived.seconds, "job": job}
     project = store.get_project(project_id)
     running = runner.active_job(project_id)

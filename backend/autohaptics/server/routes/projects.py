@@ -98,8 +98,9 @@ def delete_project(project_id: str, store: StoreDep, runner: RunnerDep) -> Respo
 
 
 @router.post("/api/projects/{project_id}/duplicate", status_code=201, response_model=ProjectOut)
-def duplicate_project(project_id: str, store: StoreDep) -> dict:
+def duplicate_project(project_id: str, store: StoreDep, composer: ComposerDep) -> dict:
     source = store.get_project(project_id)
+    composer.flush(project_id)  # the copy takes the latest re-derive's file
     return store.duplicate_project(project_id, name=display_name(f"{source['name']} (copy)", basename=False))
 
 

@@ -17,6 +17,7 @@ export function debugState(page) {
     nOps: session ? session.nOps : null,
     ready: !!data,
     dataRevision: data ? data.revision : null,
+    pyramidsBuilt: data ? data.pyramidsBuilt : null,
     drawnRevision: page.drawnRevision ?? null,
     nTicks: data ? data.nTicks : null,
     playing: player ? player.playing : false,

@@ -77,7 +77,7 @@ export class TimelineLoader {
     if (page.disposed || seq !== this.seq) return; // a newer load is under way
     let data;
     try {
-      data = TimelineData.fromBuffer(buf, page.layout);
+      data = TimelineData.fromBuffer(buf, page.layout, page.data);
     } catch (err) {
       page.showNotice(`The timeline could not be read: ${errorText(err)}`);
       return;

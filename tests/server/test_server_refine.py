@@ -1,0 +1,93 @@
+"""Threshold commits through the API on a generated film with known answers: raising starts no work,
+lowering starts a refinement (saliency of the newly vibrating ticks only) whose timeline equals a
+fresh generate at those thresholds, and a restart in the middle of one leaves the project usable
+with its parameters.
+
+The film (64 x 36, 5 fps, 14 s): a loud boom at 3-4 s with a bright disc on the LEFT, a quiet hum
+at 9-11 s with a bright square on the RIGHT.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+
+from autohaptics import pipeline
+from autohaptics import testing as synth
+from autohaptics.params import params_from_doc, resolve_doc
+from autohaptics.server.app import create_app
+from autohaptics.server.settings import Settings
+
+HIGH = {"sharpness": 0.95, "booming": 0.95, "low_energy": 0.95, "loudness": 0.95}
+LOW = {"sharpness": 0.3, "booming": 0.3, "low_energy": 0.3, "loudness": 0.3}
+SCENE = synth.left_boom_right_hum_scene()
+
+
+@pytest.fixture(scope="module")
+def film(tmp_path_factory):
+    return synth.write_scene(tmp_path_factory.mktemp("refine") / "film.mp4", SCENE, width=64, height=36, fps=5)
+
+
+def wait_done(client: TestClient, job_id: str) -> dict:
+    with client.stream("GET", f"/api/jobs/{job_id}/events") as resp:
+        stages = [line for line in resp.iter_lines() if line.startswith("data: ")]
+    job = client.get(f"/api/jobs/{job_id}").json()
+    assert job["status"] == "done", (job, stages[-3:])
+    return job
+
+
+def vibration(client: TestClient, pid: str) -> np.ndarray:
+    return np.asarray(client.get(f"/api/projects/{pid}/timeline").json()["tracks"]["vibration"], dtype=float)
+
+
+def test_threshold_commits_refine_only_what_they_wake(tmp_path, film):
+    settings = Settings(data_dir=tmp_path / "data", frontend_dir=None)
+    with TestClient(create_app(settings)) as client:
+        r = client.post("/api/projects", files={"file": ("film.mp4", film.read_bytes(), "video/mp4")},
+                        data={"mode": "multimodal"})
+        project = r.json()
+        wait_done(client, project["job"]["id"])
+        pid = project["id"]
+        # Raising wakes no tick: derived at once, no job.
+        r = client.put(f"/api/projects/{pid}/params", json={"thresholds": HIGH})
+        assert r.status_code == 200 and r.json()["derived"] and r.json()["job"] is None
+        # Lowering wakes the hum: derived at once with estimated weights, and a refinement starts.
+        r = client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW})
+        assert r.status_code == 200 and r.json()["derived"] and r.json()["job"] is not None
+        job = wait_done(client, r.json()["job"]["id"])
+        assert job["params"]["thresholds"] == LOW and job["stage"] in ("saliency", "done")
+        refined = vibration(client, pid)
+        stored = client.get(f"/api/projects/{pid}").json()
+        assert stored["status"] == "ready" and stored["params"]["thresholds"] == LOW
+        # The same timeline as a fresh generate at the lowered thresholds.
+        params, _ = params_from_doc(resolve_doc(stored["params"])[0])
+        fresh = pipeline.generate(film, params)
+        np.testing.assert_allclose(refined, fresh.vibration, rtol=0, atol=5.1e-5)  # the document has 4 decimals
+        assert refined[91:109].max() > 0  # the hum vibrates
+        # Committing the same thresholds again wakes nothing new: no job.
+        r = client.put(f"/api/projects/{pid}/params", json={"thresholds": dict(LOW, loudness=0.31)})
+        assert r.status_code == 200 and r.json()["job"] is None
+
+
+def test_a_restart_during_a_refinement_keeps_the_project_usable(tmp_path, film):
+    settings = Settings(data_dir=tmp_path / "data", frontend_dir=None)
+    with TestClient(create_app(settings)) as client:
+        r = client.post("/api/projects", files={"file": ("film.mp4", film.read_bytes(), "video/mp4")},
+                        data={"mode": "multimodal"})
+        pid = r.json()["id"]
+        wait_done(client, r.json()["job"]["id"])
+        assert client.put(f"/api/projects/{pid}/params", json={"thresholds": HIGH}).json()["job"] is None
+        r = client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW})
+        job_id = r.json()["job"]["id"]
+    # Stopped whatever the job had done: the next start runs it again and nothing shows as failed.
+    with TestClient(create_app(settings)) as client:
+        p = client.get(f"/api/projects/{pid}").json()
+        assert p["status"] != "failed" and p["has_timeline"] and p["params"]["thresholds"] == LOW
+        job = client.get(f"/api/jobs/{job_id}").json()
+        if job["status"] != "done":  # it had not finished before the stop: resumed
+            wait_done(client, job_id)
+        assert client.get(f"/api/projects/{pid}").json()["status"] == "ready"
+        doc = client.get(f"/api/projects/{pid}/timeline").json()
+        assert doc["generator"]["params"]["thresholds"] == LOW
+        assert client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW}).json()["job"] is None
