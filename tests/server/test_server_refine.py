@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fastapi.testclient import TestClient
 
 from autohaptics import pipeline
 from autohaptics import testing as synth
@@ -19,6 +18,10 @@ from autohaptics.params import params_from_doc, resolve_doc
 from autohaptics.server.app import create_app
 from autohaptics.server.settings import Settings
 
+from service_client import LocalClient
+
+# The thesis's vibration rule, under which lowering the thresholds wakes the steady hum (the default
+# follows events and leaves a steady hum still at these thresholds).
 HIGH = {"sharpness": 0.95, "booming": 0.95, "low_energy": 0.95, "loudness": 0.95}
 LOW = {"sharpness": 0.3, "booming": 0.3, "low_energy": 0.3, "loudness": 0.3}
 SCENE = synth.left_boom_right_hum_scene()
@@ -29,7 +32,7 @@ def film(tmp_path_factory):
     return synth.write_scene(tmp_path_factory.mktemp("refine") / "film.mp4", SCENE, width=64, height=36, fps=5)
 
 
-def wait_done(client: TestClient, job_id: str) -> dict:
+def wait_done(client: LocalClient, job_id: str) -> dict:
     with client.stream("GET", f"/api/jobs/{job_id}/events") as resp:
         stages = [line for line in resp.iter_lines() if line.startswith("data: ")]
     job = client.get(f"/api/jobs/{job_id}").json()
@@ -37,15 +40,15 @@ def wait_done(client: TestClient, job_id: str) -> dict:
     return job
 
 
-def vibration(client: TestClient, pid: str) -> np.ndarray:
+def vibration(client: LocalClient, pid: str) -> np.ndarray:
     return np.asarray(client.get(f"/api/projects/{pid}/timeline").json()["tracks"]["vibration"], dtype=float)
 
 
 def test_threshold_commits_refine_only_what_they_wake(tmp_path, film):
     settings = Settings(data_dir=tmp_path / "data", frontend_dir=None)
-    with TestClient(create_app(settings)) as client:
+    with LocalClient(create_app(settings)) as client:
         r = client.post("/api/projects", files={"file": ("film.mp4", film.read_bytes(), "video/mp4")},
-                        data={"mode": "multimodal"})
+                        data={"mode": "multimodal", "preset": "thesis"})
         project = r.json()
         wait_done(client, project["job"]["id"])
         pid = project["id"]
@@ -72,16 +75,16 @@ def test_threshold_commits_refine_only_what_they_wake(tmp_path, film):
 
 def test_a_restart_during_a_refinement_keeps_the_project_usable(tmp_path, film):
     settings = Settings(data_dir=tmp_path / "data", frontend_dir=None)
-    with TestClient(create_app(settings)) as client:
+    with LocalClient(create_app(settings)) as client:
         r = client.post("/api/projects", files={"file": ("film.mp4", film.read_bytes(), "video/mp4")},
-                        data={"mode": "multimodal"})
+                        data={"mode": "multimodal", "preset": "thesis"})
         pid = r.json()["id"]
         wait_done(client, r.json()["job"]["id"])
         assert client.put(f"/api/projects/{pid}/params", json={"thresholds": HIGH}).json()["job"] is None
         r = client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW})
         job_id = r.json()["job"]["id"]
     # Stopped whatever the job had done: the next start runs it again and nothing shows as failed.
-    with TestClient(create_app(settings)) as client:
+    with LocalClient(create_app(settings)) as client:
         p = client.get(f"/api/projects/{pid}").json()
         assert p["status"] != "failed" and p["has_timeline"] and p["params"]["thresholds"] == LOW
         job = client.get(f"/api/jobs/{job_id}").json()
