@@ -8,6 +8,7 @@ import signal
 import sys
 import threading
 
+from autohaptics.cli.main import command_group
 from autohaptics.errors import DeviceError
 from autohaptics.progress import ProgressBar
 
@@ -16,10 +17,8 @@ HELP = "talk to the haptic chair (or a virtual one)"
 
 
 def register(sub) -> None:
-    p = sub.add_parser(COMMAND, help=HELP,
-                       description="List ports, run a virtual chair, push a timeline, stop, read status.")
-    chair_sub = p.add_subparsers(dest="chair_command", metavar="ACTION")
-    chair_sub.required = True
+    chair_sub = command_group(sub, COMMAND, HELP, "List ports, run a virtual chair, push a timeline, stop, read status.",
+                              dest="chair_command", metavar="ACTION")
 
     q = chair_sub.add_parser("ports", help="list serial ports and running virtual chairs")
     q.add_argument("--json", action="store_true", help="print JSON")

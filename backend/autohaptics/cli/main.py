@@ -44,6 +44,14 @@ def add_commands(sub, package: str, *, chosen: str | None, skip: tuple[str, ...]
             sub.add_parser(name, help=module.HELP, add_help=False)
 
 
+def command_group(sub, name: str, help: str, description: str, *, dest: str, metavar: str):
+    """A sub-command made of actions of its own (``chair ports``, ``bench audio``): its parser's
+    sub-parsers, one of which must be given."""
+    group = sub.add_parser(name, help=help, description=description).add_subparsers(dest=dest, metavar=metavar)
+    group.required = True
+    return group
+
+
 def register_all(sub, package: str, *, skip: tuple[str, ...] = ()) -> None:
     """Call ``register(sub)`` of every module of ``package`` that has one (by name, ``skip`` and
     private modules left out): each sub-command lives in its own module."""

@@ -24,14 +24,14 @@ Both variants: BI = 0 when N < ``min_loudness_sone`` (silence gives exactly 0, n
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from autohaptics.intensity import iso532_tables as T
-from autohaptics.errors import ParameterError
 from autohaptics.intensity.loudness import Z_BARK, check_specific
+from autohaptics.records import Record, param
 
 BOOMING_VARIANTS = ("hatano", "paper")
 
@@ -43,7 +43,7 @@ _PAPER_Z_MIN = 0.3  # Bark, lower integration limit of eq. 3.3
 
 
 @dataclass(frozen=True)
-class BoomingParams:
+class BoomingParams(Record):
     """Parameters of the booming stage.
 
     variant : "hatano" (default, linear Hatano-type index) or "paper" (thesis eq. 3.3).
@@ -51,19 +51,11 @@ class BoomingParams:
     min_loudness_sone : float, sone; below this loudness the index is 0 (default 0.1).
     """
 
-    variant: str = "hatano"
-    lf_cutoff_hz: float = 280.0
-    min_loudness_sone: float = 0.1
+    GROUP: ClassVar[str] = "booming"
 
-    def __post_init__(self):
-        if self.variant not in BOOMING_VARIANTS:
-            raise ParameterError(f"booming variant must be one of {BOOMING_VARIANTS}, got {self.variant!r}")
-        f = self.lf_cutoff_hz
-        if not isinstance(f, (int, float)) or not math.isfinite(f) or f <= 0:
-            raise ParameterError(f"lf_cutoff_hz must be a positive number of Hz, got {f!r}")
-        v = self.min_loudness_sone
-        if not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
-            raise ParameterError(f"min_loudness_sone must be a finite number >= 0, got {v!r}")
+    variant: str = param("hatano", choices=BOOMING_VARIANTS)
+    lf_cutoff_hz: float = param(280.0, hi=24_000.0, gt=0.0, unit="Hz")
+    min_loudness_sone: float = param(0.1, 0.0, 1e6, unit="sone")
 
 
 def bark_to_hz(z_bark: np.ndarray) -> np.ndarray:

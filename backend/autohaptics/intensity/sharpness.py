@@ -16,30 +16,27 @@ Decisions (ALGORITHM.md section 2):
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from autohaptics.intensity import iso532_tables as T
-from autohaptics.errors import ParameterError
 from autohaptics.intensity.loudness import Z_BARK, check_specific
+from autohaptics.records import Record, param
 
 
 @dataclass(frozen=True)
-class SharpnessParams:
+class SharpnessParams(Record):
     """Parameters of the sharpness stage.
 
     min_loudness_sone : float, sone; frames whose loudness (area of N'(z)) is below this have
         sharpness 0 (default 0.1).
     """
 
-    min_loudness_sone: float = 0.1
+    GROUP: ClassVar[str] = "sharpness"
 
-    def __post_init__(self):
-        v = self.min_loudness_sone
-        if not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
-            raise ParameterError(f"min_loudness_sone must be a finite number >= 0, got {v!r}")
+    min_loudness_sone: float = param(0.1, 0.0, 1e6, unit="sone")
 
 
 def din_weighting(z_bark: np.ndarray) -> np.ndarray:

@@ -21,14 +21,13 @@ cold side (R < G), it can only lower the chroma, i.e. pull a cold value up.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.records import DERIVE
+from autohaptics.records import DERIVE, Record, param
 from autohaptics.layout import (DEVICE_TEMP_MAX_C, DEVICE_TEMP_MIN_C, DEVICE_TEMP_RATE_C_PER_S, TEMP_HIGH_C,
                                 TEMP_LOW_C, TEMP_NEUTRAL_C)
 from autohaptics.temperature.colour import warmth
@@ -43,7 +42,7 @@ MAPPINGS = ("warmcool", "thesis")
 
 
 @dataclass(frozen=True)
-class ThermalParams:
+class ThermalParams(Record):
     """Colour-to-temperature mapping: the default warm-cool mapping around a skin-neutral
     temperature in the device's range, or the thesis's red/green rule (GUIDE section 4, Temperature).
 
@@ -66,56 +65,41 @@ class ThermalParams:
     """
 
     STAGE: ClassVar[str] = DERIVE
+    GROUP: ClassVar[str] = "thermal"
 
-    mapping: str = "warmcool"
-    neutral_c: float = TEMP_NEUTRAL_C
+    mapping: str = param("warmcool", choices=MAPPINGS)
+    neutral_c: float = param(TEMP_NEUTRAL_C, -20.0, 80.0, unit="C")
     # the device profile (temperature.DeviceProfile's fields, named for the generator)
-    device_min_c: float = DEVICE_TEMP_MIN_C
-    device_max_c: float = DEVICE_TEMP_MAX_C
-    device_rate_c_per_s: float = DEVICE_TEMP_RATE_C_PER_S
+    device_min_c: float = param(DEVICE_TEMP_MIN_C, -20.0, 80.0, unit="C")
+    device_max_c: float = param(DEVICE_TEMP_MAX_C, -20.0, 80.0, unit="C")
+    device_rate_c_per_s: float = param(DEVICE_TEMP_RATE_C_PER_S, hi=100.0, gt=0.0, unit="C/s")
     # the warm-cool measure and the film's scaling
-    fill: float = 0.85
-    quantile: float = 0.95
-    min_scale: float = 0.5
-    hue_offset: float = 0.25
+    fill: float = param(0.85, hi=1.0, gt=0.0)
+    quantile: float = param(0.95, 0.5, 1.0)
+    min_scale: float = param(0.5, hi=1e6, gt=0.0)
+    hue_offset: float = param(0.25, -1.0, 1.0)
     # the thesis mapping
-    temp_low: float = TEMP_LOW_C
-    temp_high: float = TEMP_HIGH_C
+    temp_low: float = param(TEMP_LOW_C, -20.0, 80.0, unit="C")
+    temp_high: float = param(TEMP_HIGH_C, -20.0, 80.0, unit="C")
     neutral_aware: bool = False
-    chroma_low: float = 20.0
-    chroma_high: float = 90.0
-    slew_c_per_s: float | None = None
+    chroma_low: float = param(20.0, 0.0, 255.0)
+    chroma_high: float = param(90.0, 0.0, 255.0)
+    slew_c_per_s: float | None = param(None, hi=1e6, gt=0.0, unit="C/s")
 
-    def __post_init__(self):
-        if self.mapping not in MAPPINGS:
-            raise ParameterError(f"thermal.mapping must be one of {MAPPINGS}, got {self.mapping!r}")
-        for name in ("temp_low", "temp_high", "neutral_c", "chroma_low", "chroma_high", "device_min_c",
-                     "device_max_c", "device_rate_c_per_s", "fill", "quantile", "min_scale", "hue_offset"):
-            if not math.isfinite(float(getattr(self, name))):
-                raise ParameterError(f"thermal.{name} must be finite, got {getattr(self, name)!r}")
-        if not (-20.0 <= self.temp_low < self.temp_high <= 80.0):
-            raise ParameterError(f"thermal needs -20 <= temp_low < temp_high <= 80 C, got {self.temp_low}, {self.temp_high}")
-        if not (0.0 <= self.chroma_low < self.chroma_high <= 255.0):
-            raise ParameterError("thermal needs 0 <= chroma_low < chroma_high <= 255")
-        if self.slew_c_per_s is not None and not (0.0 < float(self.slew_c_per_s) < 1e6):
-            raise ParameterError(f"thermal.slew_c_per_s must be positive (C/s) or None, got {self.slew_c_per_s!r}")
-        self._check_warmcool()
-
-    def _check_warmcool(self) -> None:
-        if not (-20.0 <= self.device_min_c < self.device_max_c <= 80.0):
-            raise ParameterError("thermal needs -20 <= device_min_c < device_max_c <= 80 C, "
-                                 f"got {self.device_min_c}, {self.device_max_c}")
+    def check(self) -> None:
+        if not self.temp_low < self.temp_high:
+            raise ParameterError(f"thermal needs temp_low < temp_high, got {self.temp_low}, {self.temp_high} C")
+        if not self.chroma_low < self.chroma_high:
+            raise ParameterError(f"thermal needs chroma_low < chroma_high, got {self.chroma_low}, {self.chroma_high}")
+        if not self.device_min_c < self.device_max_c:
+            raise ParameterError("thermal needs device_min_c < device_max_c, "
+                                 f"got {self.device_min_c}, {self.device_max_c} C")
         lo, hi = self.range_c
         if not (lo <= self.neutral_c <= hi):
             raise ParameterError(f"thermal.neutral_c must lie in [{lo:g}, {hi:g}] C (the {self.mapping} mapping's "
                                  f"range), got {self.neutral_c}")
-        if not (0.0 < self.device_rate_c_per_s <= 100.0):
-            raise ParameterError(f"thermal.device_rate_c_per_s must lie in (0, 100] C/s, got {self.device_rate_c_per_s}")
-        if not (0.0 < self.fill < 1.0 and 0.5 <= self.quantile <= 1.0 and self.min_scale > 0.0):
-            raise ParameterError("thermal needs 0 < fill < 1, 0.5 <= quantile <= 1 and min_scale > 0, got "
-                                 f"{self.fill}, {self.quantile}, {self.min_scale}")
-        if not (-1.0 < self.hue_offset < 1.0):
-            raise ParameterError(f"thermal.hue_offset must lie in (-1, 1), got {self.hue_offset}")
+        if self.fill == 1.0 or abs(self.hue_offset) == 1.0:
+            raise ParameterError(f"thermal needs fill < 1 and -1 < hue_offset < 1, got {self.fill}, {self.hue_offset}")
 
     @property
     def range_c(self) -> tuple[float, float]:

@@ -5,8 +5,10 @@ with the duration, so 2-hour low-resolution files are fine (``long=True``: faste
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+from collections.abc import Iterator
 from fractions import Fraction
 from pathlib import Path
 
@@ -74,26 +76,16 @@ def write_scene(path: str | os.PathLike, scene: Scene, *, width: int = 320, heig
     layout = None
     if acodec is not None:
         layout = _audio_layout(channels, channel_layout, acodec, sample_rate, path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".part")
-    try:
-        with av.open(str(tmp), mode="w", format=fmt) as out:
-            vs = _add_video_stream(out, vcodec, width, height, rate, long, quality) if vcodec else None
-            as_ = out.add_stream(acodec, rate=sample_rate, layout=layout) if acodec else None
-            if as_ is not None and acodec == "aac" and quality == "low":
-                # FFmpeg's default AAC coder (two-loop search, 128 kbit/s stereo) took half the time
-                # of writing the 2-hour test film; the "fast" coder at 32 kbit/s per channel takes
-                # about a third of that (0.44 instead of 1.22 s per minute of stereo)
-                as_.codec_context.options = {"aac_coder": "fast"}
-                as_.bit_rate = 32_000 * channels
-            _encode(out, scene, vs, as_, width, height, rate, sample_rate, channels, layout)
-        os.replace(tmp, path)
-    except av.error.FFmpegError as exc:
-        tmp.unlink(missing_ok=True)
-        raise ParameterError(f"{path}: FFmpeg refused {vcodec}/{acodec} in {fmt}: {exc}") from None
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    with media_output(path, f"{vcodec}/{acodec} in {fmt}") as tmp, av.open(str(tmp), mode="w", format=fmt) as out:
+        vs = _add_video_stream(out, vcodec, width, height, rate, long, quality) if vcodec else None
+        as_ = out.add_stream(acodec, rate=sample_rate, layout=layout) if acodec else None
+        if as_ is not None and acodec == "aac" and quality == "low":
+            # FFmpeg's default AAC coder (two-loop search, 128 kbit/s stereo) took half the time
+            # of writing the 2-hour test film; the "fast" coder at 32 kbit/s per channel takes
+            # about a third of that (0.44 instead of 1.22 s per minute of stereo)
+            as_.codec_context.options = {"aac_coder": "fast"}
+            as_.bit_rate = 32_000 * channels
+        _encode(out, scene, vs, as_, width, height, rate, sample_rate, channels, layout)
     return path
 
 
@@ -176,3 +168,21 @@ def _encode(out, scene: Scene, vs, as_, width, height, rate: Fraction, sample_ra
     if vs is not None:
         for p in vs.encode(None):
             out.mux(p)
+
+
+@contextlib.contextmanager
+def media_output(path: Path, what: str) -> Iterator[Path]:
+    """A temporary file beside ``path`` to write a media file into: renamed onto ``path`` when the
+    block ends, removed when it fails; FFmpeg refusing the job becomes a ParameterError naming
+    ``path`` and ``what`` (e.g. the codecs)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".part")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except av.error.FFmpegError as exc:
+        tmp.unlink(missing_ok=True)
+        raise ParameterError(f"{path}: FFmpeg refused {what}: {exc}") from None
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise

@@ -20,7 +20,7 @@ import numpy as np
 
 from autohaptics.errors import ParameterError
 from autohaptics.media import probe
-from autohaptics.testing.encode import CONTAINERS
+from autohaptics.testing.encode import CONTAINERS, media_output
 from autohaptics.testing.scenes import check_size, fps_fraction
 
 CONVERSIONS = ("repeat", "pulldown")
@@ -59,9 +59,7 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     rate = fps_fraction(fps) if fps is not None else src_rate
     if conversion == "pulldown" and (round(float(src_rate), 2) != 24 or round(float(rate), 2) != 30):
         raise ParameterError(f"3:2 pulldown turns 24 fps into 30 fps, got {float(src_rate):g} -> {float(rate):g}")
-    dst.parent.mkdir(parents=True, exist_ok=True)
-    tmp = dst.with_name(dst.name + ".part")
-    try:
+    with media_output(dst, f"to re-encode {src}") as tmp:
         with av.open(str(src)) as inp, av.open(str(tmp), mode="w", format=fmt) as out:
             vs = out.add_stream(video_codec or v_default, rate=rate)
             vs.width, vs.height, vs.pix_fmt = w, h, "yuv420p"
@@ -79,13 +77,6 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
             if audio is not None:
                 with av.open(str(src)) as again:
                     _copy_audio(again.streams.audio[0], out, *audio)
-        os.replace(tmp, dst)
-    except av.error.FFmpegError as exc:
-        tmp.unlink(missing_ok=True)
-        raise ParameterError(f"{dst}: FFmpeg refused to re-encode {src}: {exc}") from None
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
     return dst
 
 
