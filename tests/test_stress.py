@@ -20,7 +20,7 @@ import sys
 import numpy as np
 import pytest
 
-from autohaptics.layout import TEMP_HIGH_C, TEMP_LOW_C
+from autohaptics.temperature import ThermalParams
 from autohaptics.timeline import NORMALISED_FEATURES, Timeline
 from stress_inputs import CASES, Worker, case, expected_ticks, long_film
 
@@ -54,7 +54,7 @@ def check_timeline(tl: Timeline, duration_s: float | None = None) -> None:
     if duration_s is not None:
         assert abs(tl.source["duration_s"] - duration_s) <= 0.1, (tl.source["duration_s"], duration_s)
     lo, hi = tl.temp_range
-    assert TEMP_LOW_C <= lo <= hi <= TEMP_HIGH_C
+    assert (lo, hi) == ThermalParams().range_c  # the default mapping's range: the device's
     for name, arr, a, b in (("vibration", tl.vibration, 0.0, 1.0), ("fans", tl.fans, 0.0, 1.0),
                             ("temperature_c", tl.temperature_c, lo, hi)):
         assert arr.shape[0] == n, name

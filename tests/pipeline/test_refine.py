@@ -4,7 +4,8 @@ saliency only for the ticks that newly vibrate.
 
 The film (64 x 36, written at several frame rates): a loud 50 Hz boom at 3-4 s while a bright disc
 sits on the LEFT, a quiet 60 Hz hum at 9-11 s while a bright square sits on the RIGHT. At high
-thresholds only the boom vibrates; at low ones the hum wakes too, and must go to the right.
+thresholds only the boom vibrates; at low ones the hum wakes too, and must go to the right. The
+thesis's vibration rule throughout: the default follows events, and a steady hum is none.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import pytest
 from autohaptics import pipeline
 from autohaptics import testing as synth
 from autohaptics.layout import ACTUATOR_IDS
-from autohaptics.params import params_from_doc, resolve_doc
+from autohaptics.params import THESIS_RULES, params_from_doc, resolve_doc
 
 IDX = {a: i for i, a in enumerate(ACTUATOR_IDS)}
 RIGHT = [IDX[a] for a in ("A2", "A6", "A7", "A9")]
@@ -24,10 +25,11 @@ LOW = {"sharpness": 0.3, "booming": 0.3, "low_energy": 0.3, "loudness": 0.3}
 HUM = range(91, 109)  # ticks well inside the hum (9-11 s)
 
 SCENE = synth.left_boom_right_hum_scene()
+RULE = {key: value for key, value in THESIS_RULES.items() if key.startswith("intensity.")}
 
 
 def params(thresholds: dict, preset: str = "balanced"):
-    doc, _ = resolve_doc({"preset": preset, "mode": "multimodal", "thresholds": {}, "overrides": {}},
+    doc, _ = resolve_doc({"preset": preset, "mode": "multimodal", "thresholds": {}, "overrides": dict(RULE)},
                          thresholds=thresholds)
     return params_from_doc(doc)[0]
 
