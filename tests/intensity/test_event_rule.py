@@ -131,3 +131,17 @@ def test_novelty_is_finite_and_zero_for_silence(x, baseline_s):
     out = novelty(x, baseline_s=baseline_s)
     assert out.shape == x.shape and np.isfinite(out).all() and (out >= 0).all() and (out <= 1).all()
     assert not novelty(np.zeros(x.size), baseline_s=baseline_s).any()
+
+
+@settings(max_examples=40, deadline=None)
+@given(hnp.arrays(np.float64, st.integers(0, 300), elements=st.floats(-1e6, 1e6)), st.integers(1, 80))
+def test_trailing_max_equals_scipy_maximum_filter(v, n):
+    """The envelope's running maximum gives scipy.ndimage's trailing maximum_filter1d exactly."""
+    from scipy.ndimage import maximum_filter1d
+
+    from autohaptics.intensity.novelty import trailing_max
+
+    out = trailing_max(v, n)
+    assert out.shape == v.shape and out.dtype == v.dtype
+    if v.size:
+        assert np.array_equal(out, maximum_filter1d(v, n, origin=(n - 1) // 2, mode="nearest"))

@@ -55,6 +55,29 @@ def test_luma_grid_is_in_display_orientation(tmp_path, rotation):
     assert np.abs(bright - seen).max() < 0.15
 
 
+@pytest.mark.parametrize("size, rotation", [((854, 480), 0), ((854, 480), 90), ((640, 360), 0)])
+def test_planes_made_ahead_give_the_same_proxies(tmp_path, size, rotation):
+    """Frame.prepare (run in the decoding thread) changes no proxy: gray, rgb_and_gray with and
+    without the luma grid, and the signature proxy equal those of a frame made without it, at a
+    size with odd chroma planes and rotated."""
+    rng = np.random.default_rng(1)
+    frames = [cv2.GaussianBlur(rng.integers(0, 256, (size[1], size[0], 3), dtype=np.uint8), (9, 9), 3)
+              for _ in range(4)]
+    path = write_streams(tmp_path / "p.mp4", frames=frames, fps=25, rotation=rotation)
+    fresh = list(_frames(path, 4))
+    ahead = list(_frames(path, 4))
+    for a, b in zip(fresh, ahead):
+        b.prepare(160, 128)
+        np.testing.assert_array_equal(a.gray(160), b.gray(160))
+        b.prepare(160, 128)
+        for x, y in zip(a.rgb_and_gray(128, 160), b.rgb_and_gray(128, 160)):
+            np.testing.assert_array_equal(x, y)
+        b.prepare(160, 128)
+        for x, y in zip(a.rgb_and_gray(128, 160, luma_size=(64, 64)), b.rgb_and_gray(128, 160, luma_size=(64, 64))):
+            np.testing.assert_array_equal(x, y)
+        np.testing.assert_array_equal(a.proxy(48), b.proxy(48))
+
+
 def test_luma_grid_without_the_fast_path(tmp_path):
     """A proxy as wide as the frame has no fast path: the luma comes from the full frame."""
     frames = [np.tile(np.arange(64, dtype=np.uint8)[None, :, None] * 4, (36, 1, 3)) for _ in range(3)]

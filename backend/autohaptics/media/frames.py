@@ -18,7 +18,7 @@ _PLANAR_YUV8 = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj44
 class Frame:
     """One decoded picture. Valid only inside the iteration step that yielded it."""
 
-    __slots__ = ("_frame", "index", "time_s", "rotation", "width", "height")
+    __slots__ = ("_frame", "index", "time_s", "rotation", "width", "height", "_ready")
 
     def __init__(self, frame: av.VideoFrame, index: int, time_s: float, rotation: int):
         self._frame = frame
@@ -26,6 +26,18 @@ class Frame:
         self.time_s = time_s  # presentation time relative to the container start, seconds
         self.rotation = rotation
         self.width, self.height = (frame.height, frame.width) if rotation % 180 else (frame.width, frame.height)
+        self._ready: dict = {}  # planes made ahead by prepare(), each taken once
+
+    def prepare(self, gray_width: int, rgb_width: int) -> None:
+        """Make ahead the small planes that ``gray(gray_width)`` and ``rgb_and_gray(rgb_width,
+        gray_width)`` read, e.g. in the decoding thread while the caller analyses an earlier frame
+        (OpenCV runs without the GIL): those calls then return the same arrays sooner."""
+        gw, gh = self._size(gray_width, None)
+        rw, rh = self._size(rgb_width, None)
+        ys = self._planes_small(gw, gh, colour=False)
+        if ys is not None:
+            self._ready[(gw, gh, False, True)] = ys
+            self._ready[(rw, rh, True, False)] = self._planes_small(rw, rh, colour=True, luma=False)
 
     def _size(self, width: int, height: int | None) -> tuple[int, int]:
         width = max(1, int(width))
@@ -105,6 +117,10 @@ class Frame:
         plane not asked for); None when the pixel format has no fast path or the proxy is not
         smaller than the frame. ``grid`` (w, h): the luma is also area-averaged to that size
         (display orientation, limited range as stored) and appended to ``grid_out``."""
+        if grid is None and self._ready:
+            ready = self._ready.pop((width, height, colour, luma), None)
+            if ready is not None:
+                return ready
         f = self._frame
         name = f.format.name
         if name not in _PLANAR_YUV8 or width >= self.width or height >= self.height:

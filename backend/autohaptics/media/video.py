@@ -7,7 +7,7 @@ import math
 import os
 import queue
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import av
 
@@ -24,7 +24,8 @@ SPARSE_MIN_FPS = 40.0
 
 
 def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefetch: int = 0,
-               decode: str = "full", start_s: float = 0.0) -> Iterator[Frame]:
+               decode: str = "full", start_s: float = 0.0,
+               prepare: Callable[[Frame], None] | None = None) -> Iterator[Frame]:
     """Decode the video stream frame by frame (presentation order); nothing is converted here.
 
     decode : "full" decodes every frame exactly; "nonref" asks FFmpeg to skip non-reference
@@ -42,6 +43,10 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
         while decoding). Frames stay valid after the step that yielded them in this mode.
     start_s : when > 0, seek to the keyframe at or before this time (s) first; the frames then
         decode exactly as in a pass from the start, but ``Frame.index`` counts from the seek.
+    prepare : with ``prefetch``, called on each frame in the decoding thread while that thread is
+        at least half the queue ahead of the caller (it has time to spare), e.g.
+        :meth:`Frame.prepare`, so the work runs beside the caller's analysis; never when the
+        caller waits for frames.
     Raises MediaError when there is no video stream or no frame decodes.
     """
     info = info or probe(path)
@@ -50,7 +55,7 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
     if decode not in DECODE_MODES:
         raise ParameterError(f"decode must be one of {DECODE_MODES}, got {decode!r}")
     if prefetch > 0:
-        yield from _prefetched(lambda: _iter_video(info, decode, start_s), prefetch)
+        yield from _prefetched(lambda: _iter_video(info, decode, start_s), prefetch, prepare)
     else:
         yield from _iter_video(info, decode, start_s)
 
@@ -89,15 +94,18 @@ def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0) -> 
 _END = object()
 
 
-def _prefetched(make_iter, depth: int) -> Iterator:
+def _prefetched(make_iter, depth: int, prepare: Callable | None = None) -> Iterator:
     """Run an iterator in a daemon thread, ``depth`` items ahead; exceptions reach the consumer;
-    closing the consumer stops the producer."""
+    closing the consumer stops the producer. ``prepare(item)`` runs in that thread on the items
+    made while the queue is at least half full."""
     q: queue.Queue = queue.Queue(maxsize=depth)
     stop = threading.Event()
 
     def produce():
         try:
             for item in make_iter():
+                if prepare is not None and 2 * q.qsize() >= depth:
+                    prepare(item)
                 while not stop.is_set():
                     try:
                         q.put(item, timeout=0.1)

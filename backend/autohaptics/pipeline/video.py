@@ -107,7 +107,8 @@ def video_pass(info: media.MediaInfo, n: int, *, params: GenerateParams, need_sa
     need_colour : compute the mean colour (the temperature track is wanted).
     """
     vp = _Pass(info, n, params, need_saliency, need_flow, need_colour)
-    stream = media.iter_video(info.path, info=info, prefetch=params.video.prefetch, decode=params.video.decode)
+    stream = media.iter_video(info.path, info=info, prefetch=params.video.prefetch, decode=params.video.decode,
+                              prepare=vp.prepare)
     duration = max(info.duration_s, 1e-9)
     for frame, centre_tick in centre_frames(vp.timed(stream), n, int(params.video.stride)):
         vp.frame(frame, centre_tick)
@@ -154,6 +155,11 @@ class _Pass:
         self.pending = None  # (tick, gray, rgb, sig, time) waiting for its successor frame (flow pair)
         self.last_time = 0.0
         self.repeats = 0  # successor frames passed over as repeats of their pair's first frame
+
+    def prepare(self, frame: media.Frame) -> None:
+        """Make a frame's gray and RGB proxy planes ahead, in the decoding thread (the same arrays
+        :meth:`_proxies` would make; a frame that needs neither wastes them)."""
+        frame.prepare(self.flow_params.proxy_width, self.rgb_width)
 
     def timed(self, stream):
         """``stream``'s frames, the time spent waiting for each counted as ``decode_wait``."""
