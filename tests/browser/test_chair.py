@@ -203,7 +203,11 @@ def test_the_editor_plays_on_the_virtual_chair(cpage, chair_api, chair_server, f
     entries = chair.read_log()[start:]
     status = chair_api.get("/api/chair/status").json()
     skipped = status["playback"]["ticks_skipped"]
+    # a video that stalls waiting for data pauses the chair and plays it again from where the video
+    # is (a STOP before the one of the pause): the ticks may then go back, as after a re-seek
+    stalls = sum(e["ev"] == "stop" for e in chair.read_log()[start:paused_at]) - 1
     seeks = status["playback"]["drift_seeks"]
+    restarts = seeks + stalls
     if lag <= DRIFT_SEEK_S:  # the video kept time: the chair follows it without a single re-seek
         assert seeks == 0, (status["playback"], lag)
     else:  # at most one re-seek per drift limit the video fell behind, and one for where it ended
@@ -216,13 +220,13 @@ def test_the_editor_plays_on_the_virtual_chair(cpage, chair_api, chair_server, f
     assert before and 20 <= before[0][0] <= 21, ticks
     assert sum(len(r) for r in before) + skipped >= before[-1][-1] - before[0][0] + 1, ticks
     flat = [t for r in before for t in r]
-    if not seeks:
+    if not restarts:
         assert all(b > a for a, b in zip(flat, flat[1:])), ticks
-    assert len(before) <= 1 + skipped + seeks, ticks
+    assert len(before) <= 1 + skipped + restarts, ticks
     # After the seek: from 30.0 s on, in order.
     assert after and 300 <= after[0][0] <= 301, ticks
     flat = [t for r in after for t in r]
-    if not seeks:
+    if not restarts:
         assert all(b > a for a, b in zip(flat, flat[1:])), ticks
 
     # Every frame holds the composed timeline after comfort and the device's clamps.
