@@ -60,7 +60,7 @@ class VideoParams(Record):
         the deblocking filter) or "sparse" (the fast preset: also every B-frame at 40 fps and up,
         so P-frames that referenced one come out approximate; see :func:`media.iter_video`).
         With skipped frames the analysed frame is the decoded one nearest the tick's centre and a
-        flow pair spans the first decoded frame at least ``flow.min_span_s`` later, with its true interval.
+        flow pair spans the next decoded frame, with its true interval.
     stride : ticks per analysed frame, 1..10 (default 1; the fast preset: 3). With ``stride`` s the
         ticks are taken in groups of s, the frame nearest the group's centre is analysed (plus its
         successor for flow) and every tick of the group gets its values: the picture is read at
@@ -127,7 +127,6 @@ THESIS_RULES: dict[str, Any] = {
     "intensity.rule": "thesis",  # the default follows events: each feature against its recent baseline
     "intensity.loudness_gate": 0.05,  # the default gate, 0.2, is 23 phon below the film's loudest moment
     "flow.repeat_wait_s": 0.0,  # the default waits for the next distinct frame (repeats give no motion)
-    "flow.min_span_s": 0.0,  # the default pairs frames at least 65 ms apart, whatever the decoder skips
     "airflow.near_sigma_ticks": 0.0,  # the default smooths nearness over neighbouring ticks of the shot
     "thermal.mapping": "thesis",  # the default maps a warm-cool measure around 33 C into the device range
 }

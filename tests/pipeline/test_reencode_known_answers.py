@@ -40,10 +40,12 @@ VARIANTS = {
     "25 -> 30 fps, repeated frames": (25, dict(fps=30, conversion="repeat"), ".mp4"),
     "24 -> 30 fps, 3:2 pulldown": (24, dict(fps=30, conversion="pulldown"), ".mp4"),
     "VP9 at 150 kbit/s, Opus": (24, dict(video_codec="libvpx-vp9", video_bit_rate=150_000), ".webm"),
-    # the H.264 original's non-reference frames are not decoded (balanced), the VP9 copy has none:
-    # the pairs span alike only through flow.min_span_s (0.787 tolerant fan IoU without it;
-    # docs/BENCHMARKS.md, "Fans across encodes")
-    "VP9 at 150 kbit/s, 25 fps": (25, dict(video_codec="libvpx-vp9", video_bit_rate=150_000), ".webm"),
+    # measured 0.787 tolerant fan IoU (ticks F1 1.00): the embedded depth's expansion cue is a rate,
+    # so its flow noise grows as the pair's interval shrinks; the balanced decode pairs the H.264
+    # original's frames two apart (its B-frames are skipped) and the VP9 encode's one apart
+    # (docs/BENCHMARKS.md, "Fans across encodes: why the 25 fps VP9 variant misses")
+    "VP9 at 150 kbit/s, 25 fps": pytest.param(25, dict(video_codec="libvpx-vp9", video_bit_rate=150_000), ".webm",
+                                              marks=pytest.mark.xfail(strict=True, reason="tolerant fan IoU 0.79")),
 }
 
 
@@ -83,26 +85,15 @@ def repeated_pan(tmp_path_factory):
 def test_a_tick_whose_successor_frame_repeats_still_sees_the_motion(repeated_pan):
     tl = pipeline.generate(repeated_pan)
     motion = tl.features["motion_fw_per_s"][1:-1]
-    # every pair spans whole source frames over its real interval (2/30 or 3/30 s)
+    # every pair spans one source frame (1/24 s of motion) over its real interval, 1/30 or 2/30 s
     assert motion.min() >= 0.5 * 0.2 and motion.max() <= 1.5 * 0.2, motion
     assert tl.stats["video"]["flow"]["repeats_skipped"] > 0
 
 
-def test_the_flow_pair_spans_at_least_min_span_whichever_frames_are_decoded(repeated_pan):
-    params, _ = resolve_params("balanced", {"video.decode": "full"})
-    assert params.flow.min_span_s > 1 / 30
-    tl = pipeline.generate(repeated_pan, params=params)
-    motion = tl.features["motion_fw_per_s"][1:-1]
-    assert 0.75 * 0.2 <= np.median(motion) <= 1.5 * 0.2 and motion.max() <= 1.5 * 0.2, motion
-    # every frame decoded at 30 fps: each pair passed over its next frame (66 ms or more)
-    assert tl.stats["video"]["flow"]["short_skipped"] >= 15, tl.stats["video"]["flow"]
-
-
 def test_the_thesis_rule_pairs_the_next_frame_even_when_it_repeats(repeated_pan):
     params, _ = resolve_params("balanced", dict(THESIS_RULES))
-    assert params.flow.repeat_wait_s == 0 and params.flow.min_span_s == 0
+    assert params.flow.repeat_wait_s == 0
     tl = pipeline.generate(repeated_pan, params=params)
     motion = tl.features["motion_fw_per_s"][1:-1]
     assert (motion < 0.01).any(), motion  # a tick whose next decoded frame is a repeat reads still
     assert tl.stats["video"]["flow"]["repeats_skipped"] == 0
-    assert tl.stats["video"]["flow"]["short_skipped"] == 0

@@ -45,11 +45,6 @@ class FlowParams:
         this after the first frame, s, 0..1 (default 0.1, one tick: frame-rate conversion by repeated
         frames, 3:2 pulldown to 60 fps, animation on twos, also where the decoder skips the
         non-reference frames between; 0 = always the next frame, the thesis).
-    min_span_s : a flow pair's successor is the first decoded frame at least this long after its
-        first frame, s, 0..0.1 (default 0.065: two frames apart at 24-30 fps, four at 50-60 fps),
-        so the pair's span, and with it the flow noise read as a rate (the depth's expansion cue),
-        does not depend on which frames the decoder skips; the next tick's analysed frame ends the
-        wait. 0 = the next decoded frame, the thesis.
     """
 
     STAGE: ClassVar[str] = ANALYSIS
@@ -59,7 +54,6 @@ class FlowParams:
     dis_preset: str = "medium"
     proxy_fraction: float = 0.125
     repeat_wait_s: float = 0.1
-    min_span_s: float = 0.065
 
     def __post_init__(self):
         if self.method not in FLOW_METHODS:
@@ -71,8 +65,6 @@ class FlowParams:
         for name in ("proxy_fraction", "repeat_wait_s"):
             if not (0.0 <= float(getattr(self, name)) <= 1.0):  # NaN fails too
                 raise ParameterError(f"flow.{name} must lie in 0..1, got {getattr(self, name)!r}")
-        if not (0.0 <= float(self.min_span_s) <= 0.1):
-            raise ParameterError(f"flow.min_span_s must lie in 0..0.1 s (one tick), got {self.min_span_s!r}")
 
     def width_for(self, picture_width: int) -> int:
         """The gray proxy's width for a picture ``picture_width`` px wide as shown, px:

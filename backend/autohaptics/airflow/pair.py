@@ -1,7 +1,7 @@
 """What one flow pair says about its tick: a cut inside it, no motion at all (static or a fade), or
 its motion per fan cell and, where it moves past the floor, how near each cell is.
 
-A pair is a tick's analysed frame and a later decoded frame (``flow.min_span_s``); the video pass
+A pair is a tick's analysed frame and the next decoded frame; the video pass
 (:mod:`autohaptics.pipeline.video`) feeds the pairs and stores the results.
 """
 

@@ -1,7 +1,7 @@
 """The video pass: which frames are analysed, at what size, and which stages run on them.
 
 Per 100 ms tick k the pass takes the decoded frame nearest the tick's centre (``video.analysis``
-"tick") and a later one (a flow pair at least ``flow.min_span_s`` apart), or every decoded
+"tick") and the frame that follows it (a flow pair over one frame interval), or every decoded
 frame ("every", the reference: colour, motion and depth are averaged over the tick's frames;
 saliency stays on the centre frame, because averaging salient positions across a tick would put
 weight where no object ever was). Results per tick (:class:`VideoAnalysis`):
@@ -154,7 +154,6 @@ class _Pass:
         self.pending = None  # (tick, gray, rgb, sig, time) waiting for its successor frame (flow pair)
         self.last_time = 0.0
         self.repeats = 0  # successor frames passed over as repeats of their pair's first frame
-        self.short = 0  # successor frames passed over as less than flow.min_span_s after it
 
     def timed(self, stream):
         """``stream``'s frames, the time spent waiting for each counted as ``decode_wait``."""
@@ -198,16 +197,12 @@ class _Pass:
         return rgb, gray, luma, sig
 
     def _pair(self, frame, gray, sig, analysed: bool) -> None:
-        """The waiting flow pair's motion, now that its successor frame is here; or wait for a later
-        frame while this one lies less than ``flow.min_span_s`` after the pair's first, or repeats it
-        (a frame-rate conversion, pulldown) within ``flow.repeat_wait_s``. An analysed frame starts
-        a pair of its own, so it never waits."""
+        """The waiting flow pair's motion, now that its successor frame is here; or, when that frame
+        repeats the pair's first one (a frame-rate conversion, pulldown), wait for the next frame
+        (``flow.repeat_wait_s``; an analysed frame starts a pair of its own, so it never waits)."""
         pk, pgray, prgb, psig, pt = self.pending
-        st, span = self.stages, frame.time_s - pt
-        if not analysed and span < self.flow_params.min_span_s - 1e-3:  # 1 ms: timestamps are rounded
-            self.short += 1
-            return
-        if not analysed and span < self.flow_params.repeat_wait_s and \
+        st = self.stages
+        if not analysed and frame.time_s - pt < self.flow_params.repeat_wait_s and \
                 st["static"].run(is_static, pgray, gray, params=self.params.airflow):
             self.repeats += 1
             return
@@ -300,7 +295,6 @@ class _Pass:
         out.stats["flow"]["proxy_width"] = int(self.flow_params.proxy_width)
         out.stats["static"]["ticks_static"] = int(out.static.sum())
         out.stats["flow"]["repeats_skipped"] = int(self.repeats)
-        out.stats["flow"]["short_skipped"] = int(self.short)
         out.stats["cuts"]["cuts"] = int(out.cut.sum())
         out.stats["frames"] = {"ticks_with_frame": int(out.frame_mask.sum()), "ticks": n,
                                "last_time_s": round(self.last_time, 6)}
