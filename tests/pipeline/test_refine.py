@@ -74,9 +74,10 @@ def test_raising_the_thresholds_leaves_nothing_to_refine(tmp_path):
     assert not pipeline.lacking_saliency(analysis.video, tl.features["intensity"] > 0).any()
 
 
-def test_a_rederive_that_keeps_the_fan_rule_gives_the_fans_a_fresh_derive_gives(tmp_path):
-    """The fan track is kept from an earlier derive of the same cache when only the thresholds
-    changed, and computed again when the fan rule changed: either way as a fresh derive has it."""
+def test_a_rederive_that_keeps_the_picture_rules_gives_the_tracks_a_fresh_derive_gives(tmp_path):
+    """The picture's tracks (fans, temperature, motion curves) are kept from an earlier derive of
+    the same cache when only the thresholds changed, and computed again when their rule changed:
+    either way as a fresh derive has them."""
     import copy
     import dataclasses
 
@@ -87,8 +88,18 @@ def test_a_rederive_that_keeps_the_fan_rule_gives_the_fans_a_fresh_derive_gives(
     again = pipeline.derive(analysis, params(LOW))  # kept from the first derive: shared, read-only
     assert first.fans.flags.writeable and not again.fans.flags.writeable
     other = dataclasses.replace(analysis, video=copy.deepcopy(analysis.video))  # a cache never derived
-    np.testing.assert_array_equal(again.fans, pipeline.derive(other, params(LOW)).fans)
-    assert again.stats["airflow"] == first.stats["airflow"]
+    fresh = pipeline.derive(other, params(LOW))
+    assert not again.temperature_c.flags.writeable and np.ptp(fresh.temperature_c) > 0
+    for track in ("fans", "temperature_c", "vibration"):
+        np.testing.assert_array_equal(getattr(again, track), getattr(fresh, track), err_msg=track)
+    assert list(again.features) == list(fresh.features)
+    for name, values in fresh.features.items():
+        np.testing.assert_array_equal(again.features[name], values, err_msg=name)
+    assert again.stats["airflow"] == first.stats["airflow"] and again.stats["temperature"] == fresh.stats["temperature"]
+    warmer = dataclasses.replace(params(LOW), thermal=dataclasses.replace(params(LOW).thermal, neutral_c=35.0))
+    np.testing.assert_array_equal(pipeline.derive(analysis, warmer).temperature_c,
+                                  pipeline.derive(other, warmer).temperature_c)
+    assert not np.array_equal(pipeline.derive(analysis, warmer).temperature_c, again.temperature_c)
     stricter = dataclasses.replace(params(LOW), airflow=dataclasses.replace(params(LOW).airflow, strong_rel=0.9))
     changed = pipeline.derive(analysis, stricter)  # another fan rule: computed again
     np.testing.assert_array_equal(changed.fans, pipeline.derive(other, stricter).fans)
