@@ -5,6 +5,7 @@ film). Each track comes from its stage: intensity and fusion (vibration), temper
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import threading
 import time
@@ -58,7 +59,7 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
     gen_params["temp_low"], gen_params["temp_high"] = temp_low, temp_high
     tl.generator = default_generator(mode=params.mode, preset=preset, params=gen_params)
     stats["derive"] = {"seconds": time.perf_counter() - t0}
-    active = int((tl.vibration.max(axis=1) > 0).sum())
+    active = int(np.count_nonzero(np.logical_or.reduce(tl.vibration.T > 0)))
     stats["vibration"] = {"active_ticks": active, "ticks": n, "share": active / n if n else 0.0,
                           **stats.pop("intensity_rule", {})}
     tl.stats = stats
@@ -133,9 +134,37 @@ def _intensity(analysis: Analysis, params: GenerateParams, tl: Timeline, stats: 
             tl.features[name] = np.zeros(n)
         intensity = np.zeros(n)
     else:
-        intensity, curves, rule_stats = inten.audio_intensity(analysis.audio, n, params=params.intensity)
+        intensity, curves, rule_stats = inten.audio_intensity(analysis.audio, n, params=params.intensity,
+                                                              inputs=_decision_inputs(analysis.audio, params.intensity))
         for name in inten.FEATURES:
             tl.features[name] = curves[name]
         stats["intensity_rule"] = rule_stats
     tl.features["intensity"] = intensity
     return intensity
+
+
+# The intensity rule's decision inputs of recent derives, per audio feature set (held weakly) and
+# the intensity parameters that shape them: a threshold commit reuses them.
+_CURVES: dict[tuple, tuple] = {}
+_CURVES_LOCK = threading.Lock()
+
+
+def _decision_inputs(audio, params: inten.IntensityParams) -> tuple[dict, dict]:
+    """:func:`intensity.decision_inputs` of ``audio`` (its dict of per-frame features), kept from an
+    earlier derive of the same features when no parameter but those applied after them changed."""
+    key = dataclasses.replace(params, **{f: getattr(inten.IntensityParams(), f) for f in inten.APPLIED_AFTER_CURVES})
+    arrays = tuple(sorted(audio.items()))
+    ident = tuple((name, id(values)) for name, values in arrays)
+    with _CURVES_LOCK:
+        hit = _CURVES.get(ident)
+    if hit is not None and all(ref() is values for ref, (_, values) in zip(hit[0], arrays)) and hit[1] == key:
+        return hit[2]
+    inputs = inten.decision_inputs(audio, params=params)
+    for curves in inputs:
+        for values in curves.values():
+            values.flags.writeable = False
+    with _CURVES_LOCK:
+        _CURVES[ident] = ([weakref.ref(values) for _, values in arrays], key, inputs)
+        while len(_CURVES) > _PICTURE_KEPT:
+            _CURVES.pop(next(iter(_CURVES)))
+    return inputs
