@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fastapi.testclient import TestClient
 
 from autohaptics import pipeline
 from autohaptics import testing as synth
 from autohaptics.params import params_from_doc, resolve_doc
 from autohaptics.server.app import create_app
 from autohaptics.server.settings import Settings
+
+from service_client import LocalClient
 
 HIGH = {"sharpness": 0.95, "booming": 0.95, "low_energy": 0.95, "loudness": 0.95}
 LOW = {"sharpness": 0.3, "booming": 0.3, "low_energy": 0.3, "loudness": 0.3}
@@ -29,7 +30,7 @@ def film(tmp_path_factory):
     return synth.write_scene(tmp_path_factory.mktemp("refine") / "film.mp4", SCENE, width=64, height=36, fps=5)
 
 
-def wait_done(client: TestClient, job_id: str) -> dict:
+def wait_done(client: LocalClient, job_id: str) -> dict:
     with client.stream("GET", f"/api/jobs/{job_id}/events") as resp:
         stages = [line for line in resp.iter_lines() if line.startswith("data: ")]
     job = client.get(f"/api/jobs/{job_id}").json()
@@ -37,18 +38,28 @@ def wait_done(client: TestClient, job_id: str) -> dict:
     return job
 
 
-def vibration(client: TestClient, pid: str) -> np.ndarray:
+def thesis_project(client: LocalClient, film) -> tuple[str, str]:
+    """Upload ``film`` and generate it with the thesis's intensity rule, which the scene's known
+    answer is defined by (under the "events" rule both of its sounds are events at any threshold).
+    Returns (project id, job id)."""
+    r = client.post("/api/projects", files={"file": ("film.mp4", film.read_bytes(), "video/mp4")},
+                    data={"mode": "multimodal", "generate": "false"})
+    assert r.status_code == 201, r.text
+    pid = r.json()["id"]
+    r = client.post(f"/api/projects/{pid}/generate", json={"overrides": {"intensity.rule": "thesis"}})
+    assert r.status_code == 202, r.text
+    return pid, r.json()["job"]["id"]
+
+
+def vibration(client: LocalClient, pid: str) -> np.ndarray:
     return np.asarray(client.get(f"/api/projects/{pid}/timeline").json()["tracks"]["vibration"], dtype=float)
 
 
 def test_threshold_commits_refine_only_what_they_wake(tmp_path, film):
     settings = Settings(data_dir=tmp_path / "data", frontend_dir=None)
-    with TestClient(create_app(settings)) as client:
-        r = client.post("/api/projects", files={"file": ("film.mp4", film.read_bytes(), "video/mp4")},
-                        data={"mode": "multimodal"})
-        project = r.json()
-        wait_done(client, project["job"]["id"])
-        pid = project["id"]
+    with LocalClient(create_app(settings)) as client:
+        pid, job_id = thesis_project(client, film)
+        wait_done(client, job_id)
         # Raising wakes no tick: derived at once, no job.
         r = client.put(f"/api/projects/{pid}/params", json={"thresholds": HIGH})
         assert r.status_code == 200 and r.json()["derived"] and r.json()["job"] is None
@@ -72,16 +83,14 @@ def test_threshold_commits_refine_only_what_they_wake(tmp_path, film):
 
 def test_a_restart_during_a_refinement_keeps_the_project_usable(tmp_path, film):
     settings = Settings(data_dir=tmp_path / "data", frontend_dir=None)
-    with TestClient(create_app(settings)) as client:
-        r = client.post("/api/projects", files={"file": ("film.mp4", film.read_bytes(), "video/mp4")},
-                        data={"mode": "multimodal"})
-        pid = r.json()["id"]
-        wait_done(client, r.json()["job"]["id"])
+    with LocalClient(create_app(settings)) as client:
+        pid, job_id = thesis_project(client, film)
+        wait_done(client, job_id)
         assert client.put(f"/api/projects/{pid}/params", json={"thresholds": HIGH}).json()["job"] is None
         r = client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW})
         job_id = r.json()["job"]["id"]
     # Stopped whatever the job had done: the next start runs it again and nothing shows as failed.
-    with TestClient(create_app(settings)) as client:
+    with LocalClient(create_app(settings)) as client:
         p = client.get(f"/api/projects/{pid}").json()
         assert p["status"] != "failed" and p["has_timeline"] and p["params"]["thresholds"] == LOW
         job = client.get(f"/api/jobs/{job_id}").json()
