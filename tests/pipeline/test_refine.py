@@ -90,7 +90,8 @@ def test_a_rederive_that_keeps_the_picture_rules_gives_the_tracks_a_fresh_derive
     assert first.fans.max() > 0  # the scene's moving shapes blow
     again = pipeline.derive(analysis, params(LOW))  # kept from the first derive: shared, read-only
     assert first.fans.flags.writeable and not again.fans.flags.writeable
-    other = dataclasses.replace(analysis, video=copy.deepcopy(analysis.video))  # a cache never derived
+    other = dataclasses.replace(analysis, video=copy.deepcopy(analysis.video),
+                                audio=copy.deepcopy(analysis.audio))  # a cache never derived
     fresh = pipeline.derive(other, params(LOW))
     assert not again.temperature_c.flags.writeable and np.ptp(fresh.temperature_c) > 0
     for track in ("fans", "temperature_c", "vibration"):
@@ -99,6 +100,14 @@ def test_a_rederive_that_keeps_the_picture_rules_gives_the_tracks_a_fresh_derive
     for name, values in fresh.features.items():
         np.testing.assert_array_equal(again.features[name], values, err_msg=name)
     assert again.stats["airflow"] == first.stats["airflow"] and again.stats["temperature"] == fresh.stats["temperature"]
+    for rule in ("events", "thesis"):  # the intensity rule's curves kept across thresholds and densities
+        for density in (None, 0.2):
+            intensity = dataclasses.replace(params(HIGH).intensity, rule=rule, density=density)
+            pipeline.derive(analysis, dataclasses.replace(params(HIGH), intensity=intensity))
+            lower = dataclasses.replace(params(LOW), intensity=dataclasses.replace(intensity, thresholds=LOW))
+            kept, new = pipeline.derive(analysis, lower), pipeline.derive(copy.deepcopy(other), lower)
+            np.testing.assert_array_equal(kept.vibration, new.vibration, err_msg=f"{rule} {density}")
+            np.testing.assert_array_equal(kept.features["intensity"], new.features["intensity"])
     warmer = dataclasses.replace(params(LOW), thermal=dataclasses.replace(params(LOW).thermal, neutral_c=35.0))
     np.testing.assert_array_equal(pipeline.derive(analysis, warmer).temperature_c,
                                   pipeline.derive(other, warmer).temperature_c)
