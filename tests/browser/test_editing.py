@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 
+import numpy as np
 import pytest
 
 from autohaptics.timeline import Timeline
@@ -84,6 +85,17 @@ def test_threshold_drag_previews_live_then_rederives_the_vibration(page, api, pr
     assert vib_after["lit"] > vib_before["lit"], "a lower threshold should switch on more vibration"
     # Only the changed curves' pyramids were rebuilt (the temperature, fans and sound features were kept).
     assert 0 < s1["pyramidsBuilt"] < s0["pyramidsBuilt"], (s0["pyramidsBuilt"], s1["pyramidsBuilt"])
+    # After the first load (all but the fans, then the fans) only the changed blocks were fetched
+    # (since the revision on screen); the kept ones are the server's.
+    asked = page.evaluate("() => performance.getEntriesByType('resource').map((e) => e.name)"
+                          ".filter((n) => n.includes('timeline.bin'))")
+    assert len(asked) > 2 and all("since=" in url for url in asked[2:]), asked
+    doc = api.get(f"/api/projects/{pid}/timeline").json()["tracks"]
+    for tick in (0, len(doc["vibration"]) // 3, len(doc["vibration"]) - 1):
+        held = values_at(page, tick)
+        assert held["vibration"] == pytest.approx(doc["vibration"][tick], abs=0.5 / 255 + 1e-4)
+        assert held["temperature_c"] == pytest.approx(doc["temperature_c"][tick], abs=1e-3)
+        assert held["fan_grid"] == pytest.approx(np.ravel(doc["fans"][tick]).tolist(), abs=0.5 / 255 + 1e-4)
 
 
 def test_threshold_slider_commits_from_the_keyboard(page, api, project_copy):

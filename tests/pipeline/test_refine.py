@@ -4,8 +4,10 @@ saliency only for the ticks that newly vibrate.
 
 The film (64 x 36, written at several frame rates): a loud 50 Hz boom at 3-4 s while a bright disc
 sits on the LEFT, a quiet 60 Hz hum at 9-11 s while a bright square sits on the RIGHT. At high
-thresholds only the boom vibrates; at low ones the hum wakes too, and must go to the right. The
-thesis's vibration rule throughout: the default follows events, and a steady hum is none.
+thresholds only the boom vibrates; at low ones the hum wakes too, and must go to the right. That
+holds for the thesis's intensity rule (features against the film's maximum), which these tests pin:
+under the "events" rule both sounds are events at any threshold. The refinement itself reads only
+which ticks vibrate after the derive, whatever the rule.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import pytest
 from autohaptics import pipeline
 from autohaptics import testing as synth
 from autohaptics.layout import ACTUATOR_IDS
-from autohaptics.params import THESIS_RULES, params_from_doc, resolve_doc
+from autohaptics.params import params_from_doc, resolve_doc
 
 IDX = {a: i for i, a in enumerate(ACTUATOR_IDS)}
 RIGHT = [IDX[a] for a in ("A2", "A6", "A7", "A9")]
@@ -25,12 +27,11 @@ LOW = {"sharpness": 0.3, "booming": 0.3, "low_energy": 0.3, "loudness": 0.3}
 HUM = range(91, 109)  # ticks well inside the hum (9-11 s)
 
 SCENE = synth.left_boom_right_hum_scene()
-RULE = {key: value for key, value in THESIS_RULES.items() if key.startswith("intensity.")}
 
 
 def params(thresholds: dict, preset: str = "balanced"):
-    doc, _ = resolve_doc({"preset": preset, "mode": "multimodal", "thresholds": {}, "overrides": dict(RULE)},
-                         thresholds=thresholds)
+    doc, _ = resolve_doc({"preset": preset, "mode": "multimodal", "thresholds": {},
+                          "overrides": {"intensity.rule": "thesis"}}, thresholds=thresholds)
     return params_from_doc(doc)[0]
 
 
@@ -76,9 +77,10 @@ def test_raising_the_thresholds_leaves_nothing_to_refine(tmp_path):
     assert not pipeline.lacking_saliency(analysis.video, tl.features["intensity"] > 0).any()
 
 
-def test_a_rederive_that_keeps_the_fan_rule_gives_the_fans_a_fresh_derive_gives(tmp_path):
-    """The fan track is kept from an earlier derive of the same cache when only the thresholds
-    changed, and computed again when the fan rule changed: either way as a fresh derive has it."""
+def test_a_rederive_that_keeps_the_picture_rules_gives_the_tracks_a_fresh_derive_gives(tmp_path):
+    """The picture's tracks (fans, temperature, motion curves) are kept from an earlier derive of
+    the same cache when only the thresholds changed, and computed again when their rule changed:
+    either way as a fresh derive has them."""
     import copy
     import dataclasses
 
@@ -88,9 +90,28 @@ def test_a_rederive_that_keeps_the_fan_rule_gives_the_fans_a_fresh_derive_gives(
     assert first.fans.max() > 0  # the scene's moving shapes blow
     again = pipeline.derive(analysis, params(LOW))  # kept from the first derive: shared, read-only
     assert first.fans.flags.writeable and not again.fans.flags.writeable
-    other = dataclasses.replace(analysis, video=copy.deepcopy(analysis.video))  # a cache never derived
-    np.testing.assert_array_equal(again.fans, pipeline.derive(other, params(LOW)).fans)
-    assert again.stats["airflow"] == first.stats["airflow"]
+    other = dataclasses.replace(analysis, video=copy.deepcopy(analysis.video),
+                                audio=copy.deepcopy(analysis.audio))  # a cache never derived
+    fresh = pipeline.derive(other, params(LOW))
+    assert not again.temperature_c.flags.writeable and np.ptp(fresh.temperature_c) > 0
+    for track in ("fans", "temperature_c", "vibration"):
+        np.testing.assert_array_equal(getattr(again, track), getattr(fresh, track), err_msg=track)
+    assert list(again.features) == list(fresh.features)
+    for name, values in fresh.features.items():
+        np.testing.assert_array_equal(again.features[name], values, err_msg=name)
+    assert again.stats["airflow"] == first.stats["airflow"] and again.stats["temperature"] == fresh.stats["temperature"]
+    for rule in ("events", "thesis"):  # the intensity rule's curves kept across thresholds and densities
+        for density in (None, 0.2):
+            intensity = dataclasses.replace(params(HIGH).intensity, rule=rule, density=density)
+            pipeline.derive(analysis, dataclasses.replace(params(HIGH), intensity=intensity))
+            lower = dataclasses.replace(params(LOW), intensity=dataclasses.replace(intensity, thresholds=LOW))
+            kept, new = pipeline.derive(analysis, lower), pipeline.derive(copy.deepcopy(other), lower)
+            np.testing.assert_array_equal(kept.vibration, new.vibration, err_msg=f"{rule} {density}")
+            np.testing.assert_array_equal(kept.features["intensity"], new.features["intensity"])
+    warmer = dataclasses.replace(params(LOW), thermal=dataclasses.replace(params(LOW).thermal, neutral_c=35.0))
+    np.testing.assert_array_equal(pipeline.derive(analysis, warmer).temperature_c,
+                                  pipeline.derive(other, warmer).temperature_c)
+    assert not np.array_equal(pipeline.derive(analysis, warmer).temperature_c, again.temperature_c)
     stricter = dataclasses.replace(params(LOW), airflow=dataclasses.replace(params(LOW).airflow, strong_rel=0.9))
     changed = pipeline.derive(analysis, stricter)  # another fan rule: computed again
     np.testing.assert_array_equal(changed.fans, pipeline.derive(other, stricter).fans)

@@ -316,14 +316,21 @@ def test_health_config_openapi(client):
 def test_frontend_is_served_without_stale_caches(tmp_path):
     front = tmp_path / "frontend"
     (front / "src").mkdir(parents=True)
-    (front / "index.html").write_text("<!doctype html><title>editor</title>")
+    (front / "index.html").write_text("<!doctype html><head><title>editor</title></head><body></body>")
     (front / "src" / "app.js").write_text("export const x = 1;")
+    (front / "src" / "data").mkdir()
+    (front / "src" / "data" / "api.js").write_text("export const y = 2;")
     (front / "logo.png").write_bytes(b"\x89PNG")
     app = create_app(Settings(data_dir=tmp_path / "data", frontend_dir=front, jobs=1))
     with LocalClient(app) as c:
         index = c.get("/")
         assert index.status_code == 200 and "editor" in index.text
         assert index.headers["cache-control"] == "no-cache"
+        # every module named up front, so a cold open fetches them at once, not level by level
+        assert ('<link rel="modulepreload" href="src/app.js">\n  <link rel="modulepreload" href="src/data/api.js">'
+                '\n</head>') in index.text
+        (front / "src" / "app.js").write_text("export const x = 3;")
+        assert c.get("/src/app.js").text == "export const x = 3;"  # a changed file is served changed
         js = c.get("/src/app.js")
         assert js.status_code == 200 and js.headers["cache-control"] == "no-cache"
         assert "javascript" in js.headers["content-type"]

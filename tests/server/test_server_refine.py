@@ -20,8 +20,6 @@ from autohaptics.server.settings import Settings
 
 from service_client import LocalClient
 
-# The thesis's vibration rule, under which lowering the thresholds wakes the steady hum (the default
-# follows events and leaves a steady hum still at these thresholds).
 HIGH = {"sharpness": 0.95, "booming": 0.95, "low_energy": 0.95, "loudness": 0.95}
 LOW = {"sharpness": 0.3, "booming": 0.3, "low_energy": 0.3, "loudness": 0.3}
 SCENE = synth.left_boom_right_hum_scene()
@@ -40,6 +38,19 @@ def wait_done(client: LocalClient, job_id: str) -> dict:
     return job
 
 
+def thesis_project(client: LocalClient, film) -> tuple[str, str]:
+    """Upload ``film`` and generate it with the thesis's intensity rule, which the scene's known
+    answer is defined by (under the "events" rule both of its sounds are events at any threshold).
+    Returns (project id, job id)."""
+    r = client.post("/api/projects", files={"file": ("film.mp4", film.read_bytes(), "video/mp4")},
+                    data={"mode": "multimodal", "generate": "false"})
+    assert r.status_code == 201, r.text
+    pid = r.json()["id"]
+    r = client.post(f"/api/projects/{pid}/generate", json={"overrides": {"intensity.rule": "thesis"}})
+    assert r.status_code == 202, r.text
+    return pid, r.json()["job"]["id"]
+
+
 def vibration(client: LocalClient, pid: str) -> np.ndarray:
     return np.asarray(client.get(f"/api/projects/{pid}/timeline").json()["tracks"]["vibration"], dtype=float)
 
@@ -47,11 +58,8 @@ def vibration(client: LocalClient, pid: str) -> np.ndarray:
 def test_threshold_commits_refine_only_what_they_wake(tmp_path, film):
     settings = Settings(data_dir=tmp_path / "data", frontend_dir=None)
     with LocalClient(create_app(settings)) as client:
-        r = client.post("/api/projects", files={"file": ("film.mp4", film.read_bytes(), "video/mp4")},
-                        data={"mode": "multimodal", "preset": "thesis"})
-        project = r.json()
-        wait_done(client, project["job"]["id"])
-        pid = project["id"]
+        pid, job_id = thesis_project(client, film)
+        wait_done(client, job_id)
         # Raising wakes no tick: derived at once, no job.
         r = client.put(f"/api/projects/{pid}/params", json={"thresholds": HIGH})
         assert r.status_code == 200 and r.json()["derived"] and r.json()["job"] is None
@@ -76,10 +84,8 @@ def test_threshold_commits_refine_only_what_they_wake(tmp_path, film):
 def test_a_restart_during_a_refinement_keeps_the_project_usable(tmp_path, film):
     settings = Settings(data_dir=tmp_path / "data", frontend_dir=None)
     with LocalClient(create_app(settings)) as client:
-        r = client.post("/api/projects", files={"file": ("film.mp4", film.read_bytes(), "video/mp4")},
-                        data={"mode": "multimodal", "preset": "thesis"})
-        pid = r.json()["id"]
-        wait_done(client, r.json()["job"]["id"])
+        pid, job_id = thesis_project(client, film)
+        wait_done(client, job_id)
         assert client.put(f"/api/projects/{pid}/params", json={"thresholds": HIGH}).json()["job"] is None
         r = client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW})
         job_id = r.json()["job"]["id"]

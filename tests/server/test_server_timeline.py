@@ -187,6 +187,42 @@ def test_binary_blocks_gzip_and_revalidation(client, project):
     assert decode(changed.content)[0]["revision"] == res["revision"]
 
 
+def test_binary_since_a_revision_sends_only_the_changed_blocks(client, project):
+    """``?since=R``: the blocks unchanged since revision R are left out and named in the header;
+    with R's blocks they make the whole timeline. An edit of one lane sends that lane; a threshold
+    commit the vibration and the curves, never the fans or the temperature."""
+    pid = project["id"]
+    url = f"/api/projects/{pid}/timeline.bin"
+    header0, full0 = decode(client.get(url).content)
+    rev0 = header0["revision"]
+    res = edit(client, pid, {"op": "set", "lanes": ["A2"], "t0": 0, "t1": 5, "value": 1.0})
+    h1, part1 = decode(client.get(url, params={"since": rev0}).content)
+    assert h1["since"] == rev0 and h1["revision"] == res["revision"] and list(part1) == ["vibration"]
+    assert "fans" in h1["unchanged"] and "temperature_c" in h1["unchanged"]
+    _, full1 = decode(client.get(url).content)
+    np.testing.assert_array_equal(part1["vibration"], full1["vibration"])
+    for name in h1["unchanged"]:
+        np.testing.assert_array_equal(full0[name], full1[name])
+
+    r = client.put(f"/api/projects/{pid}/params", json={"thresholds": {"loudness": 0.2, "sharpness": 0.2,
+                                                                      "booming": 0.2, "low_energy": 0.2}})
+    assert r.status_code == 200 and r.json()["derived"], r.text
+    h2, part2 = decode(client.get(url, params={"since": h1["revision"]}).content)
+    assert h2["since"] == h1["revision"] and "vibration" in part2
+    assert not {"fans", "fan_activity", "temperature_c"} & set(part2)
+    _, full2 = decode(client.get(url).content)
+    assert set(part2) | set(h2["unchanged"]) == set(full2)
+    for name, values in full2.items():
+        np.testing.assert_array_equal(part2[name] if name in part2 else full1[name], values)
+    assert not np.array_equal(full2["vibration"], full1["vibration"])
+
+    h3, part3 = decode(client.get(url, params={"since": h2["revision"]}).content)  # nothing moved on
+    assert part3 == {} and set(h3["unchanged"]) == set(full2)
+    old = decode(client.get(url, params={"since": 10_000}).content)  # a revision not kept: all of it
+    assert "since" not in old[0] and set(old[1]) == set(full2)
+    assert client.get(url, params={"since": -1}).status_code in (400, 422)
+
+
 # -------------------------------------------------------------------- generated layer
 def test_generated_layer_is_npz_and_its_json_export(client, project, data_dir):
     pid = project["id"]

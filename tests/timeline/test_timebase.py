@@ -35,6 +35,18 @@ def test_frames_to_ticks_keeps_trailing_axes_and_truncates():
     np.testing.assert_allclose(out[:, 0], [8, 18, 28])
 
 
+@pytest.mark.parametrize("dtype", [np.float64, np.float32, np.uint8, bool])
+def test_frames_to_ticks_equals_the_max_over_each_ticks_frames(dtype):
+    rng = np.random.default_rng(3)
+    x = (rng.random((503, 3)) * 200).astype(dtype)
+    out = tb.frames_to_ticks(x, 101)  # 503 frames: the last tick has 3, padded with zeros
+    padded = np.concatenate([x, np.zeros((2, 3), dtype=dtype)])
+    np.testing.assert_array_equal(out, padded.reshape(101, 5, 3).max(axis=1))
+    assert out.dtype == x.dtype
+    y = np.array([0.1, np.nan, 0.3, 0.2, 0.0, 0.5])
+    np.testing.assert_array_equal(tb.frames_to_ticks(y, 2), [np.nan, 0.5])  # NaN propagates, as a max does
+
+
 def test_tick_of_time_tolerates_rounding():
     assert tb.tick_of_time(0.3) == 3
     assert tb.tick_of_time(0.29999999) == 3

@@ -3,7 +3,7 @@
 Uploads FILM (by default a 2-hour 64 x 36, 5 fps film with events over silence, written once into
 the work folder) to a private server, lets it generate, then commits thresholds as the editor does
 and prints, per commit: PUT /params, then GET of the composed timeline.bin it leads to (gzip, as
-a browser asks), their sum (target <= 150 ms) and the server's CPU time over both (the steadier
+a browser asks, with ``?since=`` the revision held: the blocks that changed), their sum (target <= 150 ms) and the server's CPU time over both (the steadier
 figure on a shared machine), the bytes sent, whether a refinement started and
 its wall time as a share of the first generate (target <= 10 %). Then it stops the server while a
 refinement runs, starts it again and prints what the project shows (target: never ``failed``, the
@@ -114,17 +114,19 @@ def ensure_project(api: httpx.Client, film: Path, work: Path) -> tuple[dict, flo
     return api.get(f"/api/projects/{r.json()['id']}").json(), seconds
 
 
-def commit(api: httpx.Client, pid: str, thresholds: dict, server: psutil.Process) -> dict:
-    """One commit as the editor makes it: PUT /params, then GET the composed timeline.bin (gzip);
-    with the server process's CPU time over both (steadier than wall time on a loaded machine)."""
+def commit(api: httpx.Client, pid: str, thresholds: dict, server: psutil.Process, held: list[int]) -> dict:
+    """One commit as the editor makes it: PUT /params, then GET the composed timeline.bin (gzip)
+    with what changed since the revision it holds (``held[0]``, moved on to the answer's); with
+    the server process's CPU time over both (steadier than wall time on a loaded machine)."""
     c0 = sum(server.cpu_times()[:2])
     t0 = time.perf_counter()
     r = api.put(f"/api/projects/{pid}/params", json={"thresholds": thresholds})
     t1 = time.perf_counter()
     r.raise_for_status()
-    b = api.get(f"/api/projects/{pid}/timeline.bin", headers={"Accept-Encoding": "gzip"})
+    b = api.get(f"/api/projects/{pid}/timeline.bin", params={"since": held[0]}, headers={"Accept-Encoding": "gzip"})
     t2 = time.perf_counter()
     b.raise_for_status()
+    held[0] = r.json()["revision"]
     return {"put_ms": (t1 - t0) * 1e3, "bin_ms": (t2 - t1) * 1e3, "total_ms": (t2 - t0) * 1e3,
             "cpu_ms": (sum(server.cpu_times()[:2]) - c0) * 1e3, "bytes": b.num_bytes_downloaded,
             "job": r.json()["job"]}
@@ -133,19 +135,24 @@ def commit(api: httpx.Client, pid: str, thresholds: dict, server: psutil.Process
 def commit_rows(api: httpx.Client, pid: str, repeat: int, first_s: float, server: psutil.Process) -> list[dict]:
     """Raise and restore ``repeat`` times each (neither wakes a tick without saliency), then each
     lowering of :data:`LOWER` once with its refinement waited for."""
-    base = api.get(f"/api/projects/{pid}").json()["params"]["thresholds"]
+    project = api.get(f"/api/projects/{pid}").json()
+    base, held = project["params"]["thresholds"], [project["revision"]]
+    api.get(f"/api/projects/{pid}/timeline.bin", headers={"Accept-Encoding": "gzip"})  # what the editor opened
     runs = {"raise": [], "restore": []}
     for _ in range(repeat):
-        runs["raise"].append(commit(api, pid, RAISE, server))
-        runs["restore"].append(commit(api, pid, base, server))
+        runs["raise"].append(commit(api, pid, RAISE, server, held))
+        runs["restore"].append(commit(api, pid, base, server, held))
     keys = ("put_ms", "bin_ms", "total_ms", "cpu_ms")
     rows = [dict(case=name, **{k: statistics.median(r[k] for r in rs) for k in keys},
                  bytes=rs[-1]["bytes"], jobs=sum(bool(r["job"]) for r in rs), job_s=0.0, share=0.0)
             for name, rs in runs.items()]
     for th in LOWER:
-        r = commit(api, pid, th, server)
+        r = commit(api, pid, th, server, held)
         job = wait_job(api, r["job"]["id"]) if r["job"] else None
         seconds = (job_seconds(job) or float("nan")) if job else 0.0
+        if job is not None:  # the refinement's own revision: the editor reloads it whole
+            held[0] = api.get(f"/api/projects/{pid}").json()["revision"]
+            api.get(f"/api/projects/{pid}/timeline.bin", headers={"Accept-Encoding": "gzip"})
         rows.append(dict(case=f"lower to loudness {th['loudness']}", put_ms=r["put_ms"], bin_ms=r["bin_ms"],
                          total_ms=r["total_ms"], cpu_ms=r["cpu_ms"], bytes=r["bytes"], jobs=int(job is not None),
                          job_s=seconds,

@@ -8,18 +8,20 @@ recent baseline, :mod:`.novelty`; the "thesis" rule against the film's maximum).
 
 from autohaptics.intensity.features import AudioFeatureParams, AudioFeatures, compute_audio_features
 from autohaptics.intensity.rule import (
+    APPLIED_AFTER_CURVES,
     DEFAULT_THRESHOLDS,
     FEATURES,
     NORMALISERS,
     RULES,
     IntensityParams,
     audio_intensity,
+    decision_inputs,
     frame_intensity,
     normalise,
     normalise_features,
     tick_intensity,
 )
 
-__all__ = ["AudioFeatureParams", "AudioFeatures", "DEFAULT_THRESHOLDS", "FEATURES", "IntensityParams", "NORMALISERS",
-           "RULES", "audio_intensity", "compute_audio_features", "frame_intensity", "normalise", "normalise_features",
-           "tick_intensity"]
+__all__ = ["APPLIED_AFTER_CURVES", "AudioFeatureParams", "AudioFeatures", "DEFAULT_THRESHOLDS", "FEATURES",
+           "IntensityParams", "NORMALISERS", "RULES", "audio_intensity", "compute_audio_features", "decision_inputs",
+           "frame_intensity", "normalise", "normalise_features", "tick_intensity"]

@@ -190,16 +190,29 @@ def density_scale(normalised: dict[str, np.ndarray], curves: dict[str, np.ndarra
     return float(ticks[keep])
 
 
-def audio_intensity(features: dict[str, np.ndarray], n_ticks: int, *,
-                    params: IntensityParams) -> tuple[np.ndarray, dict[str, np.ndarray], dict]:
+# The fields applied after the decision curves (:func:`decision_inputs`): a threshold commit changes
+# only these, so the curves of one film can be kept across commits (``pipeline.derive``).
+APPLIED_AFTER_CURVES = ("thresholds", "density", "loudness_gate")
+
+
+def decision_inputs(features: dict[str, np.ndarray], *,
+                    params: IntensityParams) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """The normalised features and the curves the thresholds apply to, per 20 ms frame: the part of
+    :func:`audio_intensity` that none of :data:`APPLIED_AFTER_CURVES` changes (most of its time)."""
+    norm = normalise_features(features, params=params)
+    return norm, decision_curves(features, norm, params=params)
+
+
+def audio_intensity(features: dict[str, np.ndarray], n_ticks: int, *, params: IntensityParams,
+                    inputs: tuple[dict, dict] | None = None) -> tuple[np.ndarray, dict[str, np.ndarray], dict]:
     """The per-tick vibration intensity of ``params.rule`` (module docstring).
 
     features : {feature: physical values per 20 ms frame [shape=(n_ticks * 5,)]}.
+    inputs : :func:`decision_inputs` of ``features`` with these parameters, when already computed.
     Returns (intensity float64 [shape=(n_ticks,)] in [0, 1], the per-tick curves the thresholds
     apply to {feature: [shape=(n_ticks,)] in [0, 1]}, stats {"rule", "density", "threshold_scale"}).
     """
-    norm = normalise_features(features, params=params)
-    curves = decision_curves(features, norm, params=params)
+    norm, curves = inputs if inputs is not None else decision_inputs(features, params=params)
     scale = density_scale(norm, curves, n_ticks, params=params)
     value_features = FEATURES if params.rule == "thesis" else LEVEL_FEATURES
     frames = triggered_values(norm, curves, params=params, value_features=value_features, scale=scale)

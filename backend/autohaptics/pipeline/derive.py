@@ -5,6 +5,7 @@ film). Each track comes from its stage: intensity and fusion (vibration), temper
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import threading
 import time
@@ -49,54 +50,77 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
             if lacking_saliency(video, intensity > 0).any():
                 stats["needs_analysis"] = True
     temp_low, temp_high = params.thermal.range_c
-    tl.temperature_c[:] = float(np.clip(params.thermal.neutral_c, temp_low, temp_high))
-    if "temperature" in params.tracks and video is not None:
-        tl.temperature_c[:], target, stats["temperature"] = temperature_track(video.mean_rgb, params=params.thermal,
-                                                                              tick_s=TICK_S)
-        if params.thermal.mapping != "thesis":
-            tl.features["temperature_target_c"] = target
-    if video is not None:
-        peak = float(video.motion.max()) if video.motion.size else 0.0
-        tl.features["motion"] = np.clip(video.motion / peak, 0.0, 1.0) if peak > 0 else np.zeros(n)
-        tl.features["motion_fw_per_s"] = video.motion.astype(np.float64)
-        if "fans" in params.tracks:
-            stats["airflow"] = _fans(video, params, tl)
+    if video is None:
+        tl.temperature_c[:] = float(np.clip(params.thermal.neutral_c, temp_low, temp_high))
+    else:
+        _picture_tracks(video, params, tl, stats)
     gen_params = params_to_dict(params)
     gen_params["thresholds"] = dict(params.intensity.thresholds)
     gen_params["temp_low"], gen_params["temp_high"] = temp_low, temp_high
     tl.generator = default_generator(mode=params.mode, preset=preset, params=gen_params)
     stats["derive"] = {"seconds": time.perf_counter() - t0}
-    active = int((tl.vibration.max(axis=1) > 0).sum())
+    active = int(np.count_nonzero(np.logical_or.reduce(tl.vibration.T > 0)))
     stats["vibration"] = {"active_ticks": active, "ticks": n, "share": active / n if n else 0.0,
                           **stats.pop("intensity_rule", {})}
     tl.stats = stats
     return tl.validate()
 
 
-# The fan track of recent derives, per video analysis (held weakly) and airflow parameters: the
-# fans depend on nothing else, and recomputing them is most of a threshold commit's derive.
-_FANS: dict[int, tuple] = {}
-_FANS_KEPT = 2
-_FANS_LOCK = threading.Lock()
+# The picture's tracks of recent derives (temperature, motion, fans), per video analysis (held
+# weakly) and the parameters they read: no threshold or intensity rule changes them, and
+# recomputing them (the fans most of all) would be most of a threshold commit's derive.
+_PICTURE: dict[int, tuple] = {}
+_PICTURE_KEPT = 2
+_PICTURE_LOCK = threading.Lock()
 
 
-def _fans(video, params: GenerateParams, tl: Timeline) -> dict:
-    """Set ``tl.fans`` and return its stats. A later derive from the same ``video`` with the same
-    ``params.airflow`` shares a read-only copy of the track (float32 [shape=(n, 9, 17)]) instead of
-    recomputing it; the first one's own track stays writable."""
-    with _FANS_LOCK:
-        hit = _FANS.get(id(video))
-    if hit is not None and hit[0]() is video and hit[1] == params.airflow:
-        tl.fans = hit[2]
-        return json.loads(json.dumps(hit[3]))
-    _, stats = fan_track(video.motion, video.cell_motion, video.nearness, video.cut, video.depth_mask,
-                         params=params.airflow, out=tl.fans)
-    kept = tl.fans.copy()
-    kept.flags.writeable = False
-    with _FANS_LOCK:
-        _FANS[id(video)] = (weakref.ref(video), params.airflow, kept, json.loads(json.dumps(stats)))
-        while len(_FANS) > _FANS_KEPT:
-            _FANS.pop(next(iter(_FANS)))
+def _picture_tracks(video, params: GenerateParams, tl: Timeline, stats: dict) -> None:
+    """Set ``tl``'s temperature, motion features and fans from ``video`` (and their ``stats``).
+
+    A later derive from the same ``video`` with the same thermal and airflow parameters and tracks
+    shares read-only copies of them instead of recomputing them; the first one's own stay writable.
+    """
+    key = (params.thermal, params.airflow, "temperature" in params.tracks, "fans" in params.tracks)
+    with _PICTURE_LOCK:
+        hit = _PICTURE.get(id(video))
+    if hit is not None and hit[0]() is video and hit[1] == key:
+        arrays, kept_stats = hit[2], hit[3]
+        tl.temperature_c, tl.fans = arrays["temperature_c"], arrays["fans"]
+        tl.features.update((name, arrays[name]) for name in arrays if name not in ("temperature_c", "fans"))
+        stats.update(json.loads(json.dumps(kept_stats)))
+        return
+    own = _picture_compute(video, params, tl)
+    stats.update(own)
+    arrays = {"temperature_c": tl.temperature_c, "fans": tl.fans,
+              **{name: tl.features[name] for name in ("temperature_target_c", "motion", "motion_fw_per_s")
+                 if name in tl.features}}
+    kept = {}
+    for name, values in arrays.items():
+        kept[name] = np.array(values, dtype=np.float32)
+        kept[name].flags.writeable = False
+    with _PICTURE_LOCK:
+        _PICTURE[id(video)] = (weakref.ref(video), key, kept, json.loads(json.dumps(own)))
+        while len(_PICTURE) > _PICTURE_KEPT:
+            _PICTURE.pop(next(iter(_PICTURE)))
+
+
+def _picture_compute(video, params: GenerateParams, tl: Timeline) -> dict:
+    """Compute ``tl``'s temperature, motion features and fans from ``video``; returns their stats."""
+    stats = {}
+    n = tl.n_ticks
+    temp_low, temp_high = params.thermal.range_c
+    tl.temperature_c[:] = float(np.clip(params.thermal.neutral_c, temp_low, temp_high))
+    if "temperature" in params.tracks:
+        tl.temperature_c[:], target, stats["temperature"] = temperature_track(video.mean_rgb, params=params.thermal,
+                                                                              tick_s=TICK_S)
+        if params.thermal.mapping != "thesis":
+            tl.features["temperature_target_c"] = target
+    peak = float(video.motion.max()) if video.motion.size else 0.0
+    tl.features["motion"] = np.clip(video.motion / peak, 0.0, 1.0) if peak > 0 else np.zeros(n)
+    tl.features["motion_fw_per_s"] = video.motion.astype(np.float64)
+    if "fans" in params.tracks:
+        _, stats["airflow"] = fan_track(video.motion, video.cell_motion, video.nearness, video.cut, video.depth_mask,
+                                        params=params.airflow, out=tl.fans)
     return stats
 
 
@@ -110,9 +134,37 @@ def _intensity(analysis: Analysis, params: GenerateParams, tl: Timeline, stats: 
             tl.features[name] = np.zeros(n)
         intensity = np.zeros(n)
     else:
-        intensity, curves, rule_stats = inten.audio_intensity(analysis.audio, n, params=params.intensity)
+        intensity, curves, rule_stats = inten.audio_intensity(analysis.audio, n, params=params.intensity,
+                                                              inputs=_decision_inputs(analysis.audio, params.intensity))
         for name in inten.FEATURES:
             tl.features[name] = curves[name]
         stats["intensity_rule"] = rule_stats
     tl.features["intensity"] = intensity
     return intensity
+
+
+# The intensity rule's decision inputs of recent derives, per audio feature set (held weakly) and
+# the intensity parameters that shape them: a threshold commit reuses them.
+_CURVES: dict[tuple, tuple] = {}
+_CURVES_LOCK = threading.Lock()
+
+
+def _decision_inputs(audio, params: inten.IntensityParams) -> tuple[dict, dict]:
+    """:func:`intensity.decision_inputs` of ``audio`` (its dict of per-frame features), kept from an
+    earlier derive of the same features when no parameter but those applied after them changed."""
+    key = dataclasses.replace(params, **{f: getattr(inten.IntensityParams(), f) for f in inten.APPLIED_AFTER_CURVES})
+    arrays = tuple(sorted(audio.items()))
+    ident = tuple((name, id(values)) for name, values in arrays)
+    with _CURVES_LOCK:
+        hit = _CURVES.get(ident)
+    if hit is not None and all(ref() is values for ref, (_, values) in zip(hit[0], arrays)) and hit[1] == key:
+        return hit[2]
+    inputs = inten.decision_inputs(audio, params=params)
+    for curves in inputs:
+        for values in curves.values():
+            values.flags.writeable = False
+    with _CURVES_LOCK:
+        _CURVES[ident] = ([weakref.ref(values) for _, values in arrays], key, inputs)
+        while len(_CURVES) > _PICTURE_KEPT:
+            _CURVES.pop(next(iter(_CURVES)))
+    return inputs

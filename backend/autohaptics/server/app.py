@@ -10,12 +10,12 @@ import anyio
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
-from starlette.staticfiles import StaticFiles
 
 from autohaptics import __version__
 from autohaptics.errors import DeviceError, MediaError, ParameterError
 from autohaptics.server import folder_lock
 from autohaptics.server.chair import ChairService
+from autohaptics.server.frontend import FrontendFiles
 from autohaptics.server.jobs import JobRunner
 from autohaptics.server.routes import chair, jobs, projects, service, timeline
 from autohaptics.server.security import TrustBoundary, folder_token, host_names
@@ -25,17 +25,6 @@ from autohaptics.server.composer import Composer
 from autohaptics.server.uploads import MediaRejected, UploadTooLarge
 
 log = logging.getLogger("autohaptics.server")
-_NO_CACHE_SUFFIXES = (".html", ".js", ".mjs", ".css", ".json")
-
-
-class FrontendFiles(StaticFiles):
-    """The editor's static files; HTML, scripts and styles are revalidated on every load."""
-
-    def file_response(self, full_path, stat_result, scope, status_code=200):
-        response = super().file_response(full_path, stat_result, scope, status_code)
-        if str(full_path).endswith(_NO_CACHE_SUFFIXES):
-            response.headers["Cache-Control"] = "no-cache"
-        return response
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:

@@ -3,8 +3,8 @@
 - :class:`Composer` loads the generated timeline (``generated.npz``) and the feature cache (kept
   in memory while their files do not change), re-derives from the cache without decoding (the
   derived timeline stays in memory), composes ``apply_ops(generated, ops[:cursor])`` (kept per
-  revision), and serves the binary form (kept per revision, layer and block list, gzipped on
-  request).
+  revision), and serves the binary form (:mod:`.bins`: unchanged blocks encoded once, and left
+  out for a client that holds them).
 - ``import`` edits: the document goes to ``projects/<id>/imports/<ref>.json``; the op stored in
   the edit list is ``{"op": "import", "ref", "name", "n_ticks"}``.
 
@@ -23,15 +23,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from autohaptics import pipeline
 from autohaptics.params import params_from_doc
 from autohaptics.errors import ParameterError
 from autohaptics.formats.importing import parse_timeline
 from autohaptics.timeline import edits as edit_ops
-from autohaptics.timeline import wire as binary
 from autohaptics.timeline.npz import load_npz
+from autohaptics.server.bins import BinaryCache, same_values
 from autohaptics.server.store import Conflict, NotFound, Store, new_id
 from autohaptics.server.waveform import cached_peaks
 from autohaptics.server.writer import LayerWriter
@@ -39,7 +37,6 @@ from autohaptics.timebase import TICK_S
 from autohaptics.timeline import Timeline
 
 log = logging.getLogger("autohaptics.server.composer")
-GZIP_LEVEL = 1  # the fans block is mostly zeros: level 1 already shrinks it ~10x, at ~100 MB/s
 
 def derive_timeline(analysis: pipeline.Analysis, doc: dict, *, name: str) -> Timeline:
     """The generated timeline for stored parameters ``doc`` from a feature cache (no decoding)."""
@@ -80,9 +77,8 @@ class Composer:
         self._warming: set[Path] = set()
         self._composed: OrderedDict[str, tuple[tuple, Composed]] = OrderedDict()
         self._json: OrderedDict[str, tuple[Composed, bytes]] = OrderedDict()
-        self._encoded: OrderedDict[tuple[str, str], dict[str, _Encoded]] = OrderedDict()
         self._tracks: OrderedDict[str, dict[str, tuple]] = OrderedDict()  # per project: (generated, keys, composed)
-        self._bins: OrderedDict[tuple, bytes] = OrderedDict()
+        self.bins = BinaryCache(cache_size)
         self._waveform_locks: dict[str, threading.Lock] = {}
         self._size = cache_size
         self.writer = LayerWriter(store, self._written)
@@ -207,7 +203,7 @@ class Composer:
         reuse = {}
         for track in edit_ops.TRACKS:  # a track whose generated values and edits are unchanged is kept
             hit = previous.get(track)
-            if hit is not None and hit[1] == keys[track] and _same_values(hit[0], getattr(generated, track)):
+            if hit is not None and hit[1] == keys[track] and same_values(hit[0], getattr(generated, track)):
                 reuse[track] = hit[2]
         tl, markers = edit_ops.apply_ops(generated, ops, imports=lambda ref: self._import(pid, ref), reuse=reuse)
         tl.source["name"] = project["name"]
@@ -337,67 +333,20 @@ class Composer:
         return data
 
     def timeline_bin(self, pid: str, *, layer: str = "composed", blocks: list[str] | None = None,
-                     gzipped: bool = False) -> tuple[bytes, str]:
-        """The binary timeline and its ETag, kept per (project, revision, layer, blocks, gzip).
+                     gzipped: bool = False, since: int | None = None) -> tuple[bytes, str]:
+        """The binary timeline and its ETag, kept per (project, revision, layer, blocks, gzip, since).
 
-        ``blocks``: the block names to send (None: all; see :func:`binary.select_blocks`). The
-        composed layer's header carries the markers. A block whose values did not change since
-        the previous revision is not quantised or compressed again."""
+        ``blocks``: the block names to send (None: all; see :func:`binary.select_blocks`);
+        ``since``: a revision the client holds, whose unchanged blocks are left out (:mod:`.bins`).
+        The composed layer's header carries the markers."""
         composed = self.compose(pid)
         names = None if blocks is None else tuple(sorted(set(blocks)))
-        tag = f"{pid}-{composed.revision}-{layer}-{','.join(names) if names else 'all'}"
-        key = (pid, composed.revision, id(composed.timeline), layer, names, gzipped)
-        with self._lock:
-            hit = self._bins.get(key)
-            if hit is not None:
-                self._bins.move_to_end(key)
-                return hit, tag
+        tag = (f"{pid}-{composed.revision}-{layer}-{','.join(names) if names else 'all'}"
+               f"{'' if since is None else f'-since{since}'}")
         tl = composed.timeline if layer == "composed" else self.require_generated(pid)
-        encoded = self._encoded_blocks(pid, layer, tl)
-        chosen_names = {b.name for b in binary.select_blocks([e.block for e in encoded],
-                                                             None if names is None else list(names))}
-        chosen = [e for e in encoded if e.block.name in chosen_names]
         header = {"markers": composed.markers} if layer == "composed" else {}
-        head = binary.head_bytes(tl.n_ticks, tl.tick_s, composed.revision, [e.block for e in chosen], header)
-        plain = [head, *(e.plain for e in chosen)]
-        if gzipped:
-            for e in chosen:
-                if e.deflated is None:
-                    e.deflated = binary.deflate_segment(e.plain, GZIP_LEVEL)
-            data = binary.gzip_join(plain, [binary.deflate_segment(head, GZIP_LEVEL), *(e.deflated for e in chosen)])
-        else:
-            data = b"".join(plain)
-        with self._lock:
-            self._bins[key] = data
-            self._bins.move_to_end(key)
-            while len(self._bins) > 4 * self._size:
-                self._bins.popitem(last=False)
-        return data, tag
-
-    def _encoded_blocks(self, pid: str, layer: str, tl: Timeline) -> list[_Encoded]:
-        """Every block of ``tl`` quantised and laid out, reusing the previous revision's blocks whose
-        source values are the same (an edit of one lane leaves the fans' 11 MB as they were)."""
-        with self._lock:
-            previous = self._encoded.get((pid, layer), {})
-        same: dict[tuple[int, int], bool] = {}
-        out: dict[str, _Encoded] = {}
-        for name, dtype, src in binary.block_sources(tl):
-            e = previous.get(name)
-            if e is not None:
-                pair = (id(e.source), id(src))
-                if pair not in same:
-                    same[pair] = _same_values(e.source, src)
-                if same[pair]:
-                    out[name] = e if e.source is src else dataclasses.replace(e, source=src)
-                    continue
-            block = binary.quantise(name, dtype, src)
-            out[name] = _Encoded(block=block, source=src, plain=binary.block_bytes(block))
-        with self._lock:
-            self._encoded[(pid, layer)] = out
-            self._encoded.move_to_end((pid, layer))
-            while len(self._encoded) > 2 * self._size:
-                self._encoded.popitem(last=False)
-        return list(out.values())
+        return self.bins.get(pid, layer, composed.revision, tl, header=header, names=names, gzipped=gzipped,
+                             since=since), tag
 
     # ------------------------------------------------------------------ waveform
     def waveform(self, pid: str, points: int) -> dict:
@@ -408,20 +357,6 @@ class Composer:
         with lock:
             return cached_peaks(self.store.media_path(project), self.store.waveform_path(pid, points),
                                 points=points)
-
-
-@dataclass
-class _Encoded:
-    """One block of a served binary timeline: quantised, its bytes, its DEFLATE segment (lazily)."""
-
-    block: binary.Block
-    source: Any  # the array it was quantised from (compared with the next revision's)
-    plain: bytes
-    deflated: bytes | None = None
-
-
-def _same_values(a, b) -> bool:
-    return a is b or (a.shape == b.shape and a.dtype == b.dtype and bool(np.array_equal(a, b)))
 
 
 def _file_key(path: Path) -> tuple | None:

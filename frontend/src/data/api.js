@@ -154,16 +154,21 @@ export class Api {
    * @param {string} id
    * @param {"composed"|"generated"} [layer]
    * @param {string|null} [blocks] comma-separated block names (null: every block)
+   * @param {number|null} [since] a revision held: its unchanged blocks are left out (named in the header)
    * @returns {Promise<ArrayBuffer>}
    */
-  timelineBin(id, layer = "composed", blocks = null) {
-    const path = this.timelineBinPath(id, layer, blocks);
+  timelineBin(id, layer = "composed", blocks = null, since = null) {
+    const path = this.timelineBinPath(id, layer, blocks, since);
     return this.readBuffer(fetch(this.base + path), `GET ${path}`);
   }
 
-  /** @param {string} id @param {"composed"|"generated"} [layer] @param {string|null} [blocks] */
-  timelineBinPath(id, layer = "composed", blocks = null) {
-    return `/api/projects/${enc(id)}/timeline.bin?layer=${layer}${blocks ? `&blocks=${blocks}` : ""}`;
+  /**
+   * @param {string} id @param {"composed"|"generated"} [layer] @param {string|null} [blocks]
+   * @param {number|null} [since]
+   */
+  timelineBinPath(id, layer = "composed", blocks = null, since = null) {
+    return `/api/projects/${enc(id)}/timeline.bin?layer=${layer}${blocks ? `&blocks=${blocks}` : ""}` +
+      `${since === null ? "" : `&since=${since}`}`;
   }
 
   /**

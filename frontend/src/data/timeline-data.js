@@ -6,7 +6,9 @@
  * (`?blocks=`): the lanes only draw `fan_activity`; the grid is for the overlay and copying.
  * `withFans()` returns the same timeline with it. Built with the timeline it replaces, it keeps
  * that one's pyramids for the curves whose samples did not change (a threshold commit changes the
- * vibration, not the temperature, fans or features): only the changed lanes are rebuilt.
+ * vibration, not the temperature, fans or features): only the changed lanes are rebuilt. An answer
+ * to `?since=` (the revision it replaces) holds only the changed blocks and takes the others,
+ * named in its header's `unchanged`, from that timeline.
  */
 
 /** The blocks of the first request: everything but the fan grid. */
@@ -28,7 +30,10 @@ export class TimelineData {
    * @param {TimelineData|null} [previous] the timeline this one replaces (its unchanged pyramids are kept)
    */
   constructor(parsed, shape, previous = null) {
-    const { header, blocks } = parsed;
+    const { header } = parsed;
+    const blocks = withUnchanged(parsed, previous);
+    /** the blocks as parsed (those kept from `previous` included) */
+    this.blocks = blocks;
     this.shape = shape;
     const nAct = shape.actuatorIds.length;
     const n = header.n_ticks;
@@ -113,6 +118,7 @@ export class TimelineData {
     if (!b) throw new Error('binary timeline has no "fans" block');
     const copy = Object.assign(Object.create(TimelineData.prototype), this);
     copy.fans = fansOf(b, this.nTicks, this.shape);
+    copy.blocks = new Map(this.blocks).set("fans", b);
     return /** @type {TimelineData} */ (copy);
   }
 
@@ -163,8 +169,29 @@ function fansOf(block, n, shape) {
   return /** @type {Uint8Array} */ (block.data);
 }
 
+/**
+ * The parsed blocks plus, for an answer to `?since=`, the blocks its header names `unchanged`
+ * taken from `previous` (which must be that revision).
+ * @param {import("./binary.js").ParsedBin} parsed
+ * @param {TimelineData|null} previous
+ */
+function withUnchanged(parsed, previous) {
+  const { header, blocks } = parsed;
+  if (header.since === undefined || header.since === null) return blocks;
+  if (!previous || previous.revision !== Number(header.since) || previous.nTicks !== header.n_ticks) {
+    throw new Error(`the timeline's changes are since revision ${header.since}, not the one held`);
+  }
+  const all = new Map(blocks);
+  for (const name of header.unchanged || []) {
+    const b = previous.blocks.get(name);
+    if (b) all.set(name, b);
+  }
+  return all;
+}
+
 /** Same length and values. @param {ArrayLike<number>} a @param {ArrayLike<number>} b */
 function sameSamples(a, b) {
+  if (a === b) return true;
   if (a.length !== b.length || a.constructor !== b.constructor) return false;
   for (let i = 0; i < a.length; i++) if (a[i] !== b[i]) return false;
   return true;

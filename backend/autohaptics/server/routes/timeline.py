@@ -43,12 +43,15 @@ def get_timeline(project_id: str, composer: ComposerDep,
 def get_timeline_bin(project_id: str, request: Request, composer: ComposerDep,
                      layer: Literal["composed", "generated"] = Query(default="composed"),
                      blocks: str | None = Query(default=None, description="comma-separated block names, "
-                                                "e.g. vibration,temperature_c,features (default: all)")) -> Response:
+                                                "e.g. vibration,temperature_c,features (default: all)"),
+                     since: int | None = Query(default=None, ge=0, description="a revision the client holds: the "
+                                               "blocks unchanged since it are left out and named in the header")
+                     ) -> Response:
     names = [b.strip() for b in blocks.split(",") if b.strip()] if blocks is not None else None
     if names is not None and not names:
         raise ParameterError("blocks must name at least one block (or leave the parameter out for all)")
     gzipped = _accepts_gzip(request.headers.get("accept-encoding", ""))
-    data, tag = composer.timeline_bin(project_id, layer=layer, blocks=names, gzipped=gzipped)
+    data, tag = composer.timeline_bin(project_id, layer=layer, blocks=names, gzipped=gzipped, since=since)
     etag = f'"{tag}{"-gz" if gzipped else ""}"'
     headers = {"ETag": etag, "Cache-Control": "no-cache", "Vary": "Accept-Encoding"}
     if etag in _etags(request.headers.get("if-none-match", "")):

@@ -59,14 +59,16 @@ export class TimelineLoader {
   /**
    * Load the composed timeline and draw it. The first load of the editor leaves the fan grid out
    * (FIRST_BLOCKS) so the lanes are drawn sooner, and fetches it right after; later loads (after
-   * an edit) take every block. The editor is "ready" once the fan grid is in too.
+   * an edit or a parameter change) take the blocks that changed since the revision on screen
+   * (`?since=`). The editor is "ready" once the fan grid is in too.
    */
   async reload() {
     const page = this.page;
     const seq = ++this.seq;
+    const held = page.data; // the revision on screen: the answer holds only what changed since it
     let buf;
     try {
-      buf = await this._fetch();
+      buf = await this._fetch(held);
     } catch (err) {
       page.media.attach();
       if (err instanceof ApiError && err.status === 404 && page.project && !page.project.has_timeline) return;
@@ -77,7 +79,7 @@ export class TimelineLoader {
     if (page.disposed || seq !== this.seq) return; // a newer load is under way
     let data;
     try {
-      data = TimelineData.fromBuffer(buf, page.layout, page.data);
+      data = TimelineData.fromBuffer(buf, page.layout, held);
     } catch (err) {
       page.showNotice(`The timeline could not be read: ${errorText(err)}`);
       return;
@@ -93,12 +95,18 @@ export class TimelineLoader {
     if (!data.hasFans) await this._loadFans(seq);
   }
 
-  /** The binary timeline: the first request's answer once, then a fresh request. */
-  async _fetch() {
+  /**
+   * The binary timeline: the first request's answer once, then the blocks changed since `held`.
+   * @param {TimelineData|null} held
+   */
+  async _fetch(held) {
     const page = this.page;
     const first = this.first && this.first.bin;
     if (this.first) this.first.bin = null;
-    if (!first) return page.api.timelineBin(page.projectId, "composed", page.data === null ? FIRST_BLOCKS : null);
+    if (!first) {
+      return page.api.timelineBin(page.projectId, "composed", held === null ? FIRST_BLOCKS : null,
+        held === null ? null : held.revision);
+    }
     const got = await first;
     if ("error" in got) throw got.error;
     return got.value;
