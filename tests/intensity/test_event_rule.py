@@ -145,3 +145,12 @@ def test_trailing_max_equals_scipy_maximum_filter(v, n):
     assert out.shape == v.shape and out.dtype == v.dtype
     if v.size:
         assert np.array_equal(out, maximum_filter1d(v, n, origin=(n - 1) // 2, mode="nearest"))
+
+
+def test_novelty_of_a_denormal_curve_is_finite():
+    """Found by the property above: a curve whose peak is a denormal number (5e-324) made its floor
+    underflow to 0 and its novelty 0/0."""
+    from autohaptics.intensity.novelty import novelty
+
+    out = novelty(np.r_[np.zeros(40), np.full(40, 5e-324)])
+    assert np.isfinite(out).all() and out.min() >= 0 and out.max() <= 1 and out[40] > 0

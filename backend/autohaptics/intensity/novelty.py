@@ -58,6 +58,7 @@ def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, cl
     top = float(v.max()) if n else 0.0
     if top <= 0.0:
         return np.zeros(n)
+    v = v / top  # the ratio below is scale-free; at 0..1 its floor cannot underflow (a denormal top)
     env_n = max(1, int(round(ENVELOPE_S / FRAME_S)))
     env = trailing_max(v, env_n)
     cum = np.concatenate([[0.0], np.cumsum(env)])
@@ -66,8 +67,7 @@ def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, cl
     lo = np.clip(hi - max(1, int(round(baseline_s / FRAME_S))), 0, n)
     count = hi - lo
     base = np.where(count > 0, (cum[hi] - cum[lo]) / np.maximum(count, 1), 0.0)
-    floor = FLOOR * top
-    out = np.maximum(np.log2((v + floor) / (np.maximum(base, 0.0) + floor)) / FULL_OCTAVES, 0.0)
+    out = np.maximum(np.log2((v + FLOOR) / (np.maximum(base, 0.0) + FLOOR)) / FULL_OCTAVES, 0.0)
     return np.minimum(out, 1.0) if clip else out
 
 
