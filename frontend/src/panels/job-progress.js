@@ -33,6 +33,7 @@ export class JobProgress {
     this.watch = null;
     /** @type {string|null} */
     this.jobId = null;
+    this.ended = false;
     this.cancelBtn.addEventListener("click", () => this.cancel());
   }
 
@@ -44,6 +45,8 @@ export class JobProgress {
   async follow(job) {
     this.close();
     this.jobId = job.id;
+    /** the job's end has been shown (a late answer to Cancel must not cover it) */
+    this.ended = false;
     this.cancelBtn.disabled = false;
     this._show(job.progress || 0, STAGES[job.stage || job.status] || job.stage || job.status);
     this.status.textContent = "";
@@ -57,6 +60,7 @@ export class JobProgress {
       throw err;
     }
     this.cancelBtn.disabled = true;
+    this.ended = true;
     if (final.status === "done") {
       this._show(1, "done");
       this.status.textContent = "Generation finished.";
@@ -82,8 +86,9 @@ export class JobProgress {
     this.cancelBtn.disabled = true;
     try {
       await this.api.cancelJob(this.jobId);
-      this.status.textContent = "Cancelling…";
+      if (!this.ended) this.status.textContent = "Cancelling…";
     } catch (err) {
+      if (this.ended) return;
       this.status.textContent = `Could not cancel: ${errorText(err)}`;
       this.cancelBtn.disabled = false;
     }
