@@ -11,13 +11,14 @@ docs/BENCHMARKS.md have the figures behind them):
 
 - ``reference``: the exact ISO 532-1 filter bank, every frame decoded and analysed, flow on a third
   of the picture's width (at least 640 px), 320 px saliency and depth, nothing skipped.
-- ``balanced`` (default): FFmpeg decodes only the reference frames, one frame (plus its successor
-  for flow) per 100 ms tick, flow on an eighth of the picture's width (at least 160 px), 256 px
+- ``balanced`` (default): FFmpeg decodes only the reference frames, one frame (plus the next distinct
+  frame for flow) per 100 ms tick, flow on an eighth of the picture's width (at least 160 px), 256 px
   saliency, 128 px depth, skipping on.
 - ``fast``: the picture read for every third tick, only I- and P-frames decoded from 40 fps up,
   128 px flow at DIS "fast", 128 px saliency, 64 px depth.
-- ``thesis``: ``balanced`` with every stage following the thesis's own rule (:data:`THESIS_RULES`),
-  to reproduce its results; the same rules combine with any preset through ``--set``.
+- ``thesis``: ``balanced`` with the vibration rule, the colour mapping and the fans' frame pairing
+  and nearness back on the thesis's rules (:data:`THESIS_RULES`); the other decisions stay (cuts,
+  the loudness gate, the fan smoothing). The same rules combine with any preset through ``--set``.
 """
 
 from __future__ import annotations
@@ -121,8 +122,8 @@ class GenerateParams(Record):
             raise ParameterError(f"unknown track(s) {bad}; choose from {list(TRACKS)}")
 
 
-# The dotted overrides that make every stage follow the thesis's own rule where the default
-# differs from it (ALGORITHM.md; docs/GUIDE.md says what each default does instead).
+# The dotted overrides that undo ALGORITHM.md's 2026-11 decisions, putting the thesis's rules back;
+# every other field keeps its default, earlier decisions included (docs/GUIDE.md, section 5).
 THESIS_RULES: dict[str, Any] = {
     "intensity.rule": "thesis",  # the default follows events: each feature against its recent baseline
     "intensity.loudness_gate": 0.05,  # the default gate, 0.2, is 23 phon below the film's loudest moment

@@ -118,7 +118,7 @@ def smoothed_cell_motion(cell_motion_: np.ndarray, shot: np.ndarray, ticks: np.n
     still keeps k still ticks in front of a clip from changing its fans), then blurred over
     neighbouring cells (``cell_sigma_cells``; beyond the grid's edge the edge cell repeats).
     Why: a tick's flow pair samples one frame interval of its motion, and which cells reach half
-    of the strongest one flickers from tick to tick (module docstring, point 5).
+    of the strongest one flickers from tick to tick (docs/BENCHMARKS.md, "Fans", point 6).
     """
     cm = np.asarray(cell_motion_)
     shot = np.asarray(shot)
