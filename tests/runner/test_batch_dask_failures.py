@@ -84,7 +84,8 @@ def cluster_procs(tmp_path):
                 socket.create_connection(("127.0.0.1", port), timeout=1).close()
                 break
             except OSError:
-                assert scheduler.poll() is None and time.monotonic() < deadline, (tmp_path / "scheduler.log").read_text()
+                assert scheduler.poll() is None and time.monotonic() < deadline, \
+                    (tmp_path / "scheduler.log").read_text()
                 time.sleep(0.2)
         worker = _start(["worker", address, "--nthreads", "1", "--no-nanny", "--no-dashboard"], tmp_path / "worker.log")
         yield address, {"scheduler": scheduler, "worker": worker}
