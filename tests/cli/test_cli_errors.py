@@ -10,12 +10,10 @@ from pathlib import Path
 import pytest
 
 from autohaptics.cli.main import main
+from autohaptics.testing import Scene, Segment, Tone, write_scene
 from autohaptics.timeline import Timeline
 
-from shared_data import shared_clip
 from stress_inputs import CASES
-
-CLIP = "bbb_1s_1280x720_vp8_vorbis.webm"
 
 
 def one_line(capsys) -> str:
@@ -25,6 +23,15 @@ def one_line(capsys) -> str:
     return err
 
 
+@pytest.fixture(scope="module")
+def film(tmp_path_factory) -> Path:
+    """A generated 1 s clip (a red picture, a 60 Hz tone): every command that reads media accepts it."""
+    scene = Scene(duration_s=1.0, background=(Segment(0.0, 1.0, (150, 60, 40)),),
+                  audio=(Tone(0.2, 0.8, 60.0, level_dbfs=-14.0),), name="cli errors")
+    return write_scene(tmp_path_factory.mktemp("cli-film") / "film.mp4", scene, width=64, height=36, fps=5,
+                       quality="low", sample_rate=24000)
+
+
 @pytest.fixture
 def timeline_json(tmp_path) -> Path:
     path = tmp_path / "t.json"
@@ -32,22 +39,36 @@ def timeline_json(tmp_path) -> Path:
     return path
 
 
-def test_features_refuses_a_truncated_file_like_generate(tmp_path, capsys):
+def test_features_refuses_a_truncated_file_like_generate_naming_it_as_given(tmp_path, capsys, monkeypatch):
     case = next(c for c in CASES if c.name == "truncated_mp4_faststart_50pct")
-    film, out = case.build(tmp_path), tmp_path / "features.json"
-    for argv in (["features", str(film), "-o", str(out)], ["generate", str(film), "-o", str(tmp_path / "t.json")]):
+    (tmp_path / "films").mkdir()
+    built = case.build(tmp_path / "films")
+    monkeypatch.chdir(tmp_path)
+    given = str(built.relative_to(tmp_path))  # relative: the line must not name the resolved path
+    for argv in (["features", given, "-o", "features.json"], ["generate", given, "-o", "t.json", "--quiet"]):
         assert main(argv) == 2, argv
-        assert case.message in one_line(capsys)
-    assert not out.exists() and not (tmp_path / "t.json").exists()
+        line = one_line(capsys)
+        assert line.startswith(f"autohaptics: error: {given}: ") and case.message in line, line
+    assert not (tmp_path / "features.json").exists() and not (tmp_path / "t.json").exists()
 
 
+def commands(film: Path, timeline: Path, out: str) -> dict[str, list[str]]:
+    """Every command that writes one output file, writing ``out``."""
+    return {"generate": ["generate", str(film), "-o", out, "--quiet"],
+            "features": ["features", str(film), "-o", out],
+            "import": ["import", str(timeline), "-o", out],
+            "export": ["export", str(timeline), "-f", "csv", "-o", out]}
+
+
+@pytest.mark.parametrize("command", ["generate", "features", "import", "export"])
 @pytest.mark.parametrize("where, message", [
-    ("missing/out.csv", "the output folder {root}/missing does not exist"),
-    ("afile/out.csv", "the output folder {root}/afile is not a folder"),
-    ("locked/out.csv", "cannot write here (Permission denied)"),
+    ("missing/out.json", "the output folder {root}/missing does not exist"),
+    ("afile/out.json", "the output folder {root}/afile is not a folder"),
+    ("locked/out.json", "cannot write here (Permission denied)"),
     ("", "is a folder; give a file name"),
 ])
-def test_an_output_that_cannot_be_written_names_the_path_given(tmp_path, timeline_json, capsys, where, message):
+def test_an_output_that_cannot_be_written_names_the_path_given(tmp_path, film, timeline_json, capsys, command,
+                                                               where, message):
     (tmp_path / "afile").write_text("x")
     locked = tmp_path / "locked"
     locked.mkdir()
@@ -57,25 +78,30 @@ def test_an_output_that_cannot_be_written_names_the_path_given(tmp_path, timelin
         if where.startswith("locked") and os.access(locked, os.W_OK):  # root writes anywhere but in /sys
             if not Path("/sys/kernel").is_dir():
                 pytest.skip("running as root without /sys: no folder refuses a write")
-            out = "/sys/autohaptics-out.csv"
-        assert main(["export", str(timeline_json), "-f", "csv", "-o", out]) == 2
+            out = "/sys/autohaptics-out.json"
+        assert main(commands(film, timeline_json, out)[command]) == 2
         err = one_line(capsys)
-        assert out in err and message.format(root=tmp_path) in err, err
-        assert not list(locked.iterdir())
+        assert err.startswith(f"autohaptics: error: {out}: ") and message.format(root=tmp_path) in err, err
+        assert not list(locked.iterdir()) and not list(tmp_path.rglob("*.part"))
+        assert (tmp_path / "afile").read_text() == "x" and not (tmp_path / "missing").exists()
     finally:
         locked.chmod(stat.S_IRWXU)
 
 
-def test_import_of_a_folder_says_so(tmp_path, capsys):
-    assert main(["import", str(tmp_path), "-o", str(tmp_path / "t.json")]) == 2
+def test_import_of_a_folder_names_that_folder(tmp_path, capsys):
+    folder = tmp_path / "timelines"
+    folder.mkdir()
+    assert main(["import", str(folder), "-o", str(tmp_path / "t.json")]) == 2
     err = one_line(capsys)
-    assert str(tmp_path) in err and "folder" in err and "no such file" not in err.lower(), err
+    assert err.startswith(f"autohaptics: error: {folder}: is a folder"), err
+    assert "no such file" not in err.lower() and "t.json" not in err, err
+    assert not (tmp_path / "t.json").exists()
 
 
 @pytest.mark.parametrize("assignment, name", [("intensity=5", "'intensity'"), ("flow=x", "'flow'"),
                                               ("thermal.x=1", "'thermal.x'"), ("lfe_gain_db=1e400", "lfe_gain_db")])
-def test_generate_refuses_a_bad_parameter_by_name(tmp_path, capsys, assignment, name):
+def test_generate_refuses_a_bad_parameter_by_name(tmp_path, film, capsys, assignment, name):
     out = tmp_path / "t.json"
-    assert main(["generate", str(shared_clip(CLIP)), "-o", str(out), "--set", assignment]) == 2
+    assert main(["generate", str(film), "-o", str(out), "--set", assignment]) == 2
     assert name in one_line(capsys)
     assert not out.exists()

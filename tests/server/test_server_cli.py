@@ -1,4 +1,5 @@
-"""``autohaptics serve``: argument checks, and a real uvicorn server on 127.0.0.1 that stops cleanly."""
+"""``autohaptics serve``: argument checks, the Host names it answers to (``--host``, ``--allow-host``,
+AUTOHAPTICS_ALLOW_HOSTS), and a real uvicorn server on 127.0.0.1 that stops cleanly."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fastapi.testclient import TestClient
 
 from autohaptics.cli.main import main
 from autohaptics.server.app import create_app
@@ -169,3 +171,52 @@ def test_a_second_server_on_the_folder_exits_and_the_running_job_completes_untou
         assert final[0] == "done", final
         assert client.get(f"/api/projects/{project['id']}").json()["has_timeline"]
         assert client.get(f"/api/projects/{project['id']}/timeline").status_code == 200
+
+
+@pytest.mark.parametrize("argv, env, accepted, refused", [
+    ([], None, ["127.0.0.1", "localhost"], ["studio.lan", "evil.example"]),
+    (["--allow-host", "studio.lan", "--allow-host", "Booth.lan"], None, ["studio.lan", "booth.lan"], ["evil.example"]),
+    ([], "studio.lan, booth.lan", ["studio.lan", "booth.lan", "localhost"], ["evil.example", "lan"]),
+    (["--allow-host", "studio.lan"], "booth.lan", ["studio.lan"], ["booth.lan"]),  # the option wins
+    (["--host", "studio.lan"], None, ["studio.lan", "127.0.0.1"], ["booth.lan", "evil.example"]),
+])
+def test_serve_answers_to_the_names_given_and_refuses_others(tmp_path, monkeypatch, capsys, argv, env,
+                                                             accepted, refused):
+    """``serve`` as run, up to uvicorn: the application it would serve is driven under each Host.
+    ``--host NAME`` binds NAME; here the bind goes to 127.0.0.1 (NAME needs no DNS entry)."""
+    import uvicorn
+
+    from autohaptics.cli import serve
+
+    if env is None:
+        monkeypatch.delenv("AUTOHAPTICS_ALLOW_HOSTS", raising=False)
+    else:
+        monkeypatch.setenv("AUTOHAPTICS_ALLOW_HOSTS", env)
+    bound: list[str] = []
+    real_bind = serve.bind_port
+    monkeypatch.setattr(serve, "bind_port", lambda host, port: bound.append(host) or real_bind("127.0.0.1", port))
+    port, answers = _free_port(), {}
+
+    def run(server, sockets=None):
+        for sock in sockets:
+            sock.close()
+        with TestClient(server.config.app, base_url="http://127.0.0.1") as c:
+            for name in accepted + refused:
+                host = f"{name}:{port}"
+                r = c.patch("/api/projects/nope", json={"name": "x"},
+                            headers={"host": host, "origin": f"http://{host}"})
+                answers[name] = (c.get("/api/projects", headers={"host": host}).status_code, r.status_code,
+                                 r.json()["detail"])
+
+    monkeypatch.setattr(uvicorn.Server, "run", run)
+    assert main(["serve", "--port", str(port), "--data", str(tmp_path / "data"),
+                 "--frontend", str(tmp_path / "none"), *argv]) == 0
+    assert bound == [argv[1] if argv[:1] == ["--host"] else "127.0.0.1"]
+    for name in accepted:
+        assert answers[name][:2] == (200, 404), (name, answers[name])
+    for name in refused:
+        assert answers[name][:2] == (403, 403), (name, answers[name])
+        assert answers[name][2] == (f"host {name!r} is not a name this service answers to; start it with "
+                                    f"--allow-host {name} to allow it on purpose")
+    if argv[:1] == ["--host"]:
+        assert f"serving http://{argv[1]}:{port}/" in capsys.readouterr().err

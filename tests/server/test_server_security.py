@@ -15,12 +15,15 @@ from fastapi.testclient import TestClient
 
 from autohaptics.server.app import create_app
 from autohaptics.server.settings import Settings
-from autohaptics.testing import Scene, Segment, Tone, write_scene
+from autohaptics.testing import Noise, Scene, Segment, Tone, write_scene
 
 from service_client import BASE_URL, LocalClient
 from test_server_input import files_of
+from test_server_jobs import sse, upload, wait_running
 
 TERMINAL = ("done", "failed", "cancelled")
+OWN = {"origin": BASE_URL, "sec-fetch-site": "same-origin"}  # the editor's own page
+WAIT_S = 0.3  # a frame the chair were sent is logged by then (the positive control shows it)
 REBINDING = {"host": "evil.example:8000", "origin": "http://evil.example:8000", "sec-fetch-site": "same-origin"}
 FOREIGN = {"origin": "http://evil.example", "sec-fetch-site": "cross-site"}
 VARIANTS = {
@@ -53,17 +56,28 @@ def film(root) -> Path:
 
 @pytest.fixture(scope="module")
 def project(client, film) -> dict:
+    """A generated project with two edits, the second undone: both undo and redo would change it."""
     r = client.post("/api/projects", files={"file": ("film.mp4", film.read_bytes(), "video/mp4")},
                     data={"mode": "audio"})
     assert r.status_code == 201, r.text
+    pid = r.json()["id"]
     deadline = time.monotonic() + 120
     while client.get(f"/api/jobs/{r.json()['job']['id']}").json()["status"] not in TERMINAL:
         assert time.monotonic() < deadline, "the generation job did not end"
         time.sleep(0.2)
-    return client.get(f"/api/projects/{r.json()['id']}").json()
+    revision = client.get(f"/api/projects/{pid}").json()["revision"]
+    for value in (0.5, 1.0):
+        r = client.post(f"/api/projects/{pid}/edits", json={"base_revision": revision, "op": {
+            "op": "set", "lanes": ["A1"], "t0": 0, "t1": 10, "value": value}})
+        assert r.status_code == 200, r.text
+        revision = r.json()["revision"]
+    r = client.post(f"/api/projects/{pid}/undo", json={"base_revision": revision})
+    assert r.status_code == 200, r.text
+    client.app.state.composer.writer.flush(pid)
+    return client.get(f"/api/projects/{pid}").json()
 
 
-def attacks(pid: str, film: Path, revision: int) -> list[tuple[str, str, dict]]:
+def attacks(pid: str, job: str, film: Path, revision: int) -> list[tuple[str, str, dict]]:
     """(method, path, request keywords): every state-changing request issue 17 lists, and the rest."""
     media = {"files": {"file": ("film.mp4", film.read_bytes(), "video/mp4")}}
     return [
@@ -75,7 +89,10 @@ def attacks(pid: str, film: Path, revision: int) -> list[tuple[str, str, dict]]:
         ("PUT", f"/api/projects/{pid}/params", {"json": {"thresholds": {"loudness": 0.1}}}),
         ("POST", f"/api/projects/{pid}/edits", {"json": {"base_revision": revision, "op": {
             "op": "set", "lanes": ["A1"], "t0": 0, "t1": 10, "value": 1.0}}}),
+        ("POST", f"/api/projects/{pid}/undo", {"json": {"base_revision": revision}}),
+        ("POST", f"/api/projects/{pid}/redo", {"json": {"base_revision": revision}}),
         ("POST", f"/api/projects/{pid}/import", {"files": {"file": ("t.json", b"{}", "application/json")}}),
+        ("POST", f"/api/jobs/{job}/cancel", {}),
         ("PUT", "/api/chair/settings", {"json": {"comfort": {"scale": 0.2}}}),
         ("POST", "/api/chair/push", {"json": {"project_id": pid, "start_s": 0, "end_s": 2}}),
         ("POST", "/api/chair/playback", {"json": {"project_id": pid, "state": "play", "position_s": 0}}),
@@ -85,27 +102,59 @@ def attacks(pid: str, film: Path, revision: int) -> list[tuple[str, str, dict]]:
     ]
 
 
-def snapshot(client, root: Path) -> tuple:
-    return (files_of(root / "data"), client.get("/api/projects").json(), client.get("/api/chair/settings").json())
+def snapshot(client, root: Path, pid: str) -> tuple:
+    return (files_of(root / "data"), client.get("/api/projects").json(), client.get("/api/chair/settings").json(),
+            client.get(f"/api/projects/{pid}/edits").json())
+
+
+def played(chair, since: int) -> list[dict]:
+    return [e for e in chair.read_log()[since:] if e["ev"] in ("frame", "stop")]
 
 
 @pytest.mark.parametrize("variant", sorted(VARIANTS))
 def test_foreign_and_rebinding_requests_change_nothing(client, root, project, film, chair, variant):
+    pid = project["id"]
     assert client.post("/api/chair/connect", json={"port": chair.device}).status_code == 200
     try:
-        before, log_before = snapshot(client, root), len(chair.read_log())
-        for method, path, kwargs in attacks(project["id"], film, project["revision"]):
+        before, log_before = snapshot(client, root, pid), len(chair.read_log())
+        for method, path, kwargs in attacks(pid, project["job"]["id"], film, project["revision"]):
             r = client.request(method, path, headers=VARIANTS[variant], **kwargs)
             assert r.status_code == 403, (method, path, r.status_code, r.text)
             detail = r.json()["detail"]
             assert detail and "\n" not in detail and str(root) not in detail, detail
             assert "access-control-allow-origin" not in r.headers
-        time.sleep(0.3)  # a frame the chair were sent would be logged by now
-        assert snapshot(client, root) == before
-        assert [e for e in chair.read_log()[log_before:] if e["ev"] in ("frame", "stop")] == []
+        time.sleep(WAIT_S)
+        assert snapshot(client, root, pid) == before
+        assert played(chair, log_before) == []
         assert client.get("/api/chair/status").json()["connected"]
+        # The positive control: the same push from the editor's own page (with the token) plays
+        # within the same wait, so the assertion above would see a frame that reached the chair.
+        r = client.post("/api/chair/push", json={"project_id": pid, "start_s": 0, "end_s": 2}, headers=OWN)
+        assert r.status_code == 202, r.text
+        time.sleep(WAIT_S)
+        assert [e for e in played(chair, log_before) if e["ev"] == "frame"], chair.read_log()[log_before:]
     finally:
+        client.post("/api/chair/stop")
         client.post("/api/chair/disconnect")
+
+
+def test_a_foreign_cancel_leaves_the_running_job_running(client, root):
+    """The cancel of a job that is running (the project's own job has ended, so its replay above
+    could change nothing): refused for every variant, then the editor's own cancel works."""
+    noise = Scene(duration_s=900.0, audio=(Noise(0.0, 900.0, level_dbfs=-20.0),), name="long noise")
+    wav = write_scene(root / "noise_15min.wav", noise, video=False, sample_rate=8000, channels=1)
+    job = upload(client, wav)["job"]["id"]
+    wait_running(client, job)
+    try:
+        for variant, headers in VARIANTS.items():
+            r = client.post(f"/api/jobs/{job}/cancel", headers=headers)
+            assert r.status_code == 403, (variant, r.status_code, r.text)
+        time.sleep(WAIT_S)
+        assert client.get(f"/api/jobs/{job}").json()["status"] == "running"
+    finally:
+        r = client.post(f"/api/jobs/{job}/cancel", headers=OWN)
+    assert r.status_code == 202, r.text
+    assert sse(client, job)[-1][0] == "cancelled"
 
 
 def test_cors_preflight_is_refused(client, project):
@@ -125,6 +174,9 @@ def test_chair_routes_and_event_streams_need_the_token(client, project):
         assert r.status_code == 403 and "session token" in r.json()["detail"], (path, r.text)
     assert bare.post("/api/chair/stop").status_code == 403
     assert bare.get("/api/chair/status", headers={"x-autohaptics-token": "0" * 43}).status_code == 403
+    for headers in (REBINDING, {"host": "evil.example"}, {"host": "127.0.0.1.evil.example:8000"}):
+        r = bare.get("/api/session", headers=headers)  # a rebinding page would read the token here
+        assert r.status_code == 403 and "token" not in r.json() and "is not a name" in r.json()["detail"], r.text
     token = bare.get("/api/session").json()["token"]
     assert bare.get("/api/chair/status", headers={"x-autohaptics-token": token}).status_code == 200
     with bare.stream("GET", f"/api/jobs/{job}/events", headers={"x-autohaptics-token": token}) as r:
@@ -137,12 +189,11 @@ def test_the_editor_gets_the_token_as_a_strict_cookie_and_its_own_requests_work(
     cookie = r.headers["set-cookie"]
     assert cookie.startswith("autohaptics_token_8000=") and "HttpOnly" in cookie and "SameSite=Strict" in cookie
     assert "set-cookie" not in browser.get("/health", headers={"sec-fetch-site": "cross-site"}).headers
-    own = {"origin": BASE_URL, "sec-fetch-site": "same-origin"}
     assert browser.get("/api/chair/status", headers={"sec-fetch-site": "same-origin"}).status_code == 200
-    assert browser.put("/api/chair/settings", json={"latency_ms": 0}, headers=own).status_code == 200
-    r = browser.patch(f"/api/projects/{project['id']}", json={"name": "renamed"}, headers=own)
+    assert browser.put("/api/chair/settings", json={"latency_ms": 0}, headers=OWN).status_code == 200
+    r = browser.patch(f"/api/projects/{project['id']}", json={"name": "renamed"}, headers=OWN)
     assert r.status_code == 200 and r.json()["name"] == "renamed"
-    assert browser.post("/api/chair/stop", headers=own).status_code == 200
+    assert browser.post("/api/chair/stop", headers=OWN).status_code == 200
     assert browser.get("/api/projects", headers={"host": "localhost:8000"}).status_code == 200
 
 
@@ -193,7 +244,7 @@ def malformed(pid: str, revision: int) -> list[tuple[str, str, dict, str]]:
 
 
 def test_malformed_requests_are_one_sentence_4xx_and_change_nothing(client, root, project):
-    before = snapshot(client, root)
+    before = snapshot(client, root, project["id"])
     params = client.get(f"/api/projects/{project['id']}").json()["params"]
     for method, path, kwargs, word in malformed(project["id"], project["revision"]):
         r = client.request(method, path, **kwargs)
@@ -201,5 +252,5 @@ def test_malformed_requests_are_one_sentence_4xx_and_change_nothing(client, root
         detail = r.json()["detail"]
         assert isinstance(detail, str) and word in detail and "\n" not in detail, (word, detail)
         assert str(root) not in detail and "/tmp" not in detail and "65536" not in detail, detail
-    assert snapshot(client, root) == before
+    assert snapshot(client, root, project["id"]) == before
     assert client.get(f"/api/projects/{project['id']}").json()["params"] == params

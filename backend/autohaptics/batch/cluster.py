@@ -4,11 +4,15 @@ files at the same paths. Progress comes back as worker events on a topic of this
 Failure modes end the batch with one line (AutohapticsError, exit 2 from the CLI), never a hang:
 an address that does not parse, resolve or accept a connection fails at once; a scheduler lost
 for ``LOST_SCHEDULER_S`` or a cluster without workers for ``NO_WORKERS_S`` ends the run (films
-finished before keep their timelines).
+finished before keep their timelines), so the batch returns at most ``CLOSE_S`` after that bound.
+Dask's own log lines (a cancelled reconnection's traceback, when the scheduler is lost) are kept
+off stderr while the run talks to the cluster: the outcome is reported once, by the caller.
 """
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import queue as queue_mod
 import socket
 import time
@@ -22,6 +26,7 @@ CONNECT_S = 10.0  # a reachable scheduler answers within this, s
 LOST_SCHEDULER_S = 15.0  # the scheduler unreachable this long ends the batch, s
 NO_WORKERS_S = 30.0  # the cluster without a worker this long ends the batch, s
 CLOSE_S = 5.0  # most time spent closing the client, s
+_DASK_LOGGERS = ("distributed", "tornado", "bokeh")  # the loggers Dask's configuration gives a stderr handler
 
 
 def check_address(scheduler: str) -> None:
@@ -53,6 +58,11 @@ def run_dask(run: Run, params: Any, preset: str, scheduler: str) -> None:
         from distributed import Client
     except ImportError as exc:  # pragma: no cover - dask[distributed] is a dependency
         raise AutohapticsError(f"--scheduler needs dask[distributed]: {exc}") from None
+    with _dask_logs_off():
+        _run_on(Client, run, params, preset, scheduler)
+
+
+def _run_on(Client, run: Run, params: Any, preset: str, scheduler: str) -> None:
     try:
         client = Client(scheduler, timeout=f"{CONNECT_S}s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
@@ -152,6 +162,25 @@ def _close(client, topic: str, lost: bool) -> None:
         client.close(timeout=CLOSE_S)
     except Exception:  # closing is best effort: the run's outcome is already decided
         pass
+
+
+@contextlib.contextmanager
+def _dask_logs_off():
+    """Drop every record that reaches the handlers of Dask's loggers (module docstring) meanwhile."""
+    handlers = {handler for name, logger in list(logging.Logger.manager.loggerDict.items())
+                if name.split(".")[0] in _DASK_LOGGERS and isinstance(logger, logging.Logger)
+                for handler in logger.handlers}
+    for handler in handlers:
+        handler.addFilter(_drop)
+    try:
+        yield
+    finally:
+        for handler in handlers:
+            handler.removeFilter(_drop)
+
+
+def _drop(record: logging.LogRecord) -> bool:
+    return False
 
 
 def _drain_simple(messages: "queue_mod.SimpleQueue[Any]", run: Run) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from autohaptics.errors import ParameterError
+from autohaptics.outputs import check_output
 from autohaptics.progress import ProgressBar
 
 COMMAND = "generate"
@@ -30,11 +30,7 @@ def run(args) -> int:
     from autohaptics.params import params_from_args
 
     params, preset = params_from_args(args)
-    out = Path(args.output)
-    if out.exists() and out.is_dir():
-        raise ParameterError(f"{out}: is a directory; give a file name for the timeline")
-    if not out.parent.exists():
-        raise ParameterError(f"{out.parent}: output folder does not exist")
+    out = check_output(args.output)  # before the analysis, worded as every command's output
     bar = ProgressBar(Path(args.video).name) if not args.quiet else None
     try:
         tl = generate(args.video, params, preset=preset, progress=bar, between_passes=release_between_passes)
