@@ -136,6 +136,11 @@ def overlay_cell_xy(pg, row: int, col: int) -> tuple[float, float]:
         }""", [row, col]))
 
 
+def export_rows(api, pid: str) -> list[dict]:
+    """The project's CSV export, one dict per tick."""
+    return list(csv.DictReader(io.StringIO(api.get(f"/api/projects/{pid}/export?format=csv").text)))
+
+
 def fan_column(rows: list[dict], row: int, col: int) -> list[float]:
     return [float(r[f"fan_r{row}_c{col}"]) for r in rows]
 
@@ -143,7 +148,7 @@ def fan_column(rows: list[dict], row: int, col: int) -> list[float]:
 def test_a_fan_region_edit_survives_reload_regeneration_and_export(page, api, project_copy):
     pid = project_copy["id"]
     open_editor(page, pid)
-    before = list(csv.DictReader(io.StringIO(api.get(f"/api/projects/{pid}/export?format=csv").text)))
+    before = export_rows(api, pid)
     r = lane_rect(page, "fans")
     y = r["y"] + r["height"] / 2
     page.mouse.move(page.evaluate("(t) => window.autohaptics.clientXOf(t)", 5.05), y)
@@ -153,37 +158,49 @@ def test_a_fan_region_edit_survives_reload_regeneration_and_export(page, api, pr
     assert state(page)["selection"] == {"t0": 50, "t1": 80, "lanes": ["fans"]}
     page.click("[data-testid=toggle-fan-overlay]")
     page.wait_for_function("() => document.querySelector('[data-testid=video]').videoWidth > 0")
-    # A rectangle of rows 1..2 x columns 3..5, then one more cell painted with Ctrl.
+    # A rectangle of rows 1..2 x columns 3..5, then a brush stroke with Ctrl: along row 7 from
+    # column 12 to 16, and down to row 8.
     page.mouse.move(*overlay_cell_xy(page, 1, 3))
     page.mouse.down()
     page.mouse.move(*overlay_cell_xy(page, 2, 5), steps=4)
     page.mouse.up()
     page.keyboard.down("Control")
-    page.mouse.move(*overlay_cell_xy(page, 7, 16))
+    page.mouse.move(*overlay_cell_xy(page, 7, 12))
     page.mouse.down()
+    page.mouse.move(*overlay_cell_xy(page, 7, 16), steps=16)
+    page.mouse.move(*overlay_cell_xy(page, 8, 16), steps=4)
     page.mouse.up()
     page.keyboard.up("Control")
-    assert "7 fans picked" in page.text_content("[data-testid=selection-info]")
+    assert "12 fans picked" in page.text_content("[data-testid=selection-info]")
     page.fill("[data-testid=edit-value]", "0.8")
     s0 = state(page)
     page.click("[data-testid=edit-set]")
-    wait_revision_above(page, s0["revision"])
+    s1 = wait_revision_above(page, s0["revision"])
     op = api.get(f"/api/projects/{pid}/edits").json()["ops"][-1]
-    picked = [[1, 3], [1, 4], [1, 5], [2, 3], [2, 4], [2, 5], [7, 16]]
+    picked = [[1, 3], [1, 4], [1, 5], [2, 3], [2, 4], [2, 5], *[[7, c] for c in range(12, 17)], [8, 16]]
     assert op == {"op": "set", "lanes": ["fans"], "t0": 50, "t1": 80, "value": 0.8, "cells": picked}
 
     def check() -> None:
-        rows = list(csv.DictReader(io.StringIO(api.get(f"/api/projects/{pid}/export?format=csv").text)))
+        rows = export_rows(api, pid)
         for row, col in picked:
             assert fan_column(rows, row, col)[50:80] == [0.8] * 30
-        for row, col in ((0, 0), (1, 2), (3, 4), (8, 16)):  # outside the region: as generated
+        for row, col in ((0, 0), (1, 2), (3, 4), (7, 11), (8, 15)):  # outside the region: as generated
             assert fan_column(rows, row, col) == fan_column(before, row, col)
 
+    check()
+    # Undo takes the region's values away (as generated again), redo brings them back.
+    page.click("[data-testid=undo]")
+    s2 = wait_revision_above(page, s1["revision"])
+    undone = export_rows(api, pid)
+    assert all(fan_column(undone, row, col) == fan_column(before, row, col) for row, col in picked)
+    page.click("[data-testid=redo]")
+    wait_revision_above(page, s2["revision"])
     check()
     page.reload()
     open_editor(page, pid)
     grid = page.evaluate("() => window.autohaptics.valuesAt(60).fan_grid")
-    assert grid[1 * 17 + 4] == pytest.approx(0.8, abs=1 / 255) and grid[7 * 17 + 16] == pytest.approx(0.8, abs=1 / 255)
+    assert grid[1 * 17 + 4] == pytest.approx(0.8, abs=1 / 255) and grid[7 * 17 + 14] == pytest.approx(0.8, abs=1 / 255)
+    # A threshold re-derive, then a real regeneration (a new analysis job, to done): still there.
     rev = api.get(f"/api/projects/{pid}").json()["revision"]
     r = api.put(f"/api/projects/{pid}/params", json={"thresholds": {"loudness": 0.5}})
     assert r.status_code in (200, 202), r.text
@@ -191,6 +208,20 @@ def test_a_fan_region_edit_survives_reload_regeneration_and_export(page, api, pr
         assert wait_job(api, r.json()["job"]["id"])["status"] == "done"
     assert api.get(f"/api/projects/{pid}").json()["revision"] > rev
     check()
+    page.reload()
+    open_editor(page, pid)
+    s3 = state(page)
+    page.click("[data-testid=regenerate]")
+    page.fill("[data-testid=regen-threshold-loudness]", "0.55")
+    with page.expect_response(lambda res: res.url.endswith(f"/api/projects/{pid}/generate")) as answer:
+        page.click("[data-testid=regen-start]")
+    job = answer.value.json()["job"]
+    assert job["params"]["thresholds"]["loudness"] == 0.55 and wait_job(api, job["id"])["status"] == "done"
+    wait_revision_above(page, s3["revision"])
+    assert api.get(f"/api/projects/{pid}").json()["params"]["thresholds"]["loudness"] == 0.55
+    check()
+    grid = page.evaluate("() => window.autohaptics.valuesAt(60).fan_grid")
+    assert grid[8 * 17 + 16] == pytest.approx(0.8, abs=1 / 255), "the editor shows it after the regeneration"
 
 
 CONTROLS_CLIPPED = """() => {
