@@ -70,6 +70,53 @@ def test_enter_submits_and_escape_cancels_every_dialog(page, api, project_copy):
     assert api.get(f"/api/projects/{pid}").json()["name"] == "Renamed by Enter"
 
 
+def focused(pg) -> str | None:
+    return pg.evaluate("() => document.activeElement.dataset.testid || null")
+
+
+def test_the_rename_marker_and_delete_dialogs_answer_enter_and_escape(page, api, project_copy):
+    pid = project_copy["id"]
+    other = api.post(f"/api/projects/{pid}/duplicate").json()
+    open_editor(page, pid)
+    page.click("[data-testid=marker-add]")
+    page.keyboard.type("Door")
+    s0 = state(page)
+    page.keyboard.press("Enter")
+    s1 = wait_revision_above(page, s0["revision"])  # added, and selected
+    # Rename: the focus in the label with its text selected, so typing replaces it; Enter renames.
+    page.click("[data-testid=marker-rename]")
+    assert focused(page) == "dialog-input"
+    assert page.evaluate("() => { const i = document.activeElement; return [i.selectionStart, i.selectionEnd]; }") == [0, 4]
+    page.keyboard.type("Window")
+    page.keyboard.press("Enter")
+    s2 = wait_revision_above(page, s1["revision"])
+    assert [m["label"] for m in s2["markers"]] == ["Window"]
+    assert api.get(f"/api/projects/{pid}/edits").json()["ops"][-1]["op"] == "marker_update"
+    # Escape keeps the name: nothing is sent.
+    page.click("[data-testid=marker-rename]")
+    page.keyboard.type("Not this")
+    page.keyboard.press("Escape")
+    page.wait_for_selector("dialog[open]", state="detached")
+    assert state(page)["revision"] == s2["revision"] and [m["label"] for m in state(page)["markers"]] == ["Window"]
+    # Delete on the projects page: the focus starts on Cancel, so neither Enter nor Escape deletes.
+    page.goto("/#/")
+    row = page.locator(f"[data-testid=project-row][data-id='{other['id']}']")
+    for key in ("Enter", "Escape"):
+        row.locator("[data-testid=project-delete]").click()
+        page.wait_for_selector("dialog[open]")
+        assert focused(page) == "dialog-cancel"
+        page.keyboard.press(key)
+        page.wait_for_selector("dialog[open]", state="detached")
+        assert api.get(f"/api/projects/{other['id']}").status_code == 200 and row.count() == 1
+    # Tab to Delete, then Enter: deleted.
+    row.locator("[data-testid=project-delete]").click()
+    page.keyboard.press("Tab")
+    assert focused(page) == "dialog-ok"
+    page.keyboard.press("Enter")
+    row.wait_for(state="detached")
+    assert api.get(f"/api/projects/{other['id']}").status_code == 404
+
+
 def test_the_temperature_lane_shows_what_the_chair_plays(page, api, project_copy):
     pid = project_copy["id"]
     # the thesis's colour rule: a timeline range of 30..55 C, wider than the device's 18..40 C
