@@ -272,9 +272,10 @@ def test_a_fan_region_edit_survives_reload_regeneration_and_export(page, api, pr
 
 
 CONTROLS_CLIPPED = """() => {
-    // Every control of the header, the side column, the transport and the toolbar, scrolled into
-    // view inside its own scroll area, must lie inside the viewport and inside that area.
-    const out = [];
+    // Every control of the header (buttons, the menus' summaries, the '<- Projects' link), the side
+    // column, the transport and the toolbar, scrolled into view inside its own scroll area, must lie
+    // inside the viewport and inside that area. Returns those clipped and the names of all checked.
+    const out = [], checked = [];
     const scroller = (el) => {
         for (let p = el.parentElement; p; p = p.parentElement) {
             const o = getComputedStyle(p).overflowY;
@@ -282,22 +283,37 @@ CONTROLS_CLIPPED = """() => {
         }
         return null;
     };
-    const sel = '.topbar button, .side button, .side input, .side select, .transport button, .toolbar button, .toolbar input';
+    const sel = '.topbar button, .topbar a, summary, .side button, .side input, .side select, .transport button, .toolbar button, .toolbar input';
     for (const el of document.querySelectorAll(sel)) {
         if (el.closest('[hidden]') || el.offsetParent === null || el.classList.contains('visually-hidden')) continue;
+        const name = el.dataset.testid || el.textContent.trim() || el.tagName;
+        checked.push(name);
         el.scrollIntoView({block: 'nearest', inline: 'nearest'});
         const r = el.getBoundingClientRect();
         const box = scroller(el);
         const area = box ? box.getBoundingClientRect() : {top: 0, left: 0, bottom: innerHeight, right: innerWidth};
         const inside = (b) => r.top >= b.top - 1 && r.left >= b.left - 1 && r.bottom <= b.bottom + 1 && r.right <= b.right + 1;
         if (!inside(area) || !inside({top: 0, left: 0, bottom: innerHeight, right: innerWidth})) {
-            out.push(`${el.dataset.testid || el.textContent.trim() || el.tagName} at ${Math.round(r.top)}..${Math.round(r.bottom)}`);
+            out.push(`${name} at ${Math.round(r.top)}..${Math.round(r.bottom)}`);
         }
     }
     for (const panel of document.querySelectorAll('.side .panel')) {
         if (panel.scrollHeight > panel.clientHeight + 1) out.push(`panel ${panel.textContent.slice(0, 20)} scrolls on its own`);
     }
-    return out;
+    return {clipped: out, checked};
+}"""
+
+LANES_VIEW = """() => {
+    // The lanes' scroll area: its visible band (below the sticky ruler, above its own lower edge or
+    // the viewport's) and every lane's id, top to bottom.
+    const host = document.querySelector('.timeline-host');
+    const b = host.getBoundingClientRect();
+    return {
+        scrollTop: host.scrollTop,
+        top: document.querySelector('[data-testid=ruler]').getBoundingClientRect().bottom,
+        bottom: Math.min(b.top + host.clientTop + host.clientHeight, innerHeight),
+        lanes: [...host.querySelectorAll('canvas[data-lane]')].filter((c) => !c.closest('[hidden]')).map((c) => c.dataset.lane),
+    };
 }"""
 
 
@@ -305,17 +321,24 @@ CONTROLS_CLIPPED = """() => {
 def test_no_panel_is_clipped_and_the_ruler_stays(page, project_copy, width, height):
     page.set_viewport_size({"width": width, "height": height})
     open_editor(page, project_copy["id"])
-    assert page.evaluate(CONTROLS_CLIPPED) == []
+    controls = page.evaluate(CONTROLS_CLIPPED)
+    assert controls["clipped"] == []
+    assert {"Export", "Lanes", "Keys", "back", "regenerate", "undo", "chair-push"} <= set(controls["checked"]), controls["checked"]
     for name in ("sharpness", "booming", "low_energy", "loudness"):
         assert page.is_visible(f"[data-testid=threshold-{name}]")
     host = page.locator(".timeline-host")
     host.evaluate("(el) => { el.scrollTop = el.scrollHeight; }")
+    view = page.evaluate(LANES_VIEW)
+    assert view["scrollTop"] > 0, "the lanes scrolled (they are taller than their area at this size)"
     ruler = page.locator("[data-testid=ruler]").bounding_box()
     top = host.bounding_box()["y"]
     assert top - 1 <= ruler["y"] <= top + 2, "the ruler stays at the top of the scrolled lanes"
-    for lane in ("fans", "markers"):
+    assert {"waveform", "feature-loudness", "actuators", "temperature", "fans", "markers"} <= set(view["lanes"])
+    for lane in reversed(view["lanes"]):  # from the bottom up: each one scrolled to, below the ruler
         r = lane_rect(page, lane)
-        assert 0 <= r["y"] and r["y"] + r["height"] <= height, f"{lane} lane reachable"
+        band = page.evaluate(LANES_VIEW)
+        assert band["top"] - 1 <= r["y"] and r["y"] + r["height"] <= band["bottom"] + 1, \
+            f"{lane} lane reachable: {r} in {band['top']}..{band['bottom']}"
 
 
 def test_a_threshold_drag_with_shift_is_ten_times_finer(page, project_copy):
@@ -373,3 +396,33 @@ def test_a_cancelled_regeneration_leaves_the_labels_of_the_timeline_on_show(page
     assert len(metas) == 2 and any(pid[:6] in m for m in metas)
     assert wait_job(api, busy["id"])["status"] == "done"
     api.delete(f"/api/projects/{other['id']}")
+
+
+def test_a_regeneration_cancelled_mid_run_leaves_the_labels_of_the_timeline_on_show(page, api, project_copy):
+    pid = project_copy["id"]
+    p0 = api.get(f"/api/projects/{pid}").json()
+    shown = f"Preset {p0['params']['preset']} · mode {p0['params']['mode']}"
+    open_editor(page, pid)
+    before = page.evaluate("() => Array.from({length: 52}, (_, i) => window.autohaptics.valuesAt(i * 10))")
+    page.click("[data-testid=regenerate]")
+    page.select_option("[data-testid=regen-preset]", "reference")  # every frame analysed: a long job
+    page.click("[data-testid=regen-start]")
+    slot = "[data-testid=job-slot]"
+    # Cancelled once it has got somewhere: the bar shows a figure above 0 %.
+    page.wait_for_function(f"() => {{ const b = document.querySelector('{slot} [data-testid=generation-progress]');"
+                           " return b && Number(b.getAttribute('aria-valuenow')) > 0; }", timeout=60_000)
+    assert api.get(f"/api/projects/{pid}").json()["job"]["status"] == "running"
+    page.click(f"{slot} [data-testid=generation-cancel]")
+    page.wait_for_function(f"() => document.querySelector('{slot} [data-testid=generation-status]')"
+                           ".textContent.startsWith('Generation cancelled')")
+    figure = page.text_content(f"{slot} [data-testid=generation-progress]")
+    assert figure.endswith("cancelled") and int(figure.split(" %")[0]) > 0, figure
+    page.wait_for_function(f"() => document.querySelector('{slot}').hidden")  # the bar goes
+    assert page.is_hidden(f"{slot} [data-testid=generation-progress]")
+    assert page.text_content("[data-testid=params-info]") == shown, "the preset of the timeline on screen"
+    project = api.get(f"/api/projects/{pid}").json()
+    assert project["status"] == "ready" and project["job"]["status"] == "cancelled"
+    assert project["params"] == p0["params"] and project["revision"] == p0["revision"]
+    assert page.evaluate("() => Array.from({length: 52}, (_, i) => window.autohaptics.valuesAt(i * 10))") == before
+    assert page.is_disabled("[data-testid=undo]"), "a cancelled attempt is no step of the history"
+    assert page.is_enabled("[data-testid=regenerate]")
