@@ -320,6 +320,34 @@ def test_stop_wins_over_a_play_report_that_arrives_after_it(cpage, chair_api, fi
         route.continue_()
 
 
+def test_the_port_list_defaults_to_a_chair_that_appears_after_the_page_opened(cpage, film, request):
+    """The editor opens with a plain serial port alone in the list; a virtual chair starts; ↻ picks
+    the chair, not the port the list showed first. A port the user picked stays picked."""
+    pg, mine = cpage, {}
+    plain = "/dev/ttyS0"
+
+    def ports(route) -> None:  # the real list, with only this test's chair and always a plain port
+        listed = [p for p in route.fetch().json() if not p["likely_chair"] or p["device"] == mine.get("device")]
+        if not any(p["device"] == plain for p in listed):
+            listed.append({"device": plain, "description": "n/a", "kind": "serial", "likely_chair": False})
+        route.fulfill(json=listed)
+
+    pg.route("**/api/chair/ports", ports)
+    open_editor(pg, film["id"])
+    pg.wait_for_selector(f"[data-testid=chair-port] option[value='{plain}']", state="attached")
+    assert pg.input_value("[data-testid=chair-port]") == plain
+    mine["device"] = request.getfixturevalue("chair").device  # the virtual chair starts now
+    pg.click("[data-testid=chair-refresh]")
+    pg.wait_for_selector(f"[data-testid=chair-port] option[value='{mine['device']}']", state="attached")
+    assert pg.input_value("[data-testid=chair-port]") == mine["device"]
+    # Picked by the user: kept through a refresh although a chair is listed.
+    pg.select_option("[data-testid=chair-port]", plain)
+    pg.evaluate("() => document.querySelectorAll('[data-testid=chair-port] option').forEach((o) => { o.dataset.old = '1'; })")
+    pg.click("[data-testid=chair-refresh]")
+    pg.wait_for_function("() => !document.querySelector('[data-testid=chair-port] option[data-old]')")  # listed anew
+    assert pg.input_value("[data-testid=chair-port]") == plain
+
+
 def test_push_the_selection_and_disconnect(cpage, chair_api, film, chair):
     pg, pid = cpage, film["id"]
     open_editor(pg, pid)

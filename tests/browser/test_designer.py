@@ -70,6 +70,53 @@ def test_enter_submits_and_escape_cancels_every_dialog(page, api, project_copy):
     assert api.get(f"/api/projects/{pid}").json()["name"] == "Renamed by Enter"
 
 
+def focused(pg) -> str | None:
+    return pg.evaluate("() => document.activeElement.dataset.testid || null")
+
+
+def test_the_rename_marker_and_delete_dialogs_answer_enter_and_escape(page, api, project_copy):
+    pid = project_copy["id"]
+    other = api.post(f"/api/projects/{pid}/duplicate").json()
+    open_editor(page, pid)
+    page.click("[data-testid=marker-add]")
+    page.keyboard.type("Door")
+    s0 = state(page)
+    page.keyboard.press("Enter")
+    s1 = wait_revision_above(page, s0["revision"])  # added, and selected
+    # Rename: the focus in the label with its text selected, so typing replaces it; Enter renames.
+    page.click("[data-testid=marker-rename]")
+    assert focused(page) == "dialog-input"
+    assert page.evaluate("() => { const i = document.activeElement; return [i.selectionStart, i.selectionEnd]; }") == [0, 4]
+    page.keyboard.type("Window")
+    page.keyboard.press("Enter")
+    s2 = wait_revision_above(page, s1["revision"])
+    assert [m["label"] for m in s2["markers"]] == ["Window"]
+    assert api.get(f"/api/projects/{pid}/edits").json()["ops"][-1]["op"] == "marker_update"
+    # Escape keeps the name: nothing is sent.
+    page.click("[data-testid=marker-rename]")
+    page.keyboard.type("Not this")
+    page.keyboard.press("Escape")
+    page.wait_for_selector("dialog[open]", state="detached")
+    assert state(page)["revision"] == s2["revision"] and [m["label"] for m in state(page)["markers"]] == ["Window"]
+    # Delete on the projects page: the focus starts on Cancel, so neither Enter nor Escape deletes.
+    page.goto("/#/")
+    row = page.locator(f"[data-testid=project-row][data-id='{other['id']}']")
+    for key in ("Enter", "Escape"):
+        row.locator("[data-testid=project-delete]").click()
+        page.wait_for_selector("dialog[open]")
+        assert focused(page) == "dialog-cancel"
+        page.keyboard.press(key)
+        page.wait_for_selector("dialog[open]", state="detached")
+        assert api.get(f"/api/projects/{other['id']}").status_code == 200 and row.count() == 1
+    # Tab to Delete, then Enter: deleted.
+    row.locator("[data-testid=project-delete]").click()
+    page.keyboard.press("Tab")
+    assert focused(page) == "dialog-ok"
+    page.keyboard.press("Enter")
+    row.wait_for(state="detached")
+    assert api.get(f"/api/projects/{other['id']}").status_code == 404
+
+
 def test_the_temperature_lane_shows_what_the_chair_plays(page, api, project_copy):
     pid = project_copy["id"]
     # the thesis's colour rule: a timeline range of 30..55 C, wider than the device's 18..40 C
@@ -136,6 +183,11 @@ def overlay_cell_xy(pg, row: int, col: int) -> tuple[float, float]:
         }""", [row, col]))
 
 
+def export_rows(api, pid: str) -> list[dict]:
+    """The project's CSV export, one dict per tick."""
+    return list(csv.DictReader(io.StringIO(api.get(f"/api/projects/{pid}/export?format=csv").text)))
+
+
 def fan_column(rows: list[dict], row: int, col: int) -> list[float]:
     return [float(r[f"fan_r{row}_c{col}"]) for r in rows]
 
@@ -143,7 +195,7 @@ def fan_column(rows: list[dict], row: int, col: int) -> list[float]:
 def test_a_fan_region_edit_survives_reload_regeneration_and_export(page, api, project_copy):
     pid = project_copy["id"]
     open_editor(page, pid)
-    before = list(csv.DictReader(io.StringIO(api.get(f"/api/projects/{pid}/export?format=csv").text)))
+    before = export_rows(api, pid)
     r = lane_rect(page, "fans")
     y = r["y"] + r["height"] / 2
     page.mouse.move(page.evaluate("(t) => window.autohaptics.clientXOf(t)", 5.05), y)
@@ -153,37 +205,49 @@ def test_a_fan_region_edit_survives_reload_regeneration_and_export(page, api, pr
     assert state(page)["selection"] == {"t0": 50, "t1": 80, "lanes": ["fans"]}
     page.click("[data-testid=toggle-fan-overlay]")
     page.wait_for_function("() => document.querySelector('[data-testid=video]').videoWidth > 0")
-    # A rectangle of rows 1..2 x columns 3..5, then one more cell painted with Ctrl.
+    # A rectangle of rows 1..2 x columns 3..5, then a brush stroke with Ctrl: along row 7 from
+    # column 12 to 16, and down to row 8.
     page.mouse.move(*overlay_cell_xy(page, 1, 3))
     page.mouse.down()
     page.mouse.move(*overlay_cell_xy(page, 2, 5), steps=4)
     page.mouse.up()
     page.keyboard.down("Control")
-    page.mouse.move(*overlay_cell_xy(page, 7, 16))
+    page.mouse.move(*overlay_cell_xy(page, 7, 12))
     page.mouse.down()
+    page.mouse.move(*overlay_cell_xy(page, 7, 16), steps=16)
+    page.mouse.move(*overlay_cell_xy(page, 8, 16), steps=4)
     page.mouse.up()
     page.keyboard.up("Control")
-    assert "7 fans picked" in page.text_content("[data-testid=selection-info]")
+    assert "12 fans picked" in page.text_content("[data-testid=selection-info]")
     page.fill("[data-testid=edit-value]", "0.8")
     s0 = state(page)
     page.click("[data-testid=edit-set]")
-    wait_revision_above(page, s0["revision"])
+    s1 = wait_revision_above(page, s0["revision"])
     op = api.get(f"/api/projects/{pid}/edits").json()["ops"][-1]
-    picked = [[1, 3], [1, 4], [1, 5], [2, 3], [2, 4], [2, 5], [7, 16]]
+    picked = [[1, 3], [1, 4], [1, 5], [2, 3], [2, 4], [2, 5], *[[7, c] for c in range(12, 17)], [8, 16]]
     assert op == {"op": "set", "lanes": ["fans"], "t0": 50, "t1": 80, "value": 0.8, "cells": picked}
 
     def check() -> None:
-        rows = list(csv.DictReader(io.StringIO(api.get(f"/api/projects/{pid}/export?format=csv").text)))
+        rows = export_rows(api, pid)
         for row, col in picked:
             assert fan_column(rows, row, col)[50:80] == [0.8] * 30
-        for row, col in ((0, 0), (1, 2), (3, 4), (8, 16)):  # outside the region: as generated
+        for row, col in ((0, 0), (1, 2), (3, 4), (7, 11), (8, 15)):  # outside the region: as generated
             assert fan_column(rows, row, col) == fan_column(before, row, col)
 
+    check()
+    # Undo takes the region's values away (as generated again), redo brings them back.
+    page.click("[data-testid=undo]")
+    s2 = wait_revision_above(page, s1["revision"])
+    undone = export_rows(api, pid)
+    assert all(fan_column(undone, row, col) == fan_column(before, row, col) for row, col in picked)
+    page.click("[data-testid=redo]")
+    wait_revision_above(page, s2["revision"])
     check()
     page.reload()
     open_editor(page, pid)
     grid = page.evaluate("() => window.autohaptics.valuesAt(60).fan_grid")
-    assert grid[1 * 17 + 4] == pytest.approx(0.8, abs=1 / 255) and grid[7 * 17 + 16] == pytest.approx(0.8, abs=1 / 255)
+    assert grid[1 * 17 + 4] == pytest.approx(0.8, abs=1 / 255) and grid[7 * 17 + 14] == pytest.approx(0.8, abs=1 / 255)
+    # A threshold re-derive, then a real regeneration (a new analysis job, to done): still there.
     rev = api.get(f"/api/projects/{pid}").json()["revision"]
     r = api.put(f"/api/projects/{pid}/params", json={"thresholds": {"loudness": 0.5}})
     assert r.status_code in (200, 202), r.text
@@ -191,12 +255,27 @@ def test_a_fan_region_edit_survives_reload_regeneration_and_export(page, api, pr
         assert wait_job(api, r.json()["job"]["id"])["status"] == "done"
     assert api.get(f"/api/projects/{pid}").json()["revision"] > rev
     check()
+    page.reload()
+    open_editor(page, pid)
+    s3 = state(page)
+    page.click("[data-testid=regenerate]")
+    page.fill("[data-testid=regen-threshold-loudness]", "0.55")
+    with page.expect_response(lambda res: res.url.endswith(f"/api/projects/{pid}/generate")) as answer:
+        page.click("[data-testid=regen-start]")
+    job = answer.value.json()["job"]
+    assert job["params"]["thresholds"]["loudness"] == 0.55 and wait_job(api, job["id"])["status"] == "done"
+    wait_revision_above(page, s3["revision"])
+    assert api.get(f"/api/projects/{pid}").json()["params"]["thresholds"]["loudness"] == 0.55
+    check()
+    grid = page.evaluate("() => window.autohaptics.valuesAt(60).fan_grid")
+    assert grid[8 * 17 + 16] == pytest.approx(0.8, abs=1 / 255), "the editor shows it after the regeneration"
 
 
 CONTROLS_CLIPPED = """() => {
-    // Every control of the header, the side column, the transport and the toolbar, scrolled into
-    // view inside its own scroll area, must lie inside the viewport and inside that area.
-    const out = [];
+    // Every control of the header (buttons, the menus' summaries, the '<- Projects' link), the side
+    // column, the transport and the toolbar, scrolled into view inside its own scroll area, must lie
+    // inside the viewport and inside that area. Returns those clipped and the names of all checked.
+    const out = [], checked = [];
     const scroller = (el) => {
         for (let p = el.parentElement; p; p = p.parentElement) {
             const o = getComputedStyle(p).overflowY;
@@ -204,22 +283,37 @@ CONTROLS_CLIPPED = """() => {
         }
         return null;
     };
-    const sel = '.topbar button, .side button, .side input, .side select, .transport button, .toolbar button, .toolbar input';
+    const sel = '.topbar button, .topbar a, summary, .side button, .side input, .side select, .transport button, .toolbar button, .toolbar input';
     for (const el of document.querySelectorAll(sel)) {
         if (el.closest('[hidden]') || el.offsetParent === null || el.classList.contains('visually-hidden')) continue;
+        const name = el.dataset.testid || el.textContent.trim() || el.tagName;
+        checked.push(name);
         el.scrollIntoView({block: 'nearest', inline: 'nearest'});
         const r = el.getBoundingClientRect();
         const box = scroller(el);
         const area = box ? box.getBoundingClientRect() : {top: 0, left: 0, bottom: innerHeight, right: innerWidth};
         const inside = (b) => r.top >= b.top - 1 && r.left >= b.left - 1 && r.bottom <= b.bottom + 1 && r.right <= b.right + 1;
         if (!inside(area) || !inside({top: 0, left: 0, bottom: innerHeight, right: innerWidth})) {
-            out.push(`${el.dataset.testid || el.textContent.trim() || el.tagName} at ${Math.round(r.top)}..${Math.round(r.bottom)}`);
+            out.push(`${name} at ${Math.round(r.top)}..${Math.round(r.bottom)}`);
         }
     }
     for (const panel of document.querySelectorAll('.side .panel')) {
         if (panel.scrollHeight > panel.clientHeight + 1) out.push(`panel ${panel.textContent.slice(0, 20)} scrolls on its own`);
     }
-    return out;
+    return {clipped: out, checked};
+}"""
+
+LANES_VIEW = """() => {
+    // The lanes' scroll area: its visible band (below the sticky ruler, above its own lower edge or
+    // the viewport's) and every lane's id, top to bottom.
+    const host = document.querySelector('.timeline-host');
+    const b = host.getBoundingClientRect();
+    return {
+        scrollTop: host.scrollTop,
+        top: document.querySelector('[data-testid=ruler]').getBoundingClientRect().bottom,
+        bottom: Math.min(b.top + host.clientTop + host.clientHeight, innerHeight),
+        lanes: [...host.querySelectorAll('canvas[data-lane]')].filter((c) => !c.closest('[hidden]')).map((c) => c.dataset.lane),
+    };
 }"""
 
 
@@ -227,17 +321,24 @@ CONTROLS_CLIPPED = """() => {
 def test_no_panel_is_clipped_and_the_ruler_stays(page, project_copy, width, height):
     page.set_viewport_size({"width": width, "height": height})
     open_editor(page, project_copy["id"])
-    assert page.evaluate(CONTROLS_CLIPPED) == []
+    controls = page.evaluate(CONTROLS_CLIPPED)
+    assert controls["clipped"] == []
+    assert {"Export", "Lanes", "Keys", "back", "regenerate", "undo", "chair-push"} <= set(controls["checked"]), controls["checked"]
     for name in ("sharpness", "booming", "low_energy", "loudness"):
         assert page.is_visible(f"[data-testid=threshold-{name}]")
     host = page.locator(".timeline-host")
     host.evaluate("(el) => { el.scrollTop = el.scrollHeight; }")
+    view = page.evaluate(LANES_VIEW)
+    assert view["scrollTop"] > 0, "the lanes scrolled (they are taller than their area at this size)"
     ruler = page.locator("[data-testid=ruler]").bounding_box()
     top = host.bounding_box()["y"]
     assert top - 1 <= ruler["y"] <= top + 2, "the ruler stays at the top of the scrolled lanes"
-    for lane in ("fans", "markers"):
+    assert {"waveform", "feature-loudness", "actuators", "temperature", "fans", "markers"} <= set(view["lanes"])
+    for lane in reversed(view["lanes"]):  # from the bottom up: each one scrolled to, below the ruler
         r = lane_rect(page, lane)
-        assert 0 <= r["y"] and r["y"] + r["height"] <= height, f"{lane} lane reachable"
+        band = page.evaluate(LANES_VIEW)
+        assert band["top"] - 1 <= r["y"] and r["y"] + r["height"] <= band["bottom"] + 1, \
+            f"{lane} lane reachable: {r} in {band['top']}..{band['bottom']}"
 
 
 def test_a_threshold_drag_with_shift_is_ten_times_finer(page, project_copy):
@@ -257,42 +358,6 @@ def test_a_threshold_drag_with_shift_is_ten_times_finer(page, project_copy):
     moved = thr0 - s1["thresholds"]["booming"]
     full = 15 / (r["height"] - 6)  # what 15 px move without Shift
     assert moved == pytest.approx(full / 10, abs=0.002)
-
-
-def test_a_typed_threshold_is_undone_and_redone(page, api, project_copy):
-    pid = project_copy["id"]
-    open_editor(page, pid)
-    s0 = state(page)
-    before = s0["thresholds"]["loudness"]
-    assert page.is_disabled("[data-testid=undo]")
-    page.fill("[data-testid=threshold-value-loudness]", "0.437")
-    page.press("[data-testid=threshold-value-loudness]", "Enter")
-    s1 = wait_revision_above(page, s0["revision"])
-    assert s1["thresholds"]["loudness"] == pytest.approx(0.437)
-    assert api.get(f"/api/projects/{pid}").json()["params"]["thresholds"]["loudness"] == pytest.approx(0.437)
-    page.wait_for_function("() => !document.querySelector('[data-testid=undo]').disabled")
-    ops = api.get(f"/api/projects/{pid}/edits").json()["ops"]
-    assert [op["op"] for op in ops] == ["params"] and ops[0]["to"]["thresholds"]["loudness"] == 0.437
-    # A typed value outside 0..1 is refused with a warning and nothing is sent.
-    page.fill("[data-testid=threshold-value-loudness]", "7")
-    page.press("[data-testid=threshold-value-loudness]", "Enter")
-    page.wait_for_selector(".toast >> text=A threshold is a number from 0 to 1")
-    assert page.input_value("[data-testid=threshold-value-loudness]") == "0.437"
-    assert len(api.get(f"/api/projects/{pid}/edits").json()["ops"]) == 1
-    # Undo: the previous threshold is in force again, in the panel and on the server.
-    s1 = state(page)
-    page.click("[data-testid=undo]")
-    s2 = wait_revision_above(page, s1["revision"])
-    page.wait_for_function(f"() => window.autohaptics.state().thresholds.loudness === {before}")
-    assert api.get(f"/api/projects/{pid}").json()["params"]["thresholds"]["loudness"] == pytest.approx(before)
-    assert page.input_value("[data-testid=threshold-value-loudness]") == str(before)
-    assert page.input_value("[data-testid=threshold-loudness]") == str(before)
-    # Redo brings the typed value back.
-    page.wait_for_function("() => !document.querySelector('[data-testid=redo]').disabled")
-    page.click("[data-testid=redo]")
-    wait_revision_above(page, s2["revision"])
-    page.wait_for_function("() => window.autohaptics.state().thresholds.loudness === 0.437")
-    assert api.get(f"/api/projects/{pid}").json()["params"]["thresholds"]["loudness"] == pytest.approx(0.437)
 
 
 def test_a_cancelled_regeneration_leaves_the_labels_of_the_timeline_on_show(page, api, project_copy):
@@ -331,3 +396,33 @@ def test_a_cancelled_regeneration_leaves_the_labels_of_the_timeline_on_show(page
     assert len(metas) == 2 and any(pid[:6] in m for m in metas)
     assert wait_job(api, busy["id"])["status"] == "done"
     api.delete(f"/api/projects/{other['id']}")
+
+
+def test_a_regeneration_cancelled_mid_run_leaves_the_labels_of_the_timeline_on_show(page, api, project_copy):
+    pid = project_copy["id"]
+    p0 = api.get(f"/api/projects/{pid}").json()
+    shown = f"Preset {p0['params']['preset']} · mode {p0['params']['mode']}"
+    open_editor(page, pid)
+    before = page.evaluate("() => Array.from({length: 52}, (_, i) => window.autohaptics.valuesAt(i * 10))")
+    page.click("[data-testid=regenerate]")
+    page.select_option("[data-testid=regen-preset]", "reference")  # every frame analysed: a long job
+    page.click("[data-testid=regen-start]")
+    slot = "[data-testid=job-slot]"
+    # Cancelled once it has got somewhere: the bar shows a figure above 0 %.
+    page.wait_for_function(f"() => {{ const b = document.querySelector('{slot} [data-testid=generation-progress]');"
+                           " return b && Number(b.getAttribute('aria-valuenow')) > 0; }", timeout=60_000)
+    assert api.get(f"/api/projects/{pid}").json()["job"]["status"] == "running"
+    page.click(f"{slot} [data-testid=generation-cancel]")
+    page.wait_for_function(f"() => document.querySelector('{slot} [data-testid=generation-status]')"
+                           ".textContent.startsWith('Generation cancelled')")
+    figure = page.text_content(f"{slot} [data-testid=generation-progress]")
+    assert figure.endswith("cancelled") and int(figure.split(" %")[0]) > 0, figure
+    page.wait_for_function(f"() => document.querySelector('{slot}').hidden")  # the bar goes
+    assert page.is_hidden(f"{slot} [data-testid=generation-progress]")
+    assert page.text_content("[data-testid=params-info]") == shown, "the preset of the timeline on screen"
+    project = api.get(f"/api/projects/{pid}").json()
+    assert project["status"] == "ready" and project["job"]["status"] == "cancelled"
+    assert project["params"] == p0["params"] and project["revision"] == p0["revision"]
+    assert page.evaluate("() => Array.from({length: 52}, (_, i) => window.autohaptics.valuesAt(i * 10))") == before
+    assert page.is_disabled("[data-testid=undo]"), "a cancelled attempt is no step of the history"
+    assert page.is_enabled("[data-testid=regenerate]")

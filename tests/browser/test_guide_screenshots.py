@@ -270,7 +270,9 @@ def _union(page, *selectors: str, pad: int = 8) -> dict:
 
 @pytest.mark.browser
 def test_guide_screenshots_of_the_workflow(page, api, tmp_path):
-    from browser_support import lane_rect, media_clip, open_editor, state, values_at, wait_jobs_settled, wait_revision_above
+    from browser_support import (
+        lane_rect, media_clip, next_frame, open_editor, state, values_at, wait_jobs_settled, wait_revision_above,
+    )
 
     clip = media_clip(GUIDE_CLIP)
 
@@ -280,8 +282,9 @@ def test_guide_screenshots_of_the_workflow(page, api, tmp_path):
     page.set_input_files("[data-testid=file-input]", str(clip))
     page.wait_for_function(  # the analysis under way (or already done, on a fast machine)
         "() => { const el = document.querySelector('[data-testid=upload-box] [data-testid=generation-progress]');"
-        " return el && Number(el.getAttribute('aria-valuenow')) > 0; }", timeout=120_000)
-    _shot(page, "guide_upload", element=page.locator("[data-testid=upload-box]"))
+        " return el && Number(el.getAttribute('aria-valuenow')) >= 10; }", timeout=120_000)
+    # The upload box and the film's row in the list (the newest, first), showing the same figure.
+    _shot(page, "guide_upload", clip=_union(page, "[data-testid=upload-box]", "[data-testid=project-row]"))
     page.wait_for_function(
         "() => document.querySelector('[data-testid=upload-status]').textContent.startsWith('Ready')",
         timeout=120_000)
@@ -330,7 +333,14 @@ def test_guide_screenshots_of_the_workflow(page, api, tmp_path):
     page.click("[data-testid=edit-set]")
     s2 = wait_revision_above(page, s1["revision"])
     assert values_at(page, 330)["vibration"][:2] == [1.0, 1.0]
+    page.set_viewport_size({"width": 1440, "height": 1300})  # the lanes down to the heat map, none under the ruler
+    page.locator(".timeline-host").evaluate("(el) => { el.scrollTop = 0; }")
+    page.wait_for_function("() => { const h = document.querySelector('.timeline-host').getBoundingClientRect();"
+                           " return window.autohaptics.laneRect('actuators').y + window.autohaptics.laneRect('actuators').height"
+                           " <= h.bottom; }")
+    next_frame(page)
     _shot(page, "guide_edit", clip=_union(page, "[data-testid=tool-select]", "[data-testid=lane-actuators]"))
+    page.set_viewport_size({"width": 1440, "height": 900})
 
     # 4b. Fans by region: pick cells on the fan grid over the picture, Set them over a range.
     fans = lane_rect(page, "fans")

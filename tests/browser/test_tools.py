@@ -93,6 +93,36 @@ def test_range_operations_set_fade_scale_clear(page, project_copy):
     assert page.get_attribute("[data-testid=edit-value]", "aria-label") == "Temperature to set, °C"
 
 
+def test_set_and_scale_without_a_number_warn_and_write_nothing(page, api, project_copy):
+    pid = project_copy["id"]
+    open_editor(page, pid)
+    r = lane_rect(page, "actuators")
+    y_a5 = r["y"] + 4.5 * r["height"] / 9
+    drag(page, client_x(page, 40.05), y_a5, client_x(page, 41.95), y_a5)  # A5, ticks 400..419
+    assert state(page)["selection"] == {"t0": 400, "t1": 420, "lanes": ["A5"]}
+    s0 = state(page)
+    before = values_at(page, 410)["vibration"][4]
+
+    def refused(field: str, typed: str, button: str, message: str) -> None:
+        page.fill(f"[data-testid={field}]", "")
+        page.focus(f"[data-testid={field}]")
+        page.keyboard.type(typed)  # what a number field lets through: "" and "1e" are no number
+        page.click(f"[data-testid={button}]")
+        toast = page.locator("[data-testid=toast-warn]", has_text=message).last
+        toast.wait_for()
+        page.evaluate("(el) => el.remove()", toast.element_handle())
+
+    for typed in ("", "1e", "-"):
+        refused("edit-value", typed, "edit-set", "Enter a number to set.")
+        refused("edit-factor", typed, "edit-scale", "The scale factor must be a number ≥ 0.")
+    page.wait_for_timeout(300)  # a request sent anyway would have moved the revision by now
+    s1 = state(page)
+    assert (s1["revision"], s1["cursor"], s1["saveState"]) == (s0["revision"], 0, "saved")
+    assert api.get(f"/api/projects/{pid}/edits").json()["ops"] == []
+    assert api.get(f"/api/projects/{pid}").json()["revision"] == s0["revision"]
+    assert values_at(page, 410)["vibration"][4] == before
+
+
 def test_copy_and_paste_at_the_playhead(page, project_copy):
     open_editor(page, project_copy["id"])
     r = lane_rect(page, "actuators")

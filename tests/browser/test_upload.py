@@ -168,3 +168,36 @@ def test_drag_and_drop_upload(page, api):
     project = api.get(f"/api/projects/{pid}").json()
     assert project["name"] == "dropped clip" and project["status"] == "ready"
     api.delete(f"/api/projects/{pid}")
+
+
+PROGRESS_PAIRS = """() => {
+    // Every figure either bar shows while the uploaded project's job runs, read together:
+    // [the upload box's, the project row's] (aria-valuenow and the figure of the text).
+    window.__pairs = [];
+    const figure = (bar) => [bar.getAttribute('aria-valuenow'), bar.textContent.split(' %')[0]];
+    new MutationObserver(() => {
+        const link = document.querySelector('[data-testid=open-uploaded]');
+        const id = link && link.getAttribute('href') && link.getAttribute('href').split('/').pop();
+        const box = document.querySelector('[data-testid=upload-box] [data-testid=generation-progress]');
+        const row = id && document.querySelector(`[data-testid=project-row][data-id='${id}'] [data-testid=row-progress]`);
+        if (box && row) window.__pairs.push([figure(box), figure(row)]);
+    }).observe(document.body, {subtree: true, childList: true, characterData: true, attributes: true,
+                               attributeFilter: ['aria-valuenow']});
+}"""
+
+
+def test_the_project_row_shows_the_upload_boxs_progress_figure(page, api):
+    clip = media_clip("bbb_opening_30s_1280x720_vp8_vorbis.webm")  # long enough for several figures
+    page.goto("/")
+    page.wait_for_selector("[data-testid=projects-page]")
+    page.evaluate(PROGRESS_PAIRS)
+    page.set_input_files("[data-testid=file-input]", str(clip))
+    page.wait_for_function(
+        "() => document.querySelector('[data-testid=upload-status]').textContent.startsWith('Ready')", timeout=120_000)
+    pid = page.get_attribute("[data-testid=open-uploaded]", "href").rsplit("/", 1)[-1]
+    pairs = page.evaluate("() => window.__pairs")
+    running = [box for box, _ in pairs if 0 < int(box[0]) < 100]
+    assert len({b[0] for b in running}) >= 2, f"too few figures while the job ran: {pairs}"
+    assert all(box == row for box, row in pairs), [p for p in pairs if p[0] != p[1]]
+    assert all(box[0] == box[1] for box, _ in pairs)
+    api.delete(f"/api/projects/{pid}")

@@ -165,14 +165,17 @@ def test_edit_undo_redo_reload_and_regenerate_keep_edits(client, data_dir):
     np.testing.assert_allclose(vib[2:6, 3], 0.9)
     assert doc["markers"] == [{"id": "m1", "t_s": 0.3, "label": "door"}] and doc["edits"] == [set_op, marker]
 
-    # Regenerate with other thresholds: a new generated layer, the manual edit still on top.
+    # Regenerate with other thresholds: a new generated layer, the manual edit still on top, and the
+    # change one more (undoable) step of the history.
     before = decode(client.get(f"/api/projects/{pid}/timeline.bin?layer=generated").content)[1]["vibration"]
     off = {"loudness": 1.0, "sharpness": 1.0, "booming": 1.0, "low_energy": 1.0}  # 1 disables a feature
     job = client.post(f"/api/projects/{pid}/generate", json={"thresholds": off})
     assert job.status_code == 202
     assert events_until_end(client, job.json()["job"]["id"])[-1][0] == "done"
     after = client.get(f"/api/projects/{pid}").json()
-    assert after["params"]["thresholds"] == off and after["cursor"] == 2
+    assert after["params"]["thresholds"] == off and after["cursor"] == 3
+    assert client.get(f"/api/projects/{pid}/edits").json()["ops"][2] == {
+        "op": "params", "from": project["params"], "to": after["params"]}
     generated = decode(client.get(f"/api/projects/{pid}/timeline.bin?layer=generated").content)[1]["vibration"]
     assert before.max() > 0 and generated.max() == 0
     doc = client.get(f"/api/projects/{pid}/timeline").json()

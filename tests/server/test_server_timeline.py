@@ -331,3 +331,56 @@ def test_a_parameter_change_is_an_undoable_op_in_the_edit_history(client, projec
     # The op is the service's record of PUT params: a client cannot post one.
     bad = client.post(f"/api/projects/{pid}/edits", json={"base_revision": r2["revision"], "op": e["ops"][1]})
     assert bad.status_code == 400 and "PUT /api/projects/{id}/params" in bad.json()["detail"]
+
+
+def wait_done(client, job_id: str) -> dict:
+    for _ in range(1200):
+        job = client.get(f"/api/jobs/{job_id}").json()
+        if job["status"] in TERMINAL:
+            return job
+        time.sleep(0.1)
+    raise AssertionError(f"job {job_id} still {job['status']}")
+
+
+def test_a_regeneration_with_other_parameters_is_undone_from_the_kept_analysis(client, project, data_dir):
+    pid = project["id"]
+    pdir = data_dir / "projects" / pid
+    p0 = client.get(f"/api/projects/{pid}").json()
+
+    def tracks() -> dict:
+        return client.get(f"/api/projects/{pid}/timeline").json()["tracks"]
+
+    before = tracks()
+    # The same parameters again: a job, but nothing to undo.
+    assert wait_done(client, client.post(f"/api/projects/{pid}/generate", json={}).json()["job"]["id"])["status"] == "done"
+    assert client.get(f"/api/projects/{pid}/edits").json()["cursor"] == 0
+    assert not (pdir / "analysis-previous.npz").exists()
+    # A cancelled attempt records nothing either.
+    job = client.post(f"/api/projects/{pid}/generate", json={"preset": "reference"}).json()["job"]
+    assert client.post(f"/api/jobs/{job['id']}/cancel").status_code == 202
+    assert wait_done(client, job["id"])["status"] == "cancelled"
+    assert client.get(f"/api/projects/{pid}/edits").json()["cursor"] == 0
+    # Another preset (another analysis) and mode: one `params` op once the job is done.
+    job = client.post(f"/api/projects/{pid}/generate", json={"preset": "fast", "mode": "multimodal"}).json()["job"]
+    assert client.get(f"/api/projects/{pid}/edits").json()["cursor"] == 0, "recorded when done, not before"
+    assert wait_done(client, job["id"])["status"] == "done"
+    p1 = client.get(f"/api/projects/{pid}").json()
+    assert (p1["params"]["preset"], p1["params"]["mode"]) == ("fast", "multimodal")
+    e = client.get(f"/api/projects/{pid}/edits").json()
+    assert e["cursor"] == 1 and e["revision"] == p1["revision"]
+    assert e["ops"] == [{"op": "params", "from": p0["params"], "to": p1["params"]}]
+    after = tracks()
+    assert after != before
+    assert (pdir / "analysis-previous.npz").is_file(), "the balanced analysis is kept"
+    # Undo: the previous parameters and their timeline, re-derived from the kept analysis (no job).
+    u = client.post(f"/api/projects/{pid}/undo", json={"base_revision": p1["revision"]})
+    assert u.status_code == 200, u.text
+    assert u.json()["params"] == p0["params"] and u.json()["job"] is None and u.json()["cursor"] == 0
+    assert client.get(f"/api/projects/{pid}").json()["params"] == p0["params"]
+    assert tracks() == before
+    # Redo: the regenerated parameters and timeline again, from the analysis swapped back.
+    r = client.post(f"/api/projects/{pid}/redo", json={"base_revision": u.json()["revision"]})
+    assert r.status_code == 200, r.text
+    assert r.json()["params"] == p1["params"] and r.json()["job"] is None and r.json()["cursor"] == 1
+    assert client.get(f"/api/projects/{pid}").json()["params"] == p1["params"]
+    assert tracks() == after

@@ -164,19 +164,21 @@ class Composer:
         return tl
 
     # -------------------------------------------------------------------- derive
-    def rederive(self, pid: str, doc: dict) -> Derived | None:
+    def rederive(self, pid: str, doc: dict, *, previous: bool = False) -> Derived | None:
         """Derive from the cached analysis with parameters ``doc``; the derived timeline is the
         project's generated layer at once (in memory) and its .npz is written in the background.
 
-        Returns None when there is no cache or ``doc`` changes analysis parameters (a job is
-        needed). ``seconds`` covers loading the cache and deriving.
+        previous : when the cache does not serve ``doc`` but the previous one does (``doc`` is the
+        parameters a regeneration replaced), that one becomes the current cache. Only while no
+        job of the project runs (a job reads the cache).
+
+        Returns None when no cache serves ``doc`` (a job is needed). ``seconds`` covers loading
+        the cache and deriving.
         """
         t0 = time.perf_counter()
-        analysis = self.analysis(pid)
-        if analysis is None:
-            return None
         params, _ = params_from_doc(doc)
-        if not pipeline.reusable(analysis, params):
+        analysis = self._serving(pid, params, previous=previous)
+        if analysis is None:
             return None
         project = self.store.get_project(pid)
         tl = derive_timeline(analysis, doc, name=project["name"])
@@ -184,6 +186,24 @@ class Composer:
         self.writer.put(pid, revision, tl)  # answered now, written after (.writer)
         return Derived(revision=revision, seconds=time.perf_counter() - t0,
                        needs_analysis=bool(tl.stats.get("needs_analysis")))
+
+    def _serving(self, pid: str, params, *, previous: bool) -> pipeline.Analysis | None:
+        """The feature cache that serves ``params``: the current one, else (``previous``) the
+        previous one, swapped in; None when neither does."""
+        analysis = self.analysis(pid)
+        if analysis is None:
+            return None
+        if pipeline.reusable(analysis, params):
+            return analysis
+        if not previous:
+            return None
+        before = self._cached(self.store.previous_analysis_path(pid), pipeline.Analysis.load)
+        if before is None or not pipeline.reusable(before, params):
+            return None
+        self.store.swap_analyses(pid)
+        for path, value in ((self.store.analysis_path(pid), before), (self.store.previous_analysis_path(pid), analysis)):
+            self._remember(path, _file_key(path), value)
+        return before
 
     # ------------------------------------------------------------------- compose
     def compose(self, pid: str) -> Composed:

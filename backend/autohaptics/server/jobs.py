@@ -101,6 +101,7 @@ class _Live:
     started_at: str | None = None
     cancel_requested: bool = False
     previous: dict | None = None  # the parameters of the timeline the job would replace (None: none yet)
+    record: bool = False  # a regeneration: its parameters, when done, are an undoable ``params`` op
     subscribers: Subscribers = field(default_factory=Subscribers)
 
 
@@ -164,15 +165,17 @@ class JobRunner:
             self._started = False
 
     # ------------------------------------------------------------------ actions
-    def submit(self, project: dict, params: dict, *, refine: bool = False) -> dict:
+    def submit(self, project: dict, params: dict, *, refine: bool = False, record: bool = False) -> dict:
         """Queue a generation job for ``project`` with stored parameters ``params``; Conflict when one runs.
 
         refine : the project's feature cache serves ``params``: compute only the saliency a derive
-        lacks (:func:`pipeline.refine`), not the whole analysis."""
+        lacks (:func:`pipeline.refine`), not the whole analysis.
+        record : when done, the change from the timeline's parameters to the job's enters the edit
+        history as a ``params`` op (a regeneration; a parameter change records its own)."""
         if not self._started or self._stopping:
             raise Conflict("the job runner is not running")
         job = self.store.create_job(project["id"], params)
-        self._queue(project, job, refine=refine)
+        self._queue(project, job, refine=refine, record=record)
         return job
 
     def resume(self, jobs: list[dict]) -> None:
@@ -192,12 +195,12 @@ class JobRunner:
                 log.exception("resuming job %s", job["id"])
                 self.store.finish_job(job["id"], "failed", error=f"could not be resumed: {exc}")
 
-    def _queue(self, project: dict, job: dict, *, refine: bool) -> None:
+    def _queue(self, project: dict, job: dict, *, refine: bool, record: bool = False) -> None:
         cancel = self.pool.cancel_event()
         params = job["params"]
         media_path = str(self.store.media_path(project))
         live = _Live(job_id=job["id"], project_id=project["id"], params=params, name=project["name"],
-                     media_path=media_path, cancel=cancel,
+                     media_path=media_path, cancel=cancel, record=record,
                      previous=project["params"] if project.get("has_timeline") else None)
         spec = {"job_id": job["id"], "media_path": media_path, "work_dir": str(self.store.job_work_dir(job["id"])),
                 "params": params, "name": project["name"], "refine": refine,
@@ -354,7 +357,8 @@ class JobRunner:
                 self.composer.flush(live.project_id)
             try:
                 job = self.store.finish_job(job_id, status, error=error, params=params,
-                                            started_at=(result or {}).get("started_at") or live.started_at)
+                                            started_at=(result or {}).get("started_at") or live.started_at,
+                                            **_replaced(live, params))
             except Exception as exc:
                 log.exception("storing the end of job %s", job_id)
                 job = self.store.finish_job(job_id, "failed", error=f"{type(exc).__name__}: {exc}")
@@ -406,6 +410,19 @@ class JobRunner:
         tl = derive_timeline(analysis, current, name=live.name)
         save_npz(tl, work / GENERATED)
         return current, bool(tl.stats.get("needs_analysis"))
+
+
+def _replaced(live: _Live, params: dict) -> dict:
+    """What a done job keeps of the timeline it replaces: the feature cache, when the job analysed
+    with other analysis parameters (undoing the change re-derives from it), and the change as a
+    ``params`` op when the job is a regeneration that changed the parameters."""
+    from autohaptics.params import same_analysis
+
+    if live.previous is None:
+        return {}
+    keep = not same_analysis(live.previous, live.params)
+    op = {"op": "params", "from": live.previous, "to": params} if live.record and params != live.previous else None
+    return {"keep_analysis": keep, "op": op}
 
 
 def _outcome(future: Future | None, live: _Live) -> tuple[str, str | None, dict | None]:

@@ -5,6 +5,8 @@ Layout of ``data_dir``::
     autohaptics.sqlite3          projects, jobs, edits, settings (service-wide, e.g. the chair's)
     projects/<id>/<uuid>.<ext>   the uploaded media (server-chosen name)
     projects/<id>/analysis.npz   the feature cache (pipeline.Analysis)
+    projects/<id>/analysis-previous.npz  the cache it replaced when a job analysed with other
+                                 analysis parameters (undoing that change re-derives from it)
     projects/<id>/generated.npz  the generated timeline (never edited; edits live in the database)
     projects/<id>/imports/<ref>.json  the document of each ``import`` edit (the op keeps ``ref``)
     projects/<id>/waveform-<N>.json  cached audio peaks
@@ -92,6 +94,18 @@ class Store:
 
     def analysis_path(self, pid: str) -> Path:
         return self.project_dir(pid) / "analysis.npz"
+
+    def previous_analysis_path(self, pid: str) -> Path:
+        return self.project_dir(pid) / "analysis-previous.npz"
+
+    def swap_analyses(self, pid: str) -> None:
+        """The previous feature cache becomes the current one and the current one the previous
+        (parameters that need the previous analysis are in force again)."""
+        current, previous = self.analysis_path(pid), self.previous_analysis_path(pid)
+        held = current.with_name("analysis-swap.npz")
+        os.replace(current, held)
+        os.replace(previous, current)
+        os.replace(held, previous)
 
     def generated_path(self, pid: str) -> Path:
         return self.project_dir(pid) / GENERATED
@@ -270,12 +284,14 @@ class Store:
                        (float(progress), stage, job_id))
 
     def finish_job(self, job_id: str, status: str, *, error: str | None = None, started_at: str | None = None,
-                   params: dict | None = None) -> dict | None:
+                   params: dict | None = None, keep_analysis: bool = False, op: dict | None = None) -> dict | None:
         """Record a job's end. ``done``: its work folder's analysis.npz and generated.npz replace the
-        project's and the revision increases. ``params`` (what the timeline on show was derived
-        with) are stored. A project whose job did not finish but that has a timeline stays
-        ``ready`` (its ``job`` says what happened). Returns the job, or None when its project was
-        deleted meanwhile. The work folder is removed in every case."""
+        project's (``keep_analysis``: the replaced analysis is kept as the previous one), ``op`` (a
+        regeneration's ``params`` op) is appended at the cursor, and the revision increases.
+        ``params`` (what the timeline on show was derived with) are stored. A project whose job did
+        not finish but that has a timeline stays ``ready`` (its ``job`` says what happened).
+        Returns the job, or None when its project was deleted meanwhile. The work folder is
+        removed in every case."""
         work = self.job_work_dir(job_id)
         try:
             with self._tx() as db:
@@ -290,9 +306,14 @@ class Store:
                 project_status = {"done": "ready", "failed": "failed", "cancelled": "cancelled"}[status]
                 if status == "done":
                     pdir = self.project_dir(pid)
+                    if keep_analysis and self.analysis_path(pid).is_file():
+                        os.replace(self.analysis_path(pid), self.previous_analysis_path(pid))
                     for name in ("analysis.npz", GENERATED):
                         os.replace(work / name, pdir / name)
                     db.execute("UPDATE projects SET revision=revision+1, has_timeline=1 WHERE id=?", (pid,))
+                    if op is not None:
+                        self._insert_op(db, pid, db.execute("SELECT cursor FROM projects WHERE id=?",
+                                                            (pid,)).fetchone()[0], op)
                 elif db.execute("SELECT has_timeline FROM projects WHERE id=?", (pid,)).fetchone()[0]:
                     project_status = "ready"  # the previous timeline stays; the job keeps its own status
                 if params is not None:
@@ -342,11 +363,13 @@ class Store:
         (None: on top of the current revision)."""
         with self._tx() as db:
             row = self._require(db, pid) if base_revision is None else self._check_revision(db, pid, base_revision)
-            cursor = row["cursor"]
-            db.execute("DELETE FROM edits WHERE project_id=? AND seq>=?", (pid, cursor))
-            db.execute("INSERT INTO edits (project_id, seq, op, created_at) VALUES (?, ?, ?, ?)",
-                       (pid, cursor, json.dumps(op), now_iso()))
-            return self._move_cursor(db, pid, cursor + 1)
+            return self._insert_op(db, pid, row["cursor"], op)
+
+    def _insert_op(self, db: sqlite3.Connection, pid: str, cursor: int, op: dict) -> dict:
+        db.execute("DELETE FROM edits WHERE project_id=? AND seq>=?", (pid, cursor))
+        db.execute("INSERT INTO edits (project_id, seq, op, created_at) VALUES (?, ?, ?, ?)",
+                   (pid, cursor, json.dumps(op), now_iso()))
+        return self._move_cursor(db, pid, cursor + 1)
 
     def undo(self, pid: str, base_revision: int) -> dict:
         with self._tx() as db:

@@ -44,6 +44,11 @@ export class ChairPanel extends Emitter {
     this.tickS = tickS;
     this.range = range;
     this.portSelect = h("select", { class: "input chair-port", id: "chair-port", "data-testid": "chair-port" });
+    /** @type {string|null} the port the user picked in the list (none: the list defaults to a chair-like one) */
+    this.chosenPort = null;
+    this.portSelect.addEventListener("change", () => {
+      this.chosenPort = this.portSelect.value || null;
+    });
     this.refreshBtn = h("button", { class: "btn btn-small", type: "button", "aria-label": "Refresh the port list", title: "Refresh the port list", "data-testid": "chair-refresh", onclick: () => this.refreshPorts() }, "↻");
     this.connectBtn = h("button", { class: "btn btn-small btn-primary", type: "button", "data-testid": "chair-connect", onclick: () => this.toggleConnection() }, "Connect");
     this.stateEl = h("span", { class: "badge chair-state", "data-state": "idle", "data-testid": "chair-state" }, STATE_TEXT.idle);
@@ -150,12 +155,13 @@ export class ChairPanel extends Emitter {
       toast(`Could not list the chair ports: ${errorText(err)}`, "error");
       return;
     }
-    const current = (this.status && this.status.port) || this.portSelect.value;
+    // The port in use or picked in the list, else the first that looks like a chair (a virtual chair
+    // counts); never the list's implicit first option (/dev/ttyS0 listed before a chair appeared).
+    const current = (this.status && this.status.port) || this.chosenPort;
     this.portSelect.replaceChildren(
       ...ports.map((p) => h("option", { value: p.device }, `${p.device}${p.likely_chair ? " ★" : ""}${p.description ? ` — ${p.description}` : ""}`)),
     );
     if (!ports.length) this.portSelect.append(h("option", { value: "" }, "No ports found"));
-    // The port in use, else the first that looks like a chair (a virtual chair counts), not /dev/ttyS0.
     const chairLike = ports.find((p) => p.likely_chair) || ports.find((p) => p.kind === "virtual");
     if (current && ports.some((p) => p.device === current)) this.portSelect.value = current;
     else if (chairLike) this.portSelect.value = chairLike.device;

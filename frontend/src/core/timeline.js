@@ -358,6 +358,8 @@ export class TimelineView extends Emitter {
     root.append(body, scroll);
     this.root = root;
     this.bodyEl = body;
+    // A lane scrolled into view (focus, the keyboard) stops below the sticky ruler, not under it.
+    this.host.style.scrollPaddingTop = `${RULER_HEIGHT + 1}px`;
     this.host.append(root);
 
     this._ro = new ResizeObserver(() => this._resize());

@@ -6,7 +6,8 @@
 import { h } from "../core/dom.js";
 
 /**
- * A modal dialog with a message and OK / Cancel; resolves true on OK.
+ * A modal dialog with a message and OK / Cancel; resolves true on OK. A `danger` dialog (OK
+ * destroys something) opens with the focus on Cancel, so Enter never destroys.
  * @param {{title: string, message: string, ok?: string, danger?: boolean}} opts
  * @returns {Promise<boolean>}
  */
@@ -19,7 +20,7 @@ export function confirmDialog({ title, message, ok = "OK", danger = false }) {
       resolve(dlg.returnValue === "ok");
       dlg.remove();
     });
-    openModal(dlg);
+    openModal(dlg, danger ? cancelBtn : null);
   });
 }
 
@@ -75,12 +76,14 @@ export function modal(title, body, buttons) {
 }
 
 /**
- * Show a {@link modal} with the focus (and selection) in its first field, else on its primary button.
+ * Show a {@link modal} with the focus (and selection) on `start`, else in its first field, else on
+ * its primary button.
  * @param {HTMLDialogElement} dlg
+ * @param {HTMLElement|null} [start]
  */
-export function openModal(dlg) {
+export function openModal(dlg, start = null) {
   dlg.showModal();
-  const first = /** @type {HTMLElement|null} */ (dlg.querySelector("input, select, textarea") || dlg.querySelector('button[value="ok"]'));
+  const first = /** @type {HTMLElement|null} */ (start || dlg.querySelector("input, select, textarea") || dlg.querySelector('button[value="ok"]'));
   if (!first) return;
   first.focus();
   if (first instanceof HTMLInputElement && (first.type === "text" || first.type === "number")) first.select();

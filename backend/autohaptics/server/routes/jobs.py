@@ -25,7 +25,7 @@ def _resolve(project: dict, body: ParamsIn | None) -> dict:
 def generate(project_id: str, store: StoreDep, runner: RunnerDep, body: ParamsIn | None = Body(default=None)) -> dict:
     project = store.get_project(project_id)
     doc = _resolve(project, body)
-    job = runner.submit(project, doc)
+    job = runner.submit(project, doc, record=True)
     store.set_params(project_id, doc)
     return {"job": job}
 
@@ -51,11 +51,12 @@ def _put_params(project_id: str, body: ParamsIn, response: Response, store, runn
 
 
 def apply_params(project_id: str, doc: dict, store, runner, composer) -> dict:
-    """Make ``doc`` the project's parameters: re-derived from the cached analysis when it can be
-    (``derived`` true, the revision moves on), else a job analyses the film again (or the running
-    one, when it needs the same analysis, derives with them when it ends). Call it under the
-    project's ``runner.params_lock``. Returns ``{revision, derived, seconds?, job}``."""
-    derived = composer.rederive(project_id, doc)
+    """Make ``doc`` the project's parameters: re-derived from the cached analysis (or from the
+    previous one, while no job runs) when it can be (``derived`` true, the revision moves on), else
+    a job analyses the film again (or the running one, when it needs the same analysis, derives
+    with them when it ends). Call it under the project's ``runner.params_lock``. Returns
+    ``{revision, derived, seconds?, job}``."""
+    derived = composer.rederive(project_id, doc, previous=runner.active_job(project_id) is None)
     if derived is not None:
         job = None
         if derived.needs_analysis and runner.active_job(project_id) is None:
