@@ -187,7 +187,7 @@ def test_fan_levels_by_hand():
     motion[4, 13], near[4, 13] = 1.2, 0.3  # strong (0.6) but far: off
     motion[4, 14], near[4, 14] = 0.8, 1.0  # near but weak (0.4 < 0.5): off
     motion[5, 12], near[5, 12] = 1.5, 0.5  # 0.75, near at the limit: on
-    levels = airflow.fan_levels(motion, near)
+    levels = airflow.fan_levels(motion, near, params=airflow.AirflowParams(near_share=0.0))
     expected = np.zeros((FAN_ROWS, FAN_COLS), np.float32)
     expected[4, 12], expected[5, 12] = 1.0, 0.75
     np.testing.assert_array_equal(levels, expected)
@@ -203,17 +203,57 @@ def test_enclosed_still_centre_of_an_approaching_object_blows():
     near = np.full((FAN_ROWS, FAN_COLS), 0.2)
     near[2:7, 10:15] = 0.9
     near[4, 12] = 0.3  # not near: stays off even though enclosed
-    levels = airflow.fan_levels(motion, near)
+    only_bar = airflow.AirflowParams(near_share=0.0)
+    levels = airflow.fan_levels(motion, near, params=only_bar)
     ring_mean = (15 * 1.0 + 0.8) / 16
     assert levels[2, 10] == pytest.approx(0.8)
     np.testing.assert_allclose(levels[3:6, 11:14][near[3:6, 11:14] >= 0.5], ring_mean, rtol=1e-6)
     assert levels[4, 12] == 0.0
-    plain = airflow.fan_levels(motion, near, params=airflow.AirflowParams(fill_enclosed=False))
+    plain = airflow.fan_levels(motion, near, params=airflow.AirflowParams(fill_enclosed=False, near_share=0.0))
     assert not plain[3:6, 11:14].any()
     # a ring open to the border encloses nothing
     motion[2:7, 14] = 0.1
     motion[3:6, 15:] = 0.0
-    assert not airflow.fan_levels(motion, near)[3:6, 11:14].any()
+    assert not airflow.fan_levels(motion, near, params=only_bar)[3:6, 11:14].any()
+
+
+def test_near_cells_by_hand():
+    rows = np.repeat((np.arange(FAN_ROWS) / (FAN_ROWS - 1))[:, None], FAN_COLS, axis=1)  # 0 top .. 1 bottom
+    # the nearer half: rows 8..4 have 0, 17, 34, 51, 68 cells nearer than them (< 76.5); row 3 has 85
+    half = airflow.near_cells(rows, params=airflow.AirflowParams(near_min=0.95, near_share=0.5))
+    np.testing.assert_array_equal(half.any(axis=1), np.arange(FAN_ROWS) >= 4)
+    assert half.all(axis=1)[4:].all()
+    # the default quarter: rows 8..7 (0 and 17 nearer, < 38.25); row 6 has 34 nearer too
+    quarter = airflow.near_cells(rows, params=airflow.AirflowParams(near_min=0.95))
+    np.testing.assert_array_equal(quarter.any(axis=1), np.arange(FAN_ROWS) >= 6)
+    # the bar adds what reaches it; without a share the bar alone decides (the thesis)
+    bar = airflow.near_cells(rows, params=airflow.AirflowParams(near_min=0.3, near_share=0.5))
+    np.testing.assert_array_equal(bar.any(axis=1), rows[:, 0] >= 0.3)
+    alone = airflow.near_cells(rows, params=airflow.AirflowParams(near_min=0.8, near_share=0.0))
+    np.testing.assert_array_equal(alone.any(axis=1), rows[:, 0] >= 0.8)
+    # a flat map ranks no cell nearer than another: all near with a share, none below the bar without
+    flat = np.full((FAN_ROWS, FAN_COLS), 0.2)
+    assert airflow.near_cells(flat).all()
+    assert not airflow.near_cells(flat, params=airflow.AirflowParams(near_share=0.0)).any()
+    # NaN reads as 0 (farthest)
+    nan = rows.copy()
+    nan[8, 0] = np.nan
+    assert not airflow.near_cells(nan, params=airflow.AirflowParams(near_min=0.95, near_share=0.5))[8, 0]
+
+
+def test_nearness_below_the_bar_counts_by_its_ranking_only():
+    """Noise that lifts every cell's nearness (the expansion cue over a short frame pair) without
+    reaching ``near_min`` changes no fan: below the bar, only which cells are nearer counts."""
+    rng = np.random.default_rng(3)
+    motion = rng.uniform(0.0, 1.0, (FAN_ROWS, FAN_COLS))
+    near = rng.uniform(0.0, 0.3, (FAN_ROWS, FAN_COLS))
+    lifted = 0.1 + 1.2 * near + 0.02 * near ** 2  # increasing, every cell still below 0.5
+    assert lifted.max() < 0.5
+    a, b = airflow.fan_levels(motion, near), airflow.fan_levels(motion, lifted)
+    assert a.any()
+    np.testing.assert_array_equal(a, b)
+    thesis = airflow.AirflowParams(near_share=0.0)
+    assert not airflow.fan_levels(motion, near, params=thesis).any()  # the bar alone: nothing is near
 
 
 def test_fan_levels_of_no_motion_are_zero():

@@ -302,9 +302,9 @@ clean_grid = hnp.arrays(np.float64, (FAN_ROWS, FAN_COLS), elements=st.one_of(st.
 
 
 @SETTINGS
-@given(m=grid, near=grid, rel=unit, near_min=unit)
-def test_fan_levels_are_finite_and_in_range_for_any_grid(m, near, rel, near_min):
-    levels = A.fan_levels(m, near, params=A.AirflowParams(cell_rel=rel, near_min=near_min))
+@given(m=grid, near=grid, rel=unit, near_min=unit, share=unit)
+def test_fan_levels_are_finite_and_in_range_for_any_grid(m, near, rel, near_min, share):
+    levels = A.fan_levels(m, near, params=A.AirflowParams(cell_rel=rel, near_min=near_min, near_share=share))
     assert levels.shape == (FAN_ROWS, FAN_COLS) and np.isfinite(levels).all()
     assert levels.min() >= 0.0 and levels.max() <= 1.0
 
@@ -317,12 +317,16 @@ def test_fan_levels_do_not_depend_on_the_motion_units(m, near, exp):
 
 @SETTINGS
 @given(m=clean_grid, near=hnp.arrays(np.float64, (FAN_ROWS, FAN_COLS), elements=unit), rel=unit, near_min=unit,
-       more=unit)
-def test_a_higher_bar_never_turns_a_fan_on(m, near, rel, near_min, more):
-    base = A.fan_levels(m, near, params=A.AirflowParams(cell_rel=rel, near_min=near_min)) > 0
-    stricter_rel = A.fan_levels(m, near, params=A.AirflowParams(cell_rel=min(1.0, rel + more), near_min=near_min)) > 0
-    stricter_near = A.fan_levels(m, near, params=A.AirflowParams(cell_rel=rel, near_min=min(1.0, near_min + more))) > 0
-    assert not (stricter_rel & ~base).any() and not (stricter_near & ~base).any()
+       share=unit, more=unit)
+def test_a_higher_bar_never_turns_a_fan_on(m, near, rel, near_min, share, more):
+    def on(**kw):
+        args = dict(cell_rel=rel, near_min=near_min, near_share=share) | kw
+        return A.fan_levels(m, near, params=A.AirflowParams(**args)) > 0
+
+    base = on()
+    for stricter in (on(cell_rel=min(1.0, rel + more)), on(near_min=min(1.0, near_min + more)),
+                     on(near_share=max(0.0, share - more))):
+        assert not (stricter & ~base).any()
 
 
 @SETTINGS

@@ -12,6 +12,7 @@ from autohaptics.airflow.fans import (
     fan_track,
     grid_means,
     motion_threshold,
+    near_cells,
     smoothed_cell_motion,
     smoothed_nearness,
     sustained_motion,
@@ -28,5 +29,6 @@ from autohaptics.airflow.flow import (
 )
 
 __all__ = ["AirflowParams", "DIS_PRESETS", "FLOW_METHODS", "FlowParams", "cell_motion", "fan_levels", "fan_track",
-           "grid_means", "is_fade", "is_static", "motion_magnitude", "motion_score", "motion_threshold", "optical_flow",
+           "grid_means", "is_fade", "is_static", "motion_magnitude", "motion_score", "motion_threshold", "near_cells",
+           "optical_flow",
            "smoothed_cell_motion", "smoothed_nearness", "sustained_motion"]

@@ -32,6 +32,9 @@ class AirflowParams:
         (default 0.3; module docstring).
     cell_rel : a cell is "strong motion" at this fraction of the tick's strongest cell or more.
     near_min : a cell is "near" at this nearness or more (0..1, 1 = nearest).
+    near_share : the nearest ``near_share`` of a tick's cells are "near" too, whatever their
+        nearness (0..1, default 0.25; 0 = ``near_min`` alone, the thesis): nearness is relative, and
+        its cues' noise (a share of the flow's, larger over a shorter pair) moves an absolute bar.
     static_level, static_fraction : a frame pair is static when fewer than ``static_fraction`` of the proxy's
         pixels changed by more than ``static_level`` grey levels (noise tolerant, yet a small moving object is seen).
     fill_enclosed : a near cell enclosed by "on" cells blows too (the still centre of an object
@@ -56,6 +59,7 @@ class AirflowParams:
     strong_rel: float = 0.3
     cell_rel: float = 0.5
     near_min: float = 0.5
+    near_share: float = 0.25
     static_level: float = field(default=12.0, metadata=stage(ANALYSIS))
     static_fraction: float = field(default=0.002, metadata=stage(ANALYSIS))
     fill_enclosed: bool = True
@@ -79,7 +83,7 @@ class AirflowParams:
             v = float(getattr(self, name))
             if not (math.isfinite(v) and 0.0 <= v <= top):
                 raise ParameterError(f"airflow.{name} must lie in 0..{top:g}, got {getattr(self, name)!r}")
-        for name in ("cell_rel", "near_min", "static_fraction", "strong_rel"):
+        for name in ("cell_rel", "near_min", "near_share", "static_fraction", "strong_rel"):
             if not (0.0 <= float(getattr(self, name)) <= 1.0):
                 raise ParameterError(f"airflow.{name} must lie in 0..1, got {getattr(self, name)!r}")
 
@@ -224,7 +228,7 @@ def fan_levels(cell_motion_: np.ndarray, nearness: np.ndarray, *, params: Airflo
         return np.zeros((FAN_ROWS, FAN_COLS), np.float32)
     with np.errstate(over="ignore"):  # a subnormal peak: the quotient overflows, then clips to 1
         rel = np.clip(m / peak, 0.0, 1.0).astype(np.float32)  # the output's precision decides "still"
-    near_ok = near >= params.near_min
+    near_ok = near_cells(near, params=params)
     on = (rel >= params.cell_rel) & (rel > 0) & near_ok  # a still cell is never "strong motion"
     levels = np.where(on, rel, 0.0)
     if params.fill_enclosed and on.any():
@@ -232,6 +236,21 @@ def fan_levels(cell_motion_: np.ndarray, nearness: np.ndarray, *, params: Airflo
         if holes.any():
             levels[holes] = float(levels[on].mean())
     return levels.astype(np.float32)
+
+
+def near_cells(nearness: np.ndarray, *, params: AirflowParams = AirflowParams()) -> np.ndarray:
+    """The cells of one tick that count as near: bool [shape=(9, 17)] from nearness 0..1.
+
+    A cell is near at ``near_min`` or more, or when fewer than ``near_share`` of the cells are
+    nearer than it (ties share a rank, so a flat map is all near for any share above 0).
+    """
+    near = np.nan_to_num(np.asarray(nearness, dtype=np.float64))
+    ok = near >= params.near_min
+    if params.near_share > 0:
+        flat = np.sort(near.ravel())
+        nearer = flat.size - np.searchsorted(flat, near, side="right")
+        ok |= nearer < params.near_share * flat.size
+    return ok
 
 
 def _enclosed(on: np.ndarray) -> np.ndarray:
