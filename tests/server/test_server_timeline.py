@@ -253,6 +253,35 @@ def test_rederive_keeps_the_derived_timeline_in_memory(client, project, monkeypa
     assert client.get(f"/api/projects/{pid}/timeline.bin").status_code == 200
 
 
+def test_a_restarted_server_loads_the_project_worked_on_last_before_it_is_asked(client, project, data_dir,
+                                                                             monkeypatch):
+    """The editor of the film open before a restart opens without waiting for its files to load."""
+    pid = project["id"]
+    assert client.patch(f"/api/projects/{pid}", json={"view": {"zoom": 2.0}}).status_code == 200
+    loaded = []
+
+    def counting(path):
+        loaded.append(Path(path))
+        return generated_file.load_npz(path)
+
+    monkeypatch.setattr("autohaptics.server.composer.load_npz", counting)
+    with LocalClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as restarted:
+        deadline = time.monotonic() + 20
+        while not loaded and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert [p.parent.name for p in loaded] == [pid]  # that project alone, before any request
+        composer = restarted.app.state.composer
+        deadline = time.monotonic() + 20
+        while composer.analysis(pid) is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+
+        def no_reading(path):
+            raise AssertionError(f"{path} was read again after the start-up")
+
+        monkeypatch.setattr("autohaptics.server.composer.load_npz", no_reading)
+        assert restarted.get(f"/api/projects/{pid}/timeline.bin").status_code == 200
+
+
 def test_npz_round_trip_and_errors(tmp_path):
     tl = known()
     tl.features["loudness"] = np.linspace(0, 1, N_TICKS, dtype=np.float32)

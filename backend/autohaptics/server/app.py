@@ -68,6 +68,9 @@ async def _services(app: FastAPI, settings: Settings):
     store = Store(settings.data_dir)
     interrupted = store.recover()
     composer = Composer(store)
+    recent = store.last_worked_on()
+    if recent is not None:
+        composer.warm(recent)
     runner = JobRunner(store, workers=settings.jobs, mp_context=settings.mp_context, composer=composer)
     await anyio.to_thread.run_sync(runner.start)
     if interrupted:

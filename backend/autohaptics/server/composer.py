@@ -151,6 +151,18 @@ class Composer:
 
         threading.Thread(target=load, name=f"warm-analysis {pid}", daemon=True).start()
 
+    def warm(self, pid: str) -> None:
+        """Load ``pid``'s generated layer, its composition and its feature cache in the background:
+        at start-up, the project worked on last opens without waiting for a long film's files."""
+        def load() -> None:
+            try:
+                self.compose(pid)
+                self.analysis(pid)
+            except Exception as exc:  # the editor's own requests will report it
+                log.info("project %s: not loaded ahead (%s)", pid, exc)
+
+        threading.Thread(target=load, name=f"warm {pid}", daemon=True).start()
+
     def require_generated(self, pid: str) -> Timeline:
         tl = self.generated(pid)
         if tl is None:

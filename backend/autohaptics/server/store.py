@@ -178,6 +178,11 @@ class Store:
     def list_projects(self) -> list[dict]:
         return [self._project_dict(r) for r in self._all("SELECT * FROM projects ORDER BY created_at DESC, id")]
 
+    def last_worked_on(self) -> str | None:
+        """The project with a timeline changed or viewed last (its view is saved as it is worked on)."""
+        rows = self._all("SELECT id FROM projects WHERE has_timeline ORDER BY updated_at DESC LIMIT 1")
+        return rows[0]["id"] if rows else None
+
     def _project_dict(self, row: sqlite3.Row) -> dict:
         d = dict(row)
         for key in ("source", "params", "view"):
