@@ -28,13 +28,11 @@ class AirflowParams:
 
     threshold : motion threshold in frame widths per second; None = adaptive (module docstring).
     floor : motion below this never counts (frame widths/s, default 0.005); also the depth skip limit.
-    strong_rel : adaptive threshold = strong_rel x the 95th percentile of the moving ticks' motion
-        (default 0.3; module docstring).
+    strong_rel : adaptive threshold = strong_rel x the 95th percentile of the moving ticks' motion (0.3).
     cell_rel : a cell is "strong motion" at this fraction of the tick's strongest cell or more.
     near_min : a cell is "near" at this nearness or more (0..1, 1 = nearest).
-    near_share : the nearest ``near_share`` of a tick's cells are "near" too, whatever their
-        nearness (0..1, default 0.25; 0 = ``near_min`` alone, the thesis): nearness is relative, and
-        its cues' noise (a share of the flow's, larger over a shorter pair) moves an absolute bar.
+    near_share : the nearest ``near_share`` of a tick's cells are "near" too (0..1, default 0.25;
+        0 = ``near_min`` alone, the thesis; :func:`near_cells`).
     static_level, static_fraction : a frame pair is static when fewer than ``static_fraction`` of the proxy's
         pixels changed by more than ``static_level`` grey levels (noise tolerant, yet a small moving object is seen).
     fill_enclosed : a near cell enclosed by "on" cells blows too (the still centre of an object
@@ -242,7 +240,9 @@ def near_cells(nearness: np.ndarray, *, params: AirflowParams = AirflowParams())
     """The cells of one tick that count as near: bool [shape=(9, 17)] from nearness 0..1.
 
     A cell is near at ``near_min`` or more, or when fewer than ``near_share`` of the cells are
-    nearer than it (ties share a rank, so a flat map is all near for any share above 0).
+    nearer than it (ties share a rank, so a flat map is all near for any share above 0). Why the
+    share: nearness ranks rather than measures, and its cues' noise (a share of the flow's, larger
+    over a shorter frame pair) lifts every cell and would move an absolute bar with the encoding.
     """
     near = np.nan_to_num(np.asarray(nearness, dtype=np.float64))
     ok = near >= params.near_min
