@@ -23,12 +23,18 @@ from autohaptics.errors import MediaError
 from autohaptics.intensity import features as af
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.cache import Analysis
-from autohaptics.pipeline.video import video_pass
+from autohaptics.pipeline.child import Child, can_fork
+from autohaptics.pipeline.saliency_queue import AbandonedMask, LaterMask
+from autohaptics.pipeline.video import VideoAnalysis, video_pass
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel, null_progress
 from autohaptics.records import params_to_dict
 from autohaptics.timebase import FRAMES_PER_TICK, n_ticks as ticks_for
 
 _AUDIO_SHARE = 0.15  # share of the progress bar given to the audio pass when there is video
+# Up to this length the audio pass runs in a child process beside the video pass (on 2 cores the
+# decoder leaves the analysis time to spare); a longer film's passes run one after the other, so
+# the two passes' memory is never held at once.
+OVERLAP_MAX_S = 1800.0
 
 
 def file_sha256(path: str | Path, *, chunk: int = 1 << 20) -> str:
@@ -64,36 +70,34 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
     need_colour = "temperature" in params.tracks and info.video is not None
     need_flow = "fans" in params.tracks and info.video is not None
     need_vib = "vibration" in params.tracks
-    audio = None
+    if info.audio is None and params.mode == "audio" and need_vib:
+        raise MediaError(f"{info.path}: no audio stream (mode 'audio' needs one)")
+    if info.video is None and params.mode == "visual" and need_vib:
+        raise MediaError(f"{info.path}: no video stream (mode 'visual' needs one)")
     audio_share = _AUDIO_SHARE if info.video is not None else 1.0
-    if info.audio is None:
-        if params.mode == "audio" and need_vib:
-            raise MediaError(f"{info.path}: no audio stream (mode 'audio' needs one)")
-        stats["audio"] = {"skipped": "no audio stream"}
+    if info.audio is not None and (need_colour or need_flow) and info.duration_s <= OVERLAP_MAX_S and can_fork():
+        audio, video = _both_passes(info, params, n, stats, progress, cancel, need_vib=need_vib,
+                                    need_colour=need_colour, need_flow=need_flow)
     else:
-        audio = _audio_pass(info, params, n, stats, progress, cancel, share=audio_share)
-        if between_passes is not None:
-            between_passes()
-
-    video = None
-    need_saliency = _saliency_needed(params, audio, n) if (need_vib and info.video is not None) else np.zeros(n, bool)
-    if info.video is None:
-        if params.mode == "visual" and need_vib:
-            raise MediaError(f"{info.path}: no video stream (mode 'visual' needs one)")
-        stats["video"] = {"skipped": "no video stream"}
-    elif need_colour or need_flow or need_saliency.any():
-        t0 = time.perf_counter()
-
-        def video_progress(stage: str, fraction: float) -> None:
-            progress(stage, audio_share + (1.0 - audio_share) * fraction)
-
-        video = video_pass(info, n, params=params, need_saliency=need_saliency, need_flow=need_flow,
-                           need_colour=need_colour, progress=video_progress, cancel=cancel)
-        stats["video"] = {"seconds": time.perf_counter() - t0, **video.stats}
-        if between_passes is not None:
-            between_passes()
-    else:
-        stats["video"] = {"skipped": "no track needs the picture"}
+        audio = None
+        if info.audio is None:
+            stats["audio"] = {"skipped": "no audio stream"}
+        else:
+            audio = _audio_pass(info, params, n, stats, progress, cancel, share=audio_share)
+            if between_passes is not None:
+                between_passes()
+        need_saliency = _saliency_needed(params, audio, n) if (need_vib and info.video is not None) \
+            else np.zeros(n, bool)
+        video = None
+        if info.video is None:
+            stats["video"] = {"skipped": "no video stream"}
+        elif need_colour or need_flow or need_saliency.any():
+            video = _video_pass(info, params, n, stats, _share_of(progress, audio_share, 1.0), cancel,
+                                need_saliency=need_saliency, need_colour=need_colour, need_flow=need_flow)
+        else:
+            stats["video"] = {"skipped": "no track needs the picture"}
+    if between_passes is not None and video is not None:
+        between_passes()
     if not params.allow_truncated:
         _check_truncation(info, audio_end=stats["audio"].get("decoded_s") if audio is not None else None,
                           video_end=(video.stats["frames"]["last_time_s"] + 1.0 / max(info.video.fps, 1.0))
@@ -101,6 +105,51 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
     progress("done", 1.0)
     return Analysis(info=info.to_dict(), sha256=sha, n_ticks=n, params=params_to_dict(params),
                     audio=audio, video=video, stats=stats)
+
+
+def _share_of(progress: ProgressFn, start: float, end: float) -> ProgressFn:
+    """``progress`` for a part of the run that fills ``start``..``end`` of the bar."""
+    return lambda stage, fraction: progress(stage, start + (end - start) * fraction)
+
+
+def _video_pass(info: media.MediaInfo, params: GenerateParams, n: int, stats: dict, progress: ProgressFn,
+                cancel: CancelToken | None, **needs) -> VideoAnalysis:
+    t0 = time.perf_counter()
+    video = video_pass(info, n, params=params, progress=progress, cancel=cancel, **needs)
+    stats["video"] = {"seconds": time.perf_counter() - t0, **video.stats}
+    return video
+
+
+def _both_passes(info: media.MediaInfo, params: GenerateParams, n: int, stats: dict, progress: ProgressFn,
+                 cancel: CancelToken | None, *, need_vib: bool, need_colour: bool, need_flow: bool):
+    """The audio pass in a forked child beside the video pass, with the same results as one after
+    the other (:mod:`.saliency_queue`). Returns (audio features, VideoAnalysis)."""
+    later = LaterMask()
+    heard = [0.0]  # the audio pass's own fraction done
+
+    def audio_job(report):
+        audio_stats: dict = {}
+        audio = _audio_pass(info, params, n, audio_stats, lambda _s, f: report(f / _AUDIO_SHARE), None,
+                            share=_AUDIO_SHARE)
+        return audio, audio_stats["audio"], _saliency_needed(params, audio, n) if need_vib else np.zeros(n, bool)
+
+    def video_progress(stage: str, fraction: float) -> None:
+        if (failed := child.failure()) is not None:
+            raise failed  # the audio pass failed: the film cannot be analysed, stop now
+        progress(stage, _AUDIO_SHARE * heard[0] + (1.0 - _AUDIO_SHARE) * fraction)
+
+    video_stats: dict = {}
+    with Child(audio_job, on_progress=lambda f: heard.__setitem__(0, f),
+               on_result=lambda value: later.set(value[2]), on_end=later.close) as child:
+        try:
+            video = _video_pass(info, params, n, video_stats, video_progress, cancel, need_saliency=later,
+                                need_colour=need_colour, need_flow=need_flow)
+        except AbandonedMask:
+            child.result()  # the audio pass's own error: it is why the mask was abandoned
+            raise
+        audio, stats["audio"], _ = child.result(cancel)
+    stats["video"] = video_stats["video"]
+    return audio, video
 
 
 def _check_truncation(info: media.MediaInfo, *, audio_end: float | None, video_end: float | None) -> None:

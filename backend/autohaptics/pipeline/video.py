@@ -34,6 +34,7 @@ from autohaptics.fusion import saliency
 from autohaptics.imaging import resized
 from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS
 from autohaptics.params import GenerateParams
+from autohaptics.pipeline.saliency_queue import LaterMask, SaliencyQueue
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel
 from autohaptics.temperature import mean_colour
 from autohaptics.timebase import TICK_S, tick_of_time
@@ -97,16 +98,17 @@ class _Stage:
             self.computed += 1
 
 
-def video_pass(info: media.MediaInfo, n: int, *, params: GenerateParams, need_saliency: np.ndarray,
+def video_pass(info: media.MediaInfo, n: int, *, params: GenerateParams, need_saliency: np.ndarray | LaterMask,
                need_flow: bool, need_colour: bool, progress: ProgressFn | None = None,
                cancel: CancelToken | None = None) -> VideoAnalysis:
     """Decode the video once and run the per-tick stages (module docstring).
 
-    need_saliency : bool [shape=(n,)], ticks whose saliency is needed (already reflects skipping).
+    need_saliency : bool [shape=(n,)], ticks whose saliency is needed (already reflects skipping),
+        or a :class:`LaterMask` another thread sets while the pass runs.
     need_flow : compute motion and depth at all (the fans track is wanted).
     need_colour : compute the mean colour (the temperature track is wanted).
     """
-    vp = _Pass(info, n, params, need_saliency, need_flow, need_colour)
+    vp = _Pass(info, n, params, need_saliency, need_flow, need_colour, cancel=cancel)
     stream = media.iter_video(info.path, info=info, prefetch=params.video.prefetch, decode=params.video.decode,
                               prepare=vp.prepare)
     duration = max(info.duration_s, 1e-9)
@@ -123,15 +125,17 @@ class _Pass:
     """One video pass's state: the stages' parameters and backends, the previous frame's cut
     signature and saliency luma, and the flow pair waiting for its successor frame."""
 
-    def __init__(self, info: media.MediaInfo, n: int, params: GenerateParams, need_saliency: np.ndarray,
-                 need_flow: bool, need_colour: bool):
+    def __init__(self, info: media.MediaInfo, n: int, params: GenerateParams, need_saliency: np.ndarray | LaterMask,
+                 need_flow: bool, need_colour: bool, *, cancel: CancelToken | None = None):
         flow_params = params.flow
         if info.video is not None:  # the gray proxy's width follows the picture's (FlowParams.width_for)
             flow_params = replace(flow_params, proxy_width=flow_params.width_for(info.video.display_size[0]))
         self.n, self.params, self.flow_params = n, params, flow_params
-        self.need_saliency, self.need_flow, self.need_colour = need_saliency, need_flow, need_colour
+        self.need_flow, self.need_colour = need_flow, need_colour
         self.stages = {name: _Stage() for name in STAGES}
-        self.sal_backend = saliency.make_saliency_backend(params.saliency) if need_saliency.any() else None
+        self.stride = int(params.video.stride)
+        self.saliency = SaliencyQueue(need_saliency, self._add_weights, stride=self.stride, cancel=cancel)
+        self.sal_backend = saliency.make_saliency_backend(params.saliency) if self.saliency.may_need() else None
         self.depth_backend = depth.make_depth_backend(params.depth) if need_flow else None
         self.pair_params = PairParams(flow=flow_params, airflow=params.airflow, cuts=params.cuts, depth=params.depth,
                                       floor=float(params.airflow.floor) if params.video.skip else -1.0,
@@ -143,11 +147,6 @@ class _Pass:
             params.saliency.proxy_width, flow_params.proxy_width)
         self.rgb_width = max(sal_width, params.depth.proxy_width if need_flow else 0)
         self.every = params.video.analysis == "every"
-        self.stride = int(params.video.stride)
-        # an analysed frame's saliency is decided when the next analysed frame arrives: the ticks
-        # between them (without a frame of their own) hold its values, so it runs when any of them
-        # vibrates; (tick, width, rgb, luma) of the frame waiting for that decision
-        self.sal_pending = None
         self.out = VideoAnalysis.empty(n)
         self.acc = _Accumulator(self.out)
         self.prev_sig = None  # signature of the previous analysed frame (cut detection)
@@ -180,13 +179,12 @@ class _Pass:
             return
         if centre_tick is not None:
             k = centre_tick
-        want_sal = centre_tick is not None and bool(self.need_saliency[k:k + self.stride].any())
-        keep = want_sal or (centre_tick is not None and self.sal_backend is not None)
-        rgb, gray, luma, sig = self._proxies(frame, analyse_this, keep)
+        want_sal = centre_tick is not None and self.sal_backend is not None
+        rgb, gray, luma, sig = self._proxies(frame, analyse_this, want_sal)
         if is_successor:
             self._pair(frame, gray, sig, analyse_this)
         if analyse_this:
-            self._analyse(frame, k, rgb, gray, luma, sig, want_sal, centre=centre_tick is not None)
+            self._analyse(frame, k, rgb, gray, luma, sig, centre=centre_tick is not None)
 
     def _proxies(self, frame, analyse_this: bool, want_sal: bool):
         st, fw = self.stages, self.flow_params.proxy_width
@@ -235,7 +233,7 @@ class _Pass:
             self.acc.add_near(pk, res.near)
             self.out.depth_mask[pk] = True
 
-    def _analyse(self, frame, k: int, rgb, gray, luma, sig, want_sal: bool, *, centre: bool) -> None:
+    def _analyse(self, frame, k: int, rgb, gray, luma, sig, *, centre: bool) -> None:
         """Colour, the cut against the previous analysed frame, saliency, and the flow pair to come."""
         out, st, params = self.out, self.stages, self.params
         out.frame_mask[k] = True
@@ -248,21 +246,12 @@ class _Pass:
         if self.need_colour:
             self.acc.add_colour(k, st["colour"].run(mean_colour, rgb))
         if centre and self.sal_backend is not None:
-            self.flush_saliency(k)
-            if want_sal:
-                self.acc.add_beta(k, self.weights(frame.width, rgb, luma))
-            else:
-                self.sal_pending = (k, frame.width, rgb, luma)
+            self.saliency.add(k, frame.width, rgb, luma)
         if self.need_flow:
             self.pending = (k, gray, rgb, sig, frame.time_s)
 
-    def flush_saliency(self, upto: int) -> None:
-        """The waiting frame's weights, when a tick from it up to ``upto`` (excluded) vibrates."""
-        if self.sal_pending is not None:
-            k, width, rgb, luma = self.sal_pending
-            self.sal_pending = None
-            if self.need_saliency[k:upto].any():
-                self.acc.add_beta(k, self.weights(width, rgb, luma))
+    def _add_weights(self, k: int, width: int, rgb, luma) -> None:
+        self.acc.add_beta(k, self.weights(width, rgb, luma))
 
     def weights(self, width: int, rgb, luma) -> np.ndarray:
         """The actuator weights of a frame ``width`` px wide from its saliency map (``rgb``, ``luma``:
@@ -280,7 +269,7 @@ class _Pass:
     def finish(self) -> VideoAnalysis:
         """The per-tick results with their stats (ticks held, skipped, computed per stage)."""
         out, n = self.out, self.n
-        self.flush_saliency(n)
+        self.saliency.finish(n)
         self.acc.finish()
         if self.pending is not None and self.pending[0] > 0 and self.acc.motion_n[self.pending[0]] == 0:
             # the clip ended before the last analysed frame's successor: its motion is unknown, so the

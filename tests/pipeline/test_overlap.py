@@ -1,0 +1,154 @@
+"""The audio pass beside the video pass (a forked child, the saliency decisions in frame order):
+the same analysis as one pass after the other, its errors and cancellation, and the queue that
+holds the analysed frames until the audio says which ticks need saliency."""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+
+import numpy as np
+import psutil
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from autohaptics import testing as synth
+from autohaptics.errors import CancelledError, MediaError
+from autohaptics.params import GenerateParams
+import importlib
+from autohaptics.pipeline import analyse
+from autohaptics.pipeline import saliency_queue
+from autohaptics.pipeline.child import Child
+from autohaptics.pipeline.saliency_queue import LaterMask, SaliencyQueue
+
+analyse_module = importlib.import_module("autohaptics.pipeline.analyse")  # the package exports the function
+
+
+@pytest.fixture(scope="module")
+def film(tmp_path_factory):
+    return synth.write_scene(tmp_path_factory.mktemp("overlap") / "av.mp4", synth.sample_scene(),
+                             width=320, height=180, fps=24)
+
+
+def _no_children() -> bool:
+    """No child process left, running or unreaped."""
+    return not psutil.Process().children()
+
+
+def _same(a, b) -> None:
+    assert a.stats["video"].keys() == b.stats["video"].keys()
+    for name in ("audio", "video"):
+        x, y = getattr(a, name), getattr(b, name)
+        pairs = x.items() if isinstance(x, dict) else x.arrays().items()
+        for key, value in pairs:
+            other = y[key] if isinstance(y, dict) else getattr(y, key)
+            np.testing.assert_array_equal(value, other, err_msg=f"{name}.{key}")
+
+
+@pytest.mark.parametrize("waiting_bytes", [None, 1])
+def test_the_passes_side_by_side_give_the_analysis_of_one_after_the_other(film, monkeypatch, waiting_bytes):
+    """With 1 byte of room every analysed frame waits for the audio's mask before the next one."""
+    side = analyse(film, GenerateParams())
+    assert "audio" in side.stats and side.video.saliency_mask.any() and not side.video.saliency_mask.all()
+    if waiting_bytes is not None:
+        monkeypatch.setattr(saliency_queue, "MAX_WAITING_BYTES", waiting_bytes)
+        side = analyse(film, GenerateParams())
+    monkeypatch.setattr(analyse_module, "OVERLAP_MAX_S", 0.0)
+    _same(side, analyse(film, GenerateParams()))
+    assert _no_children()
+
+
+def test_an_audio_failure_stops_the_analysis_with_its_own_error(film, monkeypatch):
+    def broken(*args, **kwargs):
+        raise MediaError("the sound cannot be decoded")
+
+    monkeypatch.setattr(analyse_module, "_audio_pass", broken)  # the forked child runs this one
+    t0 = time.monotonic()
+    with pytest.raises(MediaError, match="the sound cannot be decoded"):
+        analyse(film, GenerateParams())
+    assert time.monotonic() - t0 < 30
+    assert _no_children()
+
+
+def test_a_cancel_stops_both_passes(film, monkeypatch):
+    slow = analyse_module._audio_pass
+
+    def slow_audio(*args, **kwargs):
+        time.sleep(60)  # the child is still busy when the cancel comes
+        return slow(*args, **kwargs)
+
+    monkeypatch.setattr(analyse_module, "_audio_pass", slow_audio)
+    cancel = threading.Event()
+    threading.Timer(0.5, cancel.set).start()
+    t0 = time.monotonic()
+    with pytest.raises(CancelledError):
+        analyse(film, GenerateParams(), cancel=cancel)
+    assert time.monotonic() - t0 < 10
+    assert _no_children()
+
+
+def test_progress_goes_one_way_and_ends_done(film):
+    seen = []
+    analyse(film, GenerateParams(), progress=lambda stage, f: seen.append(f))
+    assert seen == sorted(seen) and seen[-1] == 1.0 and len(seen) > 3
+
+
+def test_a_child_sends_progress_and_its_value_back():
+    got = []
+    with Child(lambda report: [report(i / 4) for i in range(5)] and os.getpid(),
+               on_progress=got.append) as child:
+        pid = child.result()
+    assert pid != os.getpid() and got == [0.0, 0.25, 0.5, 0.75, 1.0]
+    assert _no_children()
+
+
+def _decisions(need, stride: int, ticks: list[int], later_at: int | None, max_bytes: int | None):
+    """The frames a queue computes, in order, the mask given up front or set after ``later_at`` frames."""
+    computed = []
+    mask = LaterMask() if later_at is not None else need
+    queue = SaliencyQueue(mask, lambda k, w, rgb, luma: computed.append(k), stride=stride, max_bytes=max_bytes)
+    frame = np.zeros((2, 2, 3), np.uint8)
+    for i, k in enumerate(ticks):
+        if later_at is not None and i == later_at:
+            mask.set(need)
+        queue.add(k, 2, frame, None)
+    if later_at is not None and later_at >= len(ticks):
+        threading.Timer(0.05, mask.set, args=(need,)).start()  # set only while finish waits
+    queue.finish(len(need))
+    return computed
+
+
+@settings(max_examples=200, deadline=None)
+@given(data=st.data(), stride=st.integers(1, 4), n=st.integers(1, 60))
+def test_the_queue_decides_alike_whenever_the_mask_comes(data, stride, n):
+    """A frame is computed when a tick from it up to the next analysed frame needs saliency,
+    whether the mask is known up front, comes after some frames, or only at the end; and when the
+    waiting frames outgrow their room the queue waits for the mask instead (set by another thread)."""
+    need = np.array(data.draw(st.lists(st.booleans(), min_size=n, max_size=n)), bool)
+    starts = list(range(0, n, stride))
+    ticks = sorted(data.draw(st.sets(st.sampled_from(starts), min_size=1)))
+    up_front = _decisions(need, stride, ticks, None, None)
+    expected = [k for i, k in enumerate(ticks)
+                if need[k:max(ticks[i + 1] if i + 1 < len(ticks) else n, k + stride)].any()]
+    assert up_front == expected
+    later_at = data.draw(st.integers(0, len(ticks)))
+    assert _decisions(need, stride, ticks, later_at, None) == expected
+    mask = LaterMask()
+    threading.Timer(0.02, mask.set, args=(need,)).start()
+    computed = []
+    queue = SaliencyQueue(mask, lambda k, w, rgb, luma: computed.append(k), stride=stride, max_bytes=1)
+    for k in ticks:
+        queue.add(k, 2, np.zeros((2, 2, 3), np.uint8), None)
+    queue.finish(n)
+    assert computed == expected
+
+
+def test_a_mask_abandoned_by_a_failed_pass_stops_the_queue():
+    mask = LaterMask()
+    queue = SaliencyQueue(mask, lambda *a: None, max_bytes=1)
+    threading.Timer(0.05, mask.close).start()
+    with pytest.raises(saliency_queue.AbandonedMask):
+        queue.add(0, 2, np.zeros((2, 2, 3), np.uint8), None)
+        queue.add(1, 2, np.zeros((2, 2, 3), np.uint8), None)
