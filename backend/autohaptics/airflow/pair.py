@@ -52,16 +52,18 @@ class PairParams:
 
 def pair_motion(gray0: np.ndarray, gray1: np.ndarray, rgb0: np.ndarray, sig0: np.ndarray | None,
                 successor_sig: Callable[[], np.ndarray], dt_s: float, *, params: PairParams,
-                depth_backend=None, timer: Callable = run_directly) -> PairMotion:
+                depth_backend=None, timer: Callable = run_directly,
+                luma_signature: Callable[[np.ndarray], np.ndarray] = cuts.frame_signature) -> PairMotion:
     """Motion (and depth when the motion passes the floor) from one frame pair.
 
     gray0, gray1 : uint8 [shape=(h, w)] gray proxies; rgb0 : the first frame's RGB proxy;
     sig0 : its cut signature (or None); successor_sig() : the second frame's colour signature,
     read only when the pair moves past the floor; dt_s : the pair's real interval, s.
     timer(stage, fn, *args, **kwargs) runs each stage ("static", "flow", "depth"), e.g. timed.
+    luma_signature(gray) : a gray proxy's cut signature (a caller that pairs each frame twice keeps it).
     Cut checks: luma first (both proxies are there), then colour when the pair moves.
     """
-    if cuts.is_cut(cuts.frame_signature(gray0), cuts.frame_signature(gray1), params=params.cuts):
+    if cuts.is_cut(luma_signature(gray0), luma_signature(gray1), params=params.cuts):
         return PairMotion(cut=True)
     if (params.skip and timer("static", is_static, gray0, gray1, params=params.airflow)) or \
             timer("static", is_fade, gray0, gray1, params=params.airflow):

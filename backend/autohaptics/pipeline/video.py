@@ -42,6 +42,9 @@ from autohaptics.timebase import TICK_S, tick_of_time
 # Cut signatures are always taken from an RGB proxy this wide, so every two frames compare alike
 # (a histogram of a 128 px proxy is wider than one of a 48 px proxy of the same picture).
 SIGNATURE_WIDTH = 48
+# Up to this picture width the pass runs OpenCV single-threaded (measured: 6 % less wall time at
+# 854 x 480, the same at 1080p: docs/BENCHMARKS.md, issue 21)
+SMALL_PICTURE_PX = 1280
 STAGES = ("decode_wait", "proxy", "cuts", "static", "colour", "saliency", "flow", "depth")
 
 
@@ -108,17 +111,23 @@ def video_pass(info: media.MediaInfo, n: int, *, params: GenerateParams, need_sa
     need_flow : compute motion and depth at all (the fans track is wanted).
     need_colour : compute the mean colour (the temperature track is wanted).
     """
-    vp = _Pass(info, n, params, need_saliency, need_flow, need_colour, cancel=cancel)
-    stream = media.iter_video(info.path, info=info, prefetch=params.video.prefetch, decode=params.video.decode,
-                              prepare=vp.prepare)
-    duration = max(info.duration_s, 1e-9)
-    for frame, centre_tick in centre_frames(vp.timed(stream), n, int(params.video.stride)):
-        vp.frame(frame, centre_tick)
-        if frame.index % 16 == 0:
-            check_cancel(cancel)
-            if progress is not None:
-                progress("video", min(1.0, frame.time_s / duration))
-    return vp.finish()
+    threads = cv2.getNumThreads()
+    if info.video is not None and info.video.display_size[0] <= SMALL_PICTURE_PX:
+        cv2.setNumThreads(1)  # each call is small: OpenCV's worker threads would cost more than they give
+    try:
+        vp = _Pass(info, n, params, need_saliency, need_flow, need_colour, cancel=cancel)
+        stream = media.iter_video(info.path, info=info, prefetch=params.video.prefetch, decode=params.video.decode,
+                                  prepare=vp.prepare)
+        duration = max(info.duration_s, 1e-9)
+        for frame, centre_tick in centre_frames(vp.timed(stream), n, int(params.video.stride)):
+            vp.frame(frame, centre_tick)
+            if frame.index % 16 == 0:
+                check_cancel(cancel)
+                if progress is not None:
+                    progress("video", min(1.0, frame.time_s / duration))
+        return vp.finish()
+    finally:
+        cv2.setNumThreads(threads)
 
 
 class _Pass:
@@ -152,6 +161,7 @@ class _Pass:
         self.prev_sig = None  # signature of the previous analysed frame (cut detection)
         self.prev_sal_gray = None  # luma of the previous saliency proxy (the saliency motion cue)
         self.pending = None  # (tick, gray, rgb, sig, time) waiting for its successor frame (flow pair)
+        self.luma_sigs: list = []  # (gray proxy, its cut signature) of the last two
         self.last_time = 0.0
         self.repeats = 0  # successor frames passed over as repeats of their pair's first frame
 
@@ -219,7 +229,7 @@ class _Pass:
                 cuts.frame_signature, st["proxy"].run(frame.proxy, SIGNATURE_WIDTH))
 
         res = pair_motion(pgray, gray, prgb, psig, successor_sig, max(frame.time_s - pt, 1e-3),
-                          params=self.pair_params, depth_backend=self.depth_backend,
+                          params=self.pair_params, depth_backend=self.depth_backend, luma_signature=self.luma_signature,
                           timer=lambda name, fn, *a, **kw: st[name].run(fn, *a, **kw))
         if res.cut:
             self.out.cut[pk] = True
@@ -249,6 +259,16 @@ class _Pass:
             self.saliency.add(k, frame.width, rgb, luma)
         if self.need_flow:
             self.pending = (k, gray, rgb, sig, frame.time_s)
+
+    def luma_signature(self, gray: np.ndarray) -> np.ndarray:
+        """A gray proxy's cut signature, kept for the last two proxies (a successor frame that is
+        also analysed starts the next pair with the same proxy)."""
+        for held, sig in self.luma_sigs:
+            if held is gray:
+                return sig
+        sig = cuts.frame_signature(gray)
+        self.luma_sigs = [self.luma_sigs[-1], (gray, sig)] if self.luma_sigs else [(gray, sig)]
+        return sig
 
     def _add_weights(self, k: int, width: int, rgb, luma) -> None:
         self.acc.add_beta(k, self.weights(width, rgb, luma))
