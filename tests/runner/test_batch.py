@@ -226,7 +226,8 @@ def test_usage_errors_exit_2(tmp_path, media_dir, capsys):
 
 # ------------------------------------------------------------------- dying workers
 def _killer(clip: Path, kills: int):
-    """A progress callback that SIGKILLs the worker process that has ``clip`` open, ``kills`` times."""
+    """A progress callback that SIGKILLs the worker process that has ``clip`` open, ``kills`` times
+    (a worker of the pool: a child of this process, not a child of the worker that reads it too)."""
     me = psutil.Process()
     state = {"left": kills, "fractions": [], "killed": set()}
 
@@ -234,7 +235,7 @@ def _killer(clip: Path, kills: int):
         state["fractions"].append(fraction)
         if state["left"] <= 0:
             return
-        for child in me.children(recursive=True):
+        for child in me.children():
             if child.pid in state["killed"]:  # a killed process can list its files until it is gone
                 continue
             try:

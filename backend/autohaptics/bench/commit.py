@@ -43,29 +43,36 @@ def register(sub) -> None:
                    help="folder for the written film, the server's data and the JSON (default %(default)s); a "
                         "project generated there is reused, but its lowering figures hold only on its first run")
     p.add_argument("--hours", type=float, default=2.0, help="length of the written film (default 2)")
+    p.add_argument("--bed", action="store_true",
+                   help="write the other film: events over a steady bed of tone and room noise, other colours")
     p.add_argument("--repeat", type=int, default=5, help="answer-time measurements of each commit (default 5)")
     p.set_defaults(func=run)
 
 
-def write_film(path: Path, duration_s: float = 7200.0) -> Path:
+def write_film(path: Path, duration_s: float = 7200.0, *, bed: bool = False) -> Path:
     """A ``duration_s`` film at 64 x 36, 5 fps: 45 s textured colour segments, every 9-13 s a
-    bright disc (left or right) with, alternately, a low tone or pink noise, over silence."""
+    bright disc (left or right) with, alternately, a low tone or pink noise, over silence; with
+    ``bed`` over a steady 220 Hz tone and pink room noise, in other colours, the discs high or low."""
     from autohaptics.testing import Noise, Scene, Segment, Shape, Texture, Tone, write_scene
 
     colours = [(40, 45, 60), (170, 60, 40), (50, 140, 70), (60, 80, 160)]
+    if bed:
+        colours = [(200, 150, 90), (30, 30, 35), (90, 170, 190), (150, 90, 150)]
     segments = tuple(Segment(t, min(duration_s, t + 45.0), colours[i % 4], texture=Texture("noise", 0.1, 0.3, seed=i % 5))
                      for i, t in enumerate(float(s) for s in range(0, int(duration_s), 45)))
     shapes, audio = [], []
     t, k = 3.0, 0
     while t + 4 < duration_s:
-        shapes.append(Shape("circle", (250, 250, 240), t_on=t - 0.5, t_off=t + 3.0, xy0=(0.2 if k % 2 else 0.8, 0.5),
-                            size0=(0.2, 0.35)))
+        at = (0.5, 0.25 if k % 2 else 0.75) if bed else (0.2 if k % 2 else 0.8, 0.5)
+        shapes.append(Shape("circle", (250, 250, 240), t_on=t - 0.5, t_off=t + 3.0, xy0=at, size0=(0.2, 0.35)))
         if k % 2 == 0:
             audio.append(Tone(t, t + 1.2, 45.0 + 10 * (k % 4), level_dbfs=-12.0 - (k % 9) * 2, ramp_s=0.05))
         else:
             audio.append(Noise(t, t + 2.0, level_dbfs=-18.0 - (k % 7) * 2, colour="pink", seed=k, ramp_s=0.1))
         t += 9.0 + (k % 5)
         k += 1
+    if bed:
+        audio += [Tone(0.0, duration_s, 220.0, level_dbfs=-30.0), Noise(0.0, duration_s, level_dbfs=-42.0, colour="pink", seed=99)]
     scene = Scene(duration_s, background=segments, shapes=tuple(shapes), audio=tuple(audio), name="bench-commit")
     return write_scene(path, scene, width=64, height=36, fps=5, long=True, quality="low", sample_rate=24000)
 
@@ -193,10 +200,10 @@ def restart_mid_refinement(api: httpx.Client, proc: subprocess.Popen, data: Path
 def run(args) -> int:
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
-    film = Path(args.film) if args.film else work / f"film-{args.hours:g}h-64x36-5fps.mp4"
+    film = Path(args.film) if args.film else work / f"film-{args.hours:g}h-64x36-5fps{'-bed' if args.bed else ''}.mp4"
     if not film.exists():
         print(f"writing {film} …", flush=True)
-        write_film(film, args.hours * 3600.0)
+        write_film(film, args.hours * 3600.0, bed=args.bed)
     proc, url = start_server(work / "data")
     try:
         api = httpx.Client(base_url=url, timeout=600)

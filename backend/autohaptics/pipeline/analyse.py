@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import logging
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -23,13 +24,14 @@ from autohaptics.errors import MediaError
 from autohaptics.intensity import features as af
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.cache import Analysis
-from autohaptics.pipeline.child import Child, can_fork
+from autohaptics.pipeline.child import Child, ChildFailed, can_fork
 from autohaptics.pipeline.saliency_queue import AbandonedMask, LaterMask
 from autohaptics.pipeline.video import VideoAnalysis, video_pass
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel, null_progress
 from autohaptics.records import params_to_dict
 from autohaptics.timebase import FRAMES_PER_TICK, n_ticks as ticks_for
 
+log = logging.getLogger(__name__)
 _AUDIO_SHARE = 0.15  # share of the progress bar given to the audio pass when there is video
 # Up to this length the audio pass runs in a child process beside the video pass (on 2 cores the
 # decoder leaves the analysis time to spare); a longer film's passes run one after the other, so
@@ -74,28 +76,16 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
         raise MediaError(f"{info.path}: no audio stream (mode 'audio' needs one)")
     if info.video is None and params.mode == "visual" and need_vib:
         raise MediaError(f"{info.path}: no video stream (mode 'visual' needs one)")
-    audio_share = _AUDIO_SHARE if info.video is not None else 1.0
-    if info.audio is not None and (need_colour or need_flow) and info.duration_s <= OVERLAP_MAX_S and can_fork():
-        audio, video = _both_passes(info, params, n, stats, progress, cancel, need_vib=need_vib,
-                                    need_colour=need_colour, need_flow=need_flow)
-    else:
-        audio = None
-        if info.audio is None:
-            stats["audio"] = {"skipped": "no audio stream"}
-        else:
-            audio = _audio_pass(info, params, n, stats, progress, cancel, share=audio_share)
-            if between_passes is not None:
-                between_passes()
-        need_saliency = _saliency_needed(params, audio, n) if (need_vib and info.video is not None) \
-            else np.zeros(n, bool)
-        video = None
-        if info.video is None:
-            stats["video"] = {"skipped": "no video stream"}
-        elif need_colour or need_flow or need_saliency.any():
-            video = _video_pass(info, params, n, stats, _share_of(progress, audio_share, 1.0), cancel,
-                                need_saliency=need_saliency, need_colour=need_colour, need_flow=need_flow)
-        else:
-            stats["video"] = {"skipped": "no track needs the picture"}
+    needs = dict(need_vib=need_vib, need_colour=need_colour, need_flow=need_flow)
+    beside = info.audio is not None and (need_colour or need_flow) and info.duration_s <= OVERLAP_MAX_S and can_fork()
+    if beside:
+        try:
+            audio, video = _both_passes(info, params, n, stats, progress, cancel, **needs)
+        except ChildFailed as exc:  # the child was killed (e.g. out of memory): the passes in turn
+            log.warning("%s: the audio pass beside the video pass failed (%s); analysing in turn", info.path, exc)
+            beside = False
+    if not beside:
+        audio, video = _one_after_the_other(info, params, n, stats, progress, cancel, between_passes, **needs)
     if between_passes is not None and video is not None:
         between_passes()
     if not params.allow_truncated:
@@ -105,6 +95,29 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
     progress("done", 1.0)
     return Analysis(info=info.to_dict(), sha256=sha, n_ticks=n, params=params_to_dict(params),
                     audio=audio, video=video, stats=stats)
+
+
+def _one_after_the_other(info: media.MediaInfo, params: GenerateParams, n: int, stats: dict, progress: ProgressFn,
+                         cancel: CancelToken | None, between_passes: Callable[[], Any] | None, *, need_vib: bool,
+                         need_colour: bool, need_flow: bool):
+    """The audio pass, then the video pass where a track needs the picture. Returns (audio, video)."""
+    audio = video = None
+    audio_share = _AUDIO_SHARE if info.video is not None else 1.0
+    if info.audio is None:
+        stats["audio"] = {"skipped": "no audio stream"}
+    else:
+        audio = _audio_pass(info, params, n, stats, progress, cancel, share=audio_share)
+        if between_passes is not None:
+            between_passes()
+    need_saliency = _saliency_needed(params, audio, n) if (need_vib and info.video is not None) else np.zeros(n, bool)
+    if info.video is None:
+        stats["video"] = {"skipped": "no video stream"}
+    elif need_colour or need_flow or need_saliency.any():
+        video = _video_pass(info, params, n, stats, _share_of(progress, audio_share, 1.0), cancel,
+                            need_saliency=need_saliency, need_colour=need_colour, need_flow=need_flow)
+    else:
+        stats["video"] = {"skipped": "no track needs the picture"}
+    return audio, video
 
 
 def _share_of(progress: ProgressFn, start: float, end: float) -> ProgressFn:

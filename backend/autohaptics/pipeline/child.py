@@ -8,6 +8,7 @@ memory pages and runs on the other core. POSIX only (:func:`can_fork`).
 
 from __future__ import annotations
 
+import ctypes
 import os
 import signal
 import threading
@@ -17,6 +18,9 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from autohaptics.progress import CancelToken, check_cancel
+
+
+_PR_SET_PDEATHSIG = 1
 
 
 def can_fork() -> bool:
@@ -107,11 +111,21 @@ class Child:
         self._conn.close()
 
 
+def _die_with_parent() -> None:
+    """Linux: the kernel kills this process when its parent dies (a killed worker leaves no child
+    working on for nobody); elsewhere the child ends when it finds the pipe closed."""
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+    except (OSError, AttributeError):
+        pass
+
+
 def _run_child(fn: Callable, conn: Connection) -> None:
     """The forked child's whole life: run ``fn``, send its outcome, exit without the parent's
     clean-up (atexit handlers, buffered files and threads belong to the parent)."""
     status = 0
     last = [-1.0]
+    _die_with_parent()
 
     def report(fraction: float) -> None:
         if fraction - last[0] >= 0.01 or fraction >= 1.0:

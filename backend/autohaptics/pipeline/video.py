@@ -42,9 +42,7 @@ from autohaptics.timebase import TICK_S, tick_of_time
 # Cut signatures are always taken from an RGB proxy this wide, so every two frames compare alike
 # (a histogram of a 128 px proxy is wider than one of a 48 px proxy of the same picture).
 SIGNATURE_WIDTH = 48
-# Up to this picture width the pass runs OpenCV single-threaded (measured: 6 % less wall time at
-# 854 x 480, the same at 1080p: docs/BENCHMARKS.md, issue 21)
-SMALL_PICTURE_PX = 1280
+SMALL_PICTURE_PX = 1280  # up to this width OpenCV runs single-threaded (docs/BENCHMARKS.md, issue 21)
 STAGES = ("decode_wait", "proxy", "cuts", "static", "colour", "saliency", "flow", "depth")
 
 
