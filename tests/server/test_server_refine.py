@@ -1,7 +1,8 @@
-"""Threshold commits through the API on a generated film with known answers: raising starts no work,
-lowering starts a refinement (saliency of the newly vibrating ticks only) whose timeline equals a
-fresh generate at those thresholds, and a restart in the middle of one leaves the project usable
-with its parameters.
+"""Threshold commits through the API on a generated film with known answers: raising or lowering a
+threshold starts no work (the analysis has the saliency of every tick the sliders could wake);
+lowering the loudness gate below the analysed one starts a refinement (saliency of the newly
+vibrating ticks only) whose timeline equals a fresh generate, and a restart in the middle of one
+leaves the project usable with its parameters.
 
 The film (64 x 36, 5 fps, 14 s): a loud boom at 3-4 s with a bright disc on the LEFT, a quiet hum
 at 9-11 s with a bright square on the RIGHT.
@@ -23,6 +24,8 @@ from service_client import LocalClient
 HIGH = {"sharpness": 0.95, "booming": 0.95, "low_energy": 0.95, "loudness": 0.95}
 LOW = {"sharpness": 0.3, "booming": 0.3, "low_energy": 0.3, "loudness": 0.3}
 SCENE = synth.left_boom_right_hum_scene()
+THESIS = {"intensity.rule": "thesis"}
+GATED = THESIS | {"intensity.loudness_gate": 0.6}  # the boom passes it, the hum does not
 
 
 @pytest.fixture(scope="module")
@@ -46,7 +49,7 @@ def thesis_project(client: LocalClient, film) -> tuple[str, str]:
                     data={"mode": "multimodal", "generate": "false"})
     assert r.status_code == 201, r.text
     pid = r.json()["id"]
-    r = client.post(f"/api/projects/{pid}/generate", json={"overrides": {"intensity.rule": "thesis"}})
+    r = client.post(f"/api/projects/{pid}/generate", json={"overrides": GATED})
     assert r.status_code == 202, r.text
     return pid, r.json()["job"]["id"]
 
@@ -63,8 +66,11 @@ def test_threshold_commits_refine_only_what_they_wake(tmp_path, film):
         # Raising wakes no tick: derived at once, no job.
         r = client.put(f"/api/projects/{pid}/params", json={"thresholds": HIGH})
         assert r.status_code == 200 and r.json()["derived"] and r.json()["job"] is None
-        # Lowering wakes the hum: derived at once with estimated weights, and a refinement starts.
+        # Lowering them: the weights were computed up front, derived at once, no job.
         r = client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW})
+        assert r.status_code == 200 and r.json()["derived"] and r.json()["job"] is None
+        # Lowering the gate wakes the hum: derived at once with estimated weights, and a refinement starts.
+        r = client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW, "overrides": THESIS})
         assert r.status_code == 200 and r.json()["derived"] and r.json()["job"] is not None
         job = wait_done(client, r.json()["job"]["id"])
         assert job["params"]["thresholds"] == LOW and job["stage"] in ("saliency", "done")
@@ -87,7 +93,7 @@ def test_a_restart_during_a_refinement_keeps_the_project_usable(tmp_path, film):
         pid, job_id = thesis_project(client, film)
         wait_done(client, job_id)
         assert client.put(f"/api/projects/{pid}/params", json={"thresholds": HIGH}).json()["job"] is None
-        r = client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW})
+        r = client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW, "overrides": THESIS})
         job_id = r.json()["job"]["id"]
     # Stopped whatever the job had done: the next start runs it again and nothing shows as failed.
     with LocalClient(create_app(settings)) as client:
@@ -99,4 +105,4 @@ def test_a_restart_during_a_refinement_keeps_the_project_usable(tmp_path, film):
         assert client.get(f"/api/projects/{pid}").json()["status"] == "ready"
         doc = client.get(f"/api/projects/{pid}/timeline").json()
         assert doc["generator"]["params"]["thresholds"] == LOW
-        assert client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW}).json()["job"] is None
+        assert client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW, "overrides": THESIS}).json()["job"] is None

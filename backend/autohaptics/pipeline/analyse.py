@@ -188,12 +188,15 @@ def _check_truncation(info: media.MediaInfo, *, audio_end: float | None, video_e
 
 def _saliency_needed(params: GenerateParams, audio: dict | None, n: int) -> np.ndarray:
     """Ticks whose saliency the mode needs: every tick for "visual" (and for "multimodal" without
-    skipping), the ticks with non-zero audio intensity for "multimodal", none otherwise."""
+    skipping); for "multimodal" every tick the threshold sliders could make vibrate (all four at
+    0: the loudness gate and silence still decide), so a threshold commit finds its weights in the
+    cache instead of decoding again (docs/BENCHMARKS.md, "Saliency up front"); none otherwise."""
     if params.mode == "visual" or (params.mode == "multimodal" and not params.video.skip):
         return np.ones(n, bool)
     if params.mode != "multimodal" or audio is None:
         return np.zeros(n, bool)
-    return inten.audio_intensity(audio, n, params=params.intensity)[0] > 0
+    floor = dataclasses.replace(params.intensity, thresholds={name: 0.0 for name in inten.FEATURES}, density=None)
+    return inten.audio_intensity(audio, n, params=floor)[0] > 0
 
 
 def _audio_pass(info: media.MediaInfo, params: GenerateParams, n: int, stats: dict,
