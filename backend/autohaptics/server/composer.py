@@ -130,8 +130,9 @@ class Composer:
         return self._cached(self.store.analysis_path(pid), pipeline.Analysis.load)
 
     def _warm_analysis(self, pid: str) -> None:
-        """Load the feature cache in the background when it is not in memory yet: a project whose
-        timeline is being looked at is about to be re-derived (a threshold drag)."""
+        """Load the feature cache in the background when it is not in memory yet, and derive once
+        from it (the derive keeps what no threshold changes): a project whose timeline is being
+        looked at is about to be re-derived (a threshold drag)."""
         path = self.store.analysis_path(pid)
         key = _file_key(path)
         with self._lock:
@@ -142,7 +143,10 @@ class Composer:
 
         def load() -> None:
             try:
-                self.analysis(pid)
+                analysis = self.analysis(pid)
+                if analysis is not None:  # the derive's kept curves and picture tracks, for the first commit
+                    project = self.store.get_project(pid)
+                    derive_timeline(analysis, project["params"], name=project["name"])
             except Exception as exc:  # the re-derive will report it
                 log.info("project %s: feature cache not loaded ahead (%s)", pid, exc)
             finally:
@@ -157,9 +161,9 @@ class Composer:
         def load() -> None:
             try:
                 self.compose(pid)
-                self.analysis(pid)
             except Exception as exc:  # the editor's own requests will report it
                 log.info("project %s: not loaded ahead (%s)", pid, exc)
+            self._warm_analysis(pid)
 
         threading.Thread(target=load, name=f"warm {pid}", daemon=True).start()
 
