@@ -30,13 +30,14 @@ _PULLDOWN = ((0, 0), (1, 1), (1, 2), (2, 3), (3, 3))  # (top field's film frame,
 def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | None = None, height: int | None = None,
              fps: float | Fraction | None = None, conversion: str = "repeat", video_codec: str | None = None,
              audio_codec: str | None = None, video_bit_rate: int | None = None,
-             audio_bit_rate: int | None = None) -> Path:
+             audio_bit_rate: int | None = None, video_options: dict[str, str] | None = None) -> Path:
     """Re-encode ``src`` into ``dst`` (container from the suffix, codecs default per container as in
     :func:`~autohaptics.testing.encode.write_scene`) and return ``dst``.
 
     width, height : output picture size, px (even; default the source's). fps : output frame rate
     (default the source's); conversion : "repeat" or "pulldown" (module docstring; "pulldown" needs
     a 24 fps source and 30 fps out). video_bit_rate, audio_bit_rate : bit/s (default: the encoder's).
+    video_options : the video encoder's own options (e.g. ``{"bf": "0"}``: no B-frames).
     The audio is decoded and encoded again (resampled to 48 kHz for Opus).
     """
     info = probe(src)
@@ -65,6 +66,8 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
             vs.width, vs.height, vs.pix_fmt = w, h, "yuv420p"
             if video_bit_rate:
                 vs.bit_rate = int(video_bit_rate)
+            if video_options:
+                vs.options = dict(video_options)
             audio = _audio_stream(inp, out, audio_codec or a_default, audio_bit_rate) if info.audio else None
             frames = _source_frames(inp.streams.video[0], w, h)
             for i, rgb in enumerate(_pulldown(frames) if conversion == "pulldown" else _repeat(frames, rate)):
