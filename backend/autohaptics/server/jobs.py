@@ -2,11 +2,10 @@
 
 Life of a job:
 
-1. :meth:`JobRunner.submit` records it (``queued``) and creates ``work/<job id>/``; the job waits
-   in the runner's own queue until fewer than ``Settings.jobs`` jobs are in the pool, then
-   :func:`run_job` is submitted to it (one ``ProcessPoolExecutor`` with that many workers, spawn
-   or forkserver context). Waiting here rather than in the pool makes cancelling a queued job
-   immediate.
+1. :meth:`JobRunner.submit` records it (``queued``) and creates ``work/<job id>/``; it waits in the
+   runner's own queue (so cancelling it is immediate) until fewer than ``Settings.jobs`` jobs are
+   in the pool, then :func:`run_job` is submitted to it (one ``ProcessPoolExecutor``, spawn or
+   forkserver context).
 2. In the worker, :func:`run_job` sends ``("started", id, time)`` then ``("progress", id, stage,
    fraction)`` messages, runs :func:`pipeline.analyse` (or :func:`pipeline.refine`) with the job's
    Manager Event as the cancel token, derives, and writes ``analysis.npz`` and ``generated.npz``
@@ -19,10 +18,10 @@ Life of a job:
    queued; a job whose cancel was requested never replaces the timeline).
 
 Parameters changed while a job ran and needing no other analysis are derived with at its end (and
-refined again if they lack saliency). Deleting a project cancels its job. On shutdown running jobs are cancelled and left queued; the
-next start (as after a crash) re-queues them with their project's latest parameters
-(:meth:`Store.recover`) and runs them again (:meth:`JobRunner.resume`: a refinement where the cache
-serves those parameters, else a new analysis).
+refined again if they lack saliency). Deleting a project cancels its job. On shutdown running jobs
+are cancelled and left queued; the next start (as after a crash) re-queues them with their
+project's latest parameters (:meth:`Store.recover`) and runs them again (:meth:`JobRunner.resume`:
+a refinement where the cache serves those parameters, else a new analysis).
 """
 
 from __future__ import annotations
