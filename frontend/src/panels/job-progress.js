@@ -33,6 +33,7 @@ export class JobProgress {
     this.watch = null;
     /** @type {string|null} */
     this.jobId = null;
+    /** the job's end has been shown (a late answer to Cancel must not cover it) */
     this.ended = false;
     this.cancelBtn.addEventListener("click", () => this.cancel());
   }
@@ -45,7 +46,6 @@ export class JobProgress {
   async follow(job) {
     this.close();
     this.jobId = job.id;
-    /** the job's end has been shown (a late answer to Cancel must not cover it) */
     this.ended = false;
     this.cancelBtn.disabled = false;
     this._show(job.progress || 0, STAGES[job.stage || job.status] || job.stage || job.status);
