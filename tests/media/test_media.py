@@ -75,6 +75,11 @@ def test_planes_made_ahead_give_the_same_proxies(tmp_path, size, rotation):
         b.prepare(160, 128)
         for x, y in zip(a.rgb_and_gray(128, 160, luma_size=(64, 64)), b.rgb_and_gray(128, 160, luma_size=(64, 64))):
             np.testing.assert_array_equal(x, y)
+        b.prepare(160, 128, luma_size=(64, 64))  # the luma grid made ahead too: the plane read once
+        assert ("grid", (64, 64)) in b._ready
+        for x, y in zip(a.rgb_and_gray(128, 160, luma_size=(64, 64)), b.rgb_and_gray(128, 160, luma_size=(64, 64))):
+            np.testing.assert_array_equal(x, y)
+        assert not b._ready  # every plane made ahead was taken
         np.testing.assert_array_equal(a.proxy(48), b.proxy(48))
 
 

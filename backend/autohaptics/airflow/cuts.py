@@ -21,6 +21,7 @@ of one pair computed across the cut.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -76,27 +77,28 @@ def frame_signature(frame: np.ndarray) -> np.ndarray:
     return np.concatenate([hist, thumb])
 
 
-def _parts(sig_a: np.ndarray, sig_b: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
-    a, b = np.asarray(sig_a, np.float32), np.asarray(sig_b, np.float32)
-    if a.shape != b.shape:
-        raise ParameterError(f"signatures differ in shape (gray vs colour?): {a.shape} vs {b.shape}")
-    nh = a.size - _THUMB_N
-    return 0.5 * float(np.abs(a[:nh] - b[:nh]).sum()), a[nh:].astype(np.float64), b[nh:].astype(np.float64)
-
-
-def _corr(ta: np.ndarray, tb: np.ndarray) -> float:
-    da, db = ta - ta.mean(), tb - tb.mean()
-    den = float(np.sqrt((da * da).sum() * (db * db).sum()))
-    return float((da * db).sum() / den) if den > 0 else 1.0
+def _centred(thumb: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """A thumbnail (float64) less its mean, its mean and its sum of squared deviations: the
+    figures numpy's ``mean``, ``std`` and the correlation below are made of, each summed once."""
+    mean = np.add.reduce(thumb) / thumb.size
+    centred = thumb - mean
+    return centred, float(mean), float(np.add.reduce(centred * centred))
 
 
 def cut_score(sig_a: np.ndarray, sig_b: np.ndarray, *, params: CutParams = CutParams()) -> float:
     """How clearly two frames belong to different shots, 0..1; 0.5 or more is a cut (see is_cut)."""
-    hist, ta, tb = _parts(sig_a, sig_b)
-    if min(ta.std(), tb.std()) < params.flat_std:
-        return float(min(1.0, 0.5 * abs(ta.mean() - tb.mean()) / params.flat_jump))
+    a, b = np.asarray(sig_a, np.float32), np.asarray(sig_b, np.float32)
+    if a.shape != b.shape:
+        raise ParameterError(f"signatures differ in shape (gray vs colour?): {a.shape} vs {b.shape}")
+    nh = a.size - _THUMB_N
+    (da, ma, sa), (db, mb, sb) = _centred(a[nh:].astype(np.float64)), _centred(b[nh:].astype(np.float64))
+    if math.sqrt(min(sa, sb) / _THUMB_N) < params.flat_std:
+        return float(min(1.0, 0.5 * abs(ma - mb) / params.flat_jump))
+    hist = 0.5 * float(np.add.reduce(np.abs(a[:nh] - b[:nh])))
     colour = min(1.0, 0.5 * hist / params.hist_threshold)
-    layout = min(1.0, 0.5 * (1.0 - _corr(ta, tb)) / max(1e-6, 1.0 - params.corr_threshold))
+    den = math.sqrt(sa * sb)
+    corr = float(np.add.reduce(da * db)) / den if den > 0 else 1.0
+    layout = min(1.0, 0.5 * (1.0 - corr) / max(1e-6, 1.0 - params.corr_threshold))
     return float(min(colour, layout))
 
 

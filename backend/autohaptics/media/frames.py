@@ -28,16 +28,20 @@ class Frame:
         self.width, self.height = (frame.height, frame.width) if rotation % 180 else (frame.width, frame.height)
         self._ready: dict = {}  # planes made ahead by prepare(), each taken once
 
-    def prepare(self, gray_width: int, rgb_width: int) -> None:
+    def prepare(self, gray_width: int, rgb_width: int, luma_size: tuple[int, int] | None = None) -> None:
         """Make ahead the small planes that ``gray(gray_width)`` and ``rgb_and_gray(rgb_width,
-        gray_width)`` read, e.g. in the decoding thread while the caller analyses an earlier frame
-        (OpenCV runs without the GIL): those calls then return the same arrays sooner."""
+        gray_width, luma_size=luma_size)`` read, e.g. in the decoding thread while the caller
+        analyses an earlier frame (OpenCV runs without the GIL): those calls then return the same
+        arrays sooner, and the full luma plane is read once."""
         gw, gh = self._size(gray_width, None)
         rw, rh = self._size(rgb_width, None)
-        ys = self._planes_small(gw, gh, colour=False)
+        grid: list = []
+        ys = self._planes_small(gw, gh, colour=False, grid=luma_size, grid_out=grid)
         if ys is not None:
             self._ready[(gw, gh, False, True)] = ys
             self._ready[(rw, rh, True, False)] = self._planes_small(rw, rh, colour=True, luma=False)
+            if grid:
+                self._ready[("grid", tuple(luma_size))] = grid[0]
 
     def _size(self, width: int, height: int | None) -> tuple[int, int]:
         width = max(1, int(width))
@@ -117,10 +121,14 @@ class Frame:
         plane not asked for); None when the pixel format has no fast path or the proxy is not
         smaller than the frame. ``grid`` (w, h): the luma is also area-averaged to that size
         (display orientation, limited range as stored) and appended to ``grid_out``."""
-        if grid is None and self._ready:
-            ready = self._ready.pop((width, height, colour, luma), None)
-            if ready is not None:
-                return ready
+        if self._ready:
+            key = (width, height, colour, luma)
+            if grid is None and key in self._ready:
+                return self._ready.pop(key)
+            made = ("grid", tuple(grid)) if grid is not None else None
+            if made in self._ready and key in self._ready and grid_out is not None:
+                grid_out.append(self._ready.pop(made))
+                return self._ready.pop(key)
         f = self._frame
         name = f.format.name
         if name not in _PLANAR_YUV8 or width >= self.width or height >= self.height:

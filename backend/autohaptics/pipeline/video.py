@@ -166,7 +166,8 @@ class _Pass:
     def prepare(self, frame: media.Frame) -> None:
         """Make a frame's gray and RGB proxy planes ahead, in the decoding thread (the same arrays
         :meth:`_proxies` would make; a frame that needs neither wastes them)."""
-        frame.prepare(self.flow_params.proxy_width, self.rgb_width)
+        frame.prepare(self.flow_params.proxy_width, self.rgb_width,
+                      self.sal_luma_size if self.sal_backend is not None else None)
 
     def timed(self, stream):
         """``stream``'s frames, the time spent waiting for each counted as ``decode_wait``."""
