@@ -18,7 +18,7 @@ _PLANAR_YUV8 = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj44
 class Frame:
     """One decoded picture. Valid only inside the iteration step that yielded it."""
 
-    __slots__ = ("_frame", "index", "time_s", "rotation", "width", "height", "_ready")
+    __slots__ = ("_frame", "index", "time_s", "rotation", "width", "height", "_ready", "_luma_kept")
 
     def __init__(self, frame: av.VideoFrame, index: int, time_s: float, rotation: int):
         self._frame = frame
@@ -27,6 +27,7 @@ class Frame:
         self.rotation = rotation
         self.width, self.height = (frame.height, frame.width) if rotation % 180 else (frame.width, frame.height)
         self._ready: dict = {}  # planes made ahead by prepare(), each taken once
+        self._luma_kept: tuple | None = None  # (w, h, luma plane as stored) of the last gray proxy read
 
     def prepare(self, gray_width: int, rgb_width: int, luma_size: tuple[int, int] | None = None) -> None:
         """Make ahead the small planes that ``gray(gray_width)`` and ``rgb_and_gray(rgb_width,
@@ -74,7 +75,36 @@ class Frame:
 
     def gray(self, width: int) -> np.ndarray:
         """Luma proxy ``width`` px wide (aspect kept), uint8 [shape=(h, w)], display orientation."""
-        return self.proxy(width, fmt="gray")
+        gw, gh = self._size(width, None)
+        ys = self._planes_small(gw, gh, colour=False)
+        if ys is None:
+            return self.proxy(width, fmt="gray")
+        self._luma_kept = (gw, gh, ys[0])
+        return _luma_full_range(ys[0], self._frame)
+
+    def rgb(self, width: int, gray_width: int) -> np.ndarray:
+        """The RGB proxy of ``rgb_and_gray(width, gray_width)`` alone (the same array), its luma
+        taken from the gray proxy's plane when :meth:`gray` has read it: a frame first read for its
+        gray proxy is not read again."""
+        gw, gh = self._size(gray_width, None)
+        rw, rh = self._size(width, None)
+        kept = self._luma_kept
+        if kept is not None and kept[:2] == (gw, gh):
+            y_raw = kept[2]
+        else:
+            ys = self._planes_small(gw, gh, colour=False)
+            y_raw = ys[0] if ys is not None else None
+        chroma = self._planes_small(rw, rh, colour=True, luma=False) if y_raw is not None else None
+        if chroma is None:
+            return self.proxy(width)
+        return self._rgb_from(y_raw, (gw, gh), (rw, rh), chroma)
+
+    def _rgb_from(self, y_raw: np.ndarray, gray_size: tuple[int, int], size: tuple[int, int], chroma) -> np.ndarray:
+        """The RGB proxy of ``size`` (w, h) from the luma plane at ``gray_size`` and the chroma
+        planes at ``size`` (as :meth:`_planes_small` returns them)."""
+        y_rgb = y_raw if gray_size == size else cv2.resize(
+            y_raw, size, interpolation=cv2.INTER_AREA if size[0] < gray_size[0] else cv2.INTER_LINEAR)
+        return _yuv_to_rgb(y_rgb, chroma[1], chroma[2], self._frame)
 
     def rgb_and_gray(self, width: int, gray_width: int, *, luma_size: tuple[int, int] | None = None):
         """An RGB proxy ``width`` px wide and a luma proxy ``gray_width`` px wide from ONE read of
@@ -98,9 +128,7 @@ class Frame:
                 return rgb, gray
             return rgb, gray, self.luma_grid(luma_size)
         y_raw = ys[0]
-        y_rgb = y_raw if (gw, gh) == (rw, rh) else cv2.resize(
-            y_raw, (rw, rh), interpolation=cv2.INTER_AREA if rw < gw else cv2.INTER_LINEAR)
-        rgb, gray = _yuv_to_rgb(y_rgb, chroma[1], chroma[2], self._frame), _luma_full_range(y_raw, self._frame)
+        rgb, gray = self._rgb_from(y_raw, (gw, gh), (rw, rh), chroma), _luma_full_range(y_raw, self._frame)
         if luma_size is None:
             return rgb, gray
         return rgb, gray, _luma_full_range(grid[0], self._frame)

@@ -223,9 +223,12 @@ class _Pass:
 
         def successor_sig():
             # colour matters for the in-pair cut check (a green and a grey shot can share their
-            # luma); read only when the pair moves enough to matter
-            return sig if sig is not None else st["cuts"].run(
-                cuts.frame_signature, st["proxy"].run(frame.proxy, SIGNATURE_WIDTH))
+            # luma); read only when the pair moves enough to matter, from the RGB proxy an analysed
+            # frame's signature comes from (its gray plane already read)
+            if sig is not None:
+                return sig
+            rgb = st["proxy"].run(frame.rgb, self.rgb_width, self.flow_params.proxy_width)
+            return st["cuts"].run(cuts.frame_signature, resized(rgb, SIGNATURE_WIDTH))
 
         res = pair_motion(pgray, gray, prgb, psig, successor_sig, max(frame.time_s - pt, 1e-3),
                           params=self.pair_params, depth_backend=self.depth_backend, luma_signature=self.luma_signature,
