@@ -137,3 +137,35 @@ def test_sparse_decoding_below_40_fps_skips_only_non_reference_frames():
     fast = [t for t, _ in _decoded(path, "fast")]
     sparse = [t for t, _ in _decoded(path, "sparse")]
     assert sparse == fast
+
+
+def test_decoder_threads_leave_the_analysis_a_core(tmp_path, monkeypatch):
+    """Frames decoded ahead of the analysis: FFmpeg gets one thread fewer than the cores where it
+    skips the non-reference frames of a B-frame stream below 40 fps, its own count otherwise
+    (intra-only, above 40 fps, every frame decoded); the frames are the same either way."""
+    from autohaptics.media.video import decoder_threads
+    from autohaptics.testing.reencode import reencode
+
+    rng = np.random.default_rng(3)
+    frames = [cv2.GaussianBlur(rng.integers(0, 256, (96, 128, 3), dtype=np.uint8), (7, 7), 2) for _ in range(30)]
+    b_frames = write_streams(tmp_path / "b.mp4", frames=frames, fps=24)
+    intra = reencode(b_frames, tmp_path / "i.mp4", video_options={"g": "1"})
+    high = reencode(b_frames, tmp_path / "h.mp4", fps=50)
+
+    def threads(path, decode):
+        import av
+        with av.open(str(path)) as c:
+            return decoder_threads(c.streams.video[0], decode, media.probe(path).video.fps)
+
+    monkeypatch.setattr("os.sched_getaffinity", lambda pid: {0, 1, 2, 3}, raising=False)
+    assert threads(b_frames, "nonref") == 3 and threads(b_frames, "fast") == 3
+    assert threads(b_frames, "full") == threads(b_frames, "sparse") == 0
+    assert threads(intra, "nonref") == 0 and threads(high, "nonref") == 0
+    monkeypatch.setattr("os.sched_getaffinity", lambda pid: {0}, raising=False)
+    assert threads(b_frames, "nonref") == 1
+    ahead = [(f.time_s, f.gray(64)) for f in media.iter_video(b_frames, decode="nonref", prefetch=4)]
+    in_turn = _decoded(b_frames, "nonref")
+    assert len(ahead) == len(in_turn) > 0
+    for (ta, ga), (tb, gb) in zip(ahead, in_turn):
+        assert ta == tb
+        np.testing.assert_array_equal(ga, gb)

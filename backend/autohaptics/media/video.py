@@ -38,9 +38,10 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
         decoder conceals the missing reference; measured on the shared 1080p60 BBB clip: mean 3,
         at most 5.6 grey levels off the exact frame).
         The frames that come out keep their true timestamps.
-    prefetch : when > 0, decode in a background thread up to this many frames ahead, so FFmpeg's
-        decoder threads keep working while the caller analyses a frame (PyAV releases the GIL
-        while decoding). Frames stay valid after the step that yielded them in this mode.
+    prefetch : when > 0, decode in a background thread up to this many frames ahead, so the
+        decoder keeps working while the caller analyses a frame (PyAV releases the GIL while
+        decoding); FFmpeg then gets its threads by :func:`decoder_threads`.
+        Frames stay valid after the step that yielded them in this mode.
     start_s : when > 0, seek to the keyframe at or before this time (s) first; the frames then
         decode exactly as in a pass from the start, but ``Frame.index`` counts from the seek.
     prepare : with ``prefetch``, called on each frame in the decoding thread while that thread is
@@ -55,12 +56,30 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
     if decode not in DECODE_MODES:
         raise ParameterError(f"decode must be one of {DECODE_MODES}, got {decode!r}")
     if prefetch > 0:
-        yield from _prefetched(lambda: _iter_video(info, decode, start_s), prefetch, prepare)
+        yield from _prefetched(lambda: _iter_video(info, decode, start_s, beside=True), prefetch, prepare)
     else:
         yield from _iter_video(info, decode, start_s)
 
 
-def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0) -> Iterator[Frame]:
+def decoder_threads(stream, decode: str, fps: float) -> int:
+    """FFmpeg's decoder threads for frames decoded ahead of an analysis that holds one core.
+
+    One fewer than the cores (on 2 cores: one thread, without frame threading's hand-overs) where
+    the decoder has the lighter load: it skips the non-reference frames of a stream with B-frames
+    below ``SPARSE_MIN_FPS``. Else 0, FFmpeg's own count: an intra-only or P-only stream decodes
+    every frame, and from 40 fps there are four or more frames per tick (docs/BENCHMARKS.md, issue 21).
+    """
+    if decode not in ("nonref", "fast") or not stream.codec_context.has_b_frames or not 0 < fps < SPARSE_MIN_FPS:
+        return 0
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cores = os.cpu_count() or 1
+    return max(1, cores - 1)
+
+
+def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0, beside: bool = False) -> Iterator[Frame]:
+    """The frames of :func:`iter_video`. beside : decoded ahead of an analysis (:func:`decoder_threads`)."""
     report = AudioReport()
     n = 0
     with open_container(info.path) as c:
@@ -74,6 +93,9 @@ def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0) -> 
                 # before; measured: 2.49 s, one thread 2.42 s); slice threads do where the encoder
                 # cut frames into slices (1.52 s on the 30 s 1080p BBB loop) and cost nothing where not
                 stream.thread_type = "SLICE"
+        threads = decoder_threads(stream, decode, info.video.fps) if beside else 0
+        if threads:
+            stream.codec_context.thread_count = threads
         if decode in ("fast", "sparse"):
             stream.codec_context.options = {"skip_loop_filter": "all"}
         if start_s > 0 and stream.time_base:
