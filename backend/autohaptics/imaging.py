@@ -1,4 +1,5 @@
-"""Small image conversions the stages share: checked uint8 frames and aspect-kept resizing."""
+"""Small image conversions the stages share: checked uint8 frames, finite float maps and
+aspect-kept resizing."""
 
 from __future__ import annotations
 
@@ -39,3 +40,12 @@ def resized(rgb: np.ndarray, width: int) -> np.ndarray:
         return rgb
     height = max(1, int(round(width * h / w)))
     return cv2.resize(rgb, (width, height), interpolation=cv2.INTER_AREA if width < w else cv2.INTER_LINEAR)
+
+
+def finite32(x: np.ndarray) -> np.ndarray:
+    """``x`` as float32 with every non-finite value 0; ``x`` itself when it is already a float32
+    array of finite values (the common case, checked without the copy a masked select makes)."""
+    x = np.asarray(x)
+    if np.isfinite(x).all():
+        return x.astype(np.float32, copy=False)
+    return np.where(np.isfinite(x), x, 0.0).astype(np.float32)

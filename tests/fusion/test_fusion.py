@@ -217,3 +217,27 @@ def test_hand_numbers_are_consistent():
     w = [a / sum(alpha) for a in alpha]
     np.testing.assert_allclose([x / max(w) for x in w], [T12_BETA["A9"], T12_BETA["A5"], T12_BETA["A6"]],
                                atol=2e-6)
+
+
+@pytest.mark.parametrize("variant", fusion.VARIANTS)
+def test_frame_weights_are_the_triangle_rule_summed(variant):
+    """actuator_weights (every triangle at once) gives exactly the recipe done one triangle at a
+    time: triangle_weights at each triangle's salient centroid (times its salient share for
+    "mass"), summed, over the strongest; also with centroids on vertices (one-pixel shapes)."""
+    rng = np.random.default_rng(5)
+    params = fusion.FusionParams(variant=variant)
+    shapes = [rng.random((36, 64)) < p for p in (0.02, 0.2, 0.6)]
+    dot = np.zeros((9, 10), bool)
+    dot[4, 7] = True  # its centre is A6
+    for shape in shapes + [dot]:
+        h, w = shape.shape
+        tri = fusion.triangle_index_map(h, w)
+        total = shape.sum()
+        expected = np.zeros(9)
+        for t in range(14):
+            ys, xs = np.nonzero(shape & (tri == t))
+            if ys.size:
+                wi = fusion.triangle_weights((((xs + 0.5) / w).sum() / ys.size, ((ys + 0.5) / h).sum() / ys.size), t)
+                expected += wi * (ys.size / total if variant == "mass" else 1.0)
+        np.testing.assert_allclose(fusion.actuator_weights(shape=shape, params=params), expected / expected.max(),
+                                   rtol=1e-12)

@@ -29,6 +29,7 @@ import numpy as np
 from autohaptics.errors import ParameterError
 from autohaptics.records import ANALYSIS, param
 from autohaptics.fusion.onnx import OnnxFields
+from autohaptics.imaging import finite32
 
 BACKENDS = ("embedded", "onnx")
 DepthBackend = Callable[[np.ndarray], np.ndarray]
@@ -122,7 +123,7 @@ def _embedded(rgb: np.ndarray, params: DepthParams, flow: np.ndarray | None, dt:
             if f.shape[:2] != (h, w):
                 sx, sy = w / f.shape[1], h / f.shape[0]
                 f = cv2.resize(f, (w, h), interpolation=cv2.INTER_LINEAR) * np.array([sx, sy], np.float32)
-            f = np.where(np.isfinite(f), f, 0.0)
+            f = finite32(f)
             rate = (np.gradient(f[..., 0], axis=1) + np.gradient(f[..., 1], axis=0)) / dt  # 1/s
             rate = np.maximum(rate, 0.0).astype(np.float32)
             reach = int(round(float(params.expansion_reach) * w))
@@ -139,7 +140,7 @@ def _embedded(rgb: np.ndarray, params: DepthParams, flow: np.ndarray | None, dt:
 
 
 def _minmax(x: np.ndarray) -> np.ndarray:
-    x = np.where(np.isfinite(x), x, 0.0).astype(np.float32)
+    x = finite32(x)
     lo, hi = float(x.min()), float(x.max())
     if not hi - lo > 1e-9:
         return np.zeros_like(x)

@@ -20,6 +20,7 @@ import numpy as np
 from autohaptics.errors import ParameterError
 from autohaptics.records import ANALYSIS, DERIVE, stage
 from autohaptics.layout import FAN_COLS, FAN_ROWS
+from autohaptics.imaging import finite32
 
 
 @dataclass(frozen=True)
@@ -91,7 +92,7 @@ def grid_means(arr: np.ndarray) -> np.ndarray:
     a = np.asarray(arr, dtype=np.float32)
     if a.ndim != 2 or a.size == 0:
         raise ParameterError(f"grid_means needs a non-empty 2-D map, got shape {a.shape}")
-    a = np.where(np.isfinite(a), a, 0.0).astype(np.float32)
+    a = finite32(a)
     h, w = a.shape
     if h >= FAN_ROWS and w >= FAN_COLS:
         return cv2.resize(a, (FAN_COLS, FAN_ROWS), interpolation=cv2.INTER_AREA)

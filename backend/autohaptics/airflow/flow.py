@@ -21,7 +21,7 @@ import numpy as np
 from autohaptics.airflow.fans import AirflowParams
 from autohaptics.errors import ParameterError
 from autohaptics.records import ANALYSIS
-from autohaptics.imaging import as_gray
+from autohaptics.imaging import as_gray, finite32
 
 FLOW_METHODS = ("dis", "farneback")
 DIS_PRESETS = {"ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST, "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
@@ -100,7 +100,7 @@ def optical_flow(prev_gray: np.ndarray, gray: np.ndarray, *, params: FlowParams 
         levels = max(1, min(5, int(math.log2(min(h, w) / 8))))
         flow = cv2.calcOpticalFlowFarneback(a, b, None, 0.5, levels, win, 3, 5, 1.1, 0)
     flow = np.asarray(flow, dtype=np.float32)
-    return np.where(np.isfinite(flow), flow, 0.0).astype(np.float32)
+    return finite32(flow)
 
 
 def motion_magnitude(flow: np.ndarray, *, dt_s: float, width_px: int) -> np.ndarray:
@@ -109,7 +109,7 @@ def motion_magnitude(flow: np.ndarray, *, dt_s: float, width_px: int) -> np.ndar
         raise ParameterError(f"motion_magnitude needs dt_s > 0 and width_px > 0, got {dt_s}, {width_px}")
     flow = np.asarray(flow, dtype=np.float32)
     mag = np.sqrt(flow[..., 0] ** 2 + flow[..., 1] ** 2) / (float(width_px) * float(dt_s))
-    return np.where(np.isfinite(mag), mag, 0.0).astype(np.float32)
+    return finite32(mag)
 
 
 def motion_score(mag: np.ndarray) -> float:

@@ -31,7 +31,7 @@ import numpy as np
 
 from autohaptics.errors import ParameterError
 from autohaptics.records import ANALYSIS, param
-from autohaptics.imaging import as_rgb
+from autohaptics.imaging import as_rgb, finite32
 from autohaptics.fusion.onnx import OnnxFields
 
 BACKENDS = ("spectral", "fine_grained", "onnx")
@@ -158,7 +158,7 @@ def _checked_luma(luma: np.ndarray | None) -> np.ndarray | None:
 
 def _normalise(smap: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     """Min-max to [0, 1]; a flat or non-finite map becomes all zeros."""
-    smap = np.where(np.isfinite(smap), smap, 0.0).astype(np.float32)
+    smap = finite32(smap)
     if smap.shape != shape:
         smap = cv2.resize(smap, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
     lo, hi = float(smap.min()), float(smap.max())

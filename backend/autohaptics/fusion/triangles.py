@@ -30,6 +30,7 @@ import numpy as np
 from autohaptics.errors import ParameterError
 from autohaptics.records import ANALYSIS, Record, param
 from autohaptics.layout import ACTUATOR_IDS, CENTRE_ACTUATOR, N_ACTUATORS, TRIANGLES, vertex_xy
+from autohaptics.imaging import finite32
 
 VARIANTS = ("paper", "mass")
 _N_TRI = len(TRIANGLES)
@@ -70,7 +71,7 @@ def salient_shape(saliency: np.ndarray, *, params: FusionParams = FusionParams()
     s = np.asarray(saliency, dtype=np.float32)
     if s.ndim != 2 or s.size == 0:
         raise ParameterError(f"a saliency map must be 2-D and non-empty, got shape {s.shape}")
-    s = np.where(np.isfinite(s), s, 0.0)
+    s = finite32(s)
     if float(s.max()) <= 0.0:
         return np.zeros(s.shape, bool)
     level = max(float(params.min_level), float(s.mean() + params.k_std * s.std()))
@@ -83,7 +84,8 @@ def salient_shape(saliency: np.ndarray, *, params: FusionParams = FusionParams()
         n, labels, st, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
         keep = np.zeros(n, bool)
         keep[1:] = st[1:, cv2.CC_STAT_AREA] >= min_px
-        mask = keep[labels].astype(np.uint8)
+        if not keep[1:].all():  # else every region stays: the mask as it is
+            mask = keep[labels].astype(np.uint8)
     return mask.astype(bool)
 
 
@@ -135,6 +137,22 @@ def triangle_weights(centroid: tuple[float, float], triangle: int) -> np.ndarray
     return w
 
 
+def _weights_of(centroids: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """:func:`triangle_weights` of many (centroid, triangle) pairs at once, the same values:
+    centroids float [shape=(m, 2)], triangles int [shape=(m,)] -> float64 [shape=(m, 9)]."""
+    acts = TRIANGLE_ACTUATORS[triangles]
+    d = np.hypot(*(TRIANGLE_XY[triangles] - centroids[:, None, :]).transpose(2, 0, 1))
+    real = acts >= 0
+    alpha = np.where(real, 1.0 / np.maximum(d, _VERTEX_EPS), 0.0)
+    alpha /= np.add.reduce(alpha, axis=1, keepdims=True)
+    rows = np.zeros((len(triangles), N_ACTUATORS))
+    r, v = np.nonzero(real)
+    rows[r, acts[r, v]] = alpha[r, v]
+    for i in np.flatnonzero((real & (d < _VERTEX_EPS)).any(axis=1)):  # on a vertex: the rule's own case
+        rows[i] = triangle_weights(tuple(centroids[i]), int(triangles[i]))
+    return rows
+
+
 def actuator_weights(saliency: np.ndarray | None = None, *, params: FusionParams = FusionParams(),
                      shape: np.ndarray | None = None) -> np.ndarray:
     """beta per actuator A1..A9 for one frame: float64 [shape=(9,)] in [0, 1], max 1.
@@ -160,13 +178,11 @@ def actuator_weights(saliency: np.ndarray | None = None, *, params: FusionParams
     counts = np.bincount(t, minlength=_N_TRI).astype(np.float64)
     cx = np.bincount(t, weights=(xs + 0.5) / w, minlength=_N_TRI)
     cy = np.bincount(t, weights=(ys + 0.5) / h, minlength=_N_TRI)
-    W = np.zeros(N_ACTUATORS)
-    total = counts.sum()
-    for i in np.flatnonzero(counts):
-        wi = triangle_weights((cx[i] / counts[i], cy[i] / counts[i]), int(i))
-        if params.variant == "mass":
-            wi *= counts[i] / total
-        W += wi
+    held = np.flatnonzero(counts)
+    rows = _weights_of(np.stack([cx[held] / counts[held], cy[held] / counts[held]], axis=1), held)
+    if params.variant == "mass":
+        rows *= (counts[held] / counts.sum())[:, None]
+    W = np.add.reduce(rows, axis=0)
     peak = W.max()
     if not peak > 0:
         return fallback_weights()
