@@ -164,10 +164,9 @@ class _Pass:
         self.repeats = 0  # successor frames passed over as repeats of their pair's first frame
 
     def prepare(self, frame: media.Frame) -> None:
-        """Make a frame's gray and RGB proxy planes ahead, in the decoding thread (the same arrays
-        :meth:`_proxies` would make; a frame that needs neither wastes them)."""
-        frame.prepare(self.flow_params.proxy_width, self.rgb_width,
-                      self.sal_luma_size if self.sal_backend is not None else None)
+        """Make a frame's gray, RGB and saliency luma planes ahead, in the decoding thread (the same
+        arrays :meth:`_proxies` would make; a frame that needs none wastes them)."""
+        frame.prepare(self.flow_params.proxy_width, self.rgb_width, self.sal_luma_size if self.sal_backend else None)
 
     def timed(self, stream):
         """``stream``'s frames, the time spent waiting for each counted as ``decode_wait``."""
@@ -197,17 +196,19 @@ class _Pass:
 
     def _proxies(self, frame, analyse_this: bool, want_sal: bool):
         st, fw = self.stages, self.flow_params.proxy_width
-        rgb = sig_rgb = luma = None
+        rgb = luma = None
         if analyse_this and (self.need_colour or want_sal or self.need_flow):
             if want_sal and self.sal_luma_size is not None:
                 rgb, gray, luma = st["proxy"].run(frame.rgb_and_gray, self.rgb_width, fw, luma_size=self.sal_luma_size)
             else:
                 rgb, gray = st["proxy"].run(frame.rgb_and_gray, self.rgb_width, fw)
-            sig_rgb = resized(rgb, SIGNATURE_WIDTH)
         else:
             gray = st["proxy"].run(frame.gray, fw)
-        sig = st["cuts"].run(cuts.frame_signature, sig_rgb) if sig_rgb is not None else None
-        return rgb, gray, luma, sig
+        return rgb, gray, luma, None if rgb is None else self._signature(rgb)
+
+    def _signature(self, rgb):
+        """A frame's colour cut signature from its RGB proxy (all at ``SIGNATURE_WIDTH``)."""
+        return self.stages["cuts"].run(cuts.frame_signature, resized(rgb, SIGNATURE_WIDTH))
 
     def _pair(self, frame, gray, sig, analysed: bool) -> None:
         """The waiting flow pair's motion, now that its successor frame is here; or, when that frame
@@ -221,14 +222,10 @@ class _Pass:
             return
         self.pending = None
 
-        def successor_sig():
-            # colour matters for the in-pair cut check (a green and a grey shot can share their
-            # luma); read only when the pair moves enough to matter, from the RGB proxy an analysed
-            # frame's signature comes from (its gray plane already read)
-            if sig is not None:
-                return sig
-            rgb = st["proxy"].run(frame.rgb, self.rgb_width, self.flow_params.proxy_width)
-            return st["cuts"].run(cuts.frame_signature, resized(rgb, SIGNATURE_WIDTH))
+        def successor_sig():  # colour matters for the in-pair cut check (a green and a grey shot
+            # can share their luma): read only when the pair moves enough to matter, from its gray plane
+            return sig if sig is not None else self._signature(
+                st["proxy"].run(frame.rgb, self.rgb_width, self.flow_params.proxy_width))
 
         res = pair_motion(pgray, gray, prgb, psig, successor_sig, max(frame.time_s - pt, 1e-3),
                           params=self.pair_params, depth_backend=self.depth_backend, luma_signature=self.luma_signature,
