@@ -82,6 +82,7 @@ _CHILD_ENV: dict | None = None  # set by snapshot_source(): children import that
 def snapshot_source(dest: Path) -> Path:
     """Copy the ``autohaptics`` package to ``dest`` and make every measured child import that copy:
     a long run then measures one version of the code even when the working tree changes under it."""
+    import compileall
     import shutil
 
     global _CHILD_ENV
@@ -89,6 +90,7 @@ def snapshot_source(dest: Path) -> Path:
     if dest.exists():
         shutil.rmtree(dest)
     shutil.copytree(src, dest / "autohaptics", ignore=shutil.ignore_patterns("*.pyc"))
+    compileall.compile_dir(dest / "autohaptics", quiet=1)  # as installed: no child compiles its modules
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join([str(dest)] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
     _CHILD_ENV = env
