@@ -64,8 +64,11 @@ class Frame:
         """
         width, height = self._size(width, height)
         planes = self._planes_small(width, height, colour=fmt == "rgb24") if fmt in ("rgb24", "gray") else None
+        if planes is not None and fmt == "rgb24":
+            return _yuv_to_rgb(*planes, self._frame)
         if planes is not None:
-            return _yuv_to_rgb(*planes, self._frame) if fmt == "rgb24" else _luma_full_range(planes[0], self._frame)
+            self._luma_kept = (width, height, planes[0])  # for rgb(): the plane is not read again
+            return _luma_full_range(planes[0], self._frame)
         w, h = (height, width) if self.rotation % 180 else (width, height)
         arr = self._frame.to_ndarray(width=max(1, w), height=max(1, h), format=fmt,
                                      interpolation=interpolation)
@@ -75,12 +78,7 @@ class Frame:
 
     def gray(self, width: int) -> np.ndarray:
         """Luma proxy ``width`` px wide (aspect kept), uint8 [shape=(h, w)], display orientation."""
-        gw, gh = self._size(width, None)
-        ys = self._planes_small(gw, gh, colour=False)
-        if ys is None:
-            return self.proxy(width, fmt="gray")
-        self._luma_kept = (gw, gh, ys[0])
-        return _luma_full_range(ys[0], self._frame)
+        return self.proxy(width, fmt="gray")
 
     def rgb(self, width: int, gray_width: int) -> np.ndarray:
         """The RGB proxy of ``rgb_and_gray(width, gray_width)`` alone (the same array), its luma
