@@ -120,6 +120,16 @@ def values_at(pg, tick: int) -> dict:
     return pg.evaluate("(t) => window.autohaptics.valuesAt(t)", tick)
 
 
+def sampled_ticks(pg, count: int = 52, step: int = 10) -> list[dict]:
+    """Composed values at every ``step``-th tick once the drawn revision is complete: its played
+    temperature curve (``played_c``) arrives in a request of its own after the lanes are drawn, so
+    values read before it show ``played_c`` null and compare unequal to the same revision later."""
+    pg.wait_for_function("() => { const s = window.autohaptics.state();"
+                         " return s && s.played !== null && s.played.revision === s.drawnRevision; }")
+    return pg.evaluate("([n, k]) => Array.from({length: n}, (_, i) => window.autohaptics.valuesAt(i * k))",
+                       [count, step])
+
+
 def next_frame(pg) -> None:
     """Let the page draw: resolves after two animation frames."""
     pg.evaluate("() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)))")

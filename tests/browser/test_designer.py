@@ -8,7 +8,7 @@ import io
 
 import pytest
 
-from browser_support import lane_rect, open_editor, state, wait_job, wait_revision_above
+from browser_support import lane_rect, open_editor, sampled_ticks, state, wait_job, wait_revision_above
 
 pytestmark = pytest.mark.browser
 
@@ -403,7 +403,7 @@ def test_a_regeneration_cancelled_mid_run_leaves_the_labels_of_the_timeline_on_s
     p0 = api.get(f"/api/projects/{pid}").json()
     shown = f"Preset {p0['params']['preset']} · mode {p0['params']['mode']}"
     open_editor(page, pid)
-    before = page.evaluate("() => Array.from({length: 52}, (_, i) => window.autohaptics.valuesAt(i * 10))")
+    before = sampled_ticks(page)
     page.click("[data-testid=regenerate]")
     page.select_option("[data-testid=regen-preset]", "reference")  # every frame analysed: a long job
     page.click("[data-testid=regen-start]")
@@ -423,6 +423,6 @@ def test_a_regeneration_cancelled_mid_run_leaves_the_labels_of_the_timeline_on_s
     project = api.get(f"/api/projects/{pid}").json()
     assert project["status"] == "ready" and project["job"]["status"] == "cancelled"
     assert project["params"] == p0["params"] and project["revision"] == p0["revision"]
-    assert page.evaluate("() => Array.from({length: 52}, (_, i) => window.autohaptics.valuesAt(i * 10))") == before
+    assert sampled_ticks(page) == before
     assert page.is_disabled("[data-testid=undo]"), "a cancelled attempt is no step of the history"
     assert page.is_enabled("[data-testid=regenerate]")

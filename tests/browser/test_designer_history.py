@@ -6,12 +6,9 @@ from __future__ import annotations
 
 import pytest
 
-from browser_support import open_editor, state, wait_jobs_settled, wait_revision_above
+from browser_support import open_editor, sampled_ticks, state, wait_jobs_settled, wait_revision_above
 
 pytestmark = pytest.mark.browser
-
-SAMPLED_TICKS = "() => Array.from({length: 52}, (_, i) => window.autohaptics.valuesAt(i * 10))"
-
 
 def click_when_enabled(pg, testid: str) -> None:
     pg.wait_for_function(f"() => !document.querySelector('[data-testid={testid}]').disabled")
@@ -88,7 +85,7 @@ def test_a_regeneration_with_another_preset_is_undone_and_redone(page, api, proj
     info = "[data-testid=params-info]"
     assert page.text_content(info) == f"Preset balanced · mode {p0['mode']}"
     assert page.is_disabled("[data-testid=undo]")
-    before = page.evaluate(SAMPLED_TICKS)
+    before = sampled_ticks(page)
     s0 = state(page)
     page.click("[data-testid=regenerate]")
     page.select_option("[data-testid=regen-preset]", "fast")
@@ -98,7 +95,7 @@ def test_a_regeneration_with_another_preset_is_undone_and_redone(page, api, proj
     s1 = wait_revision_above(page, s0["revision"])
     s1 = wait_jobs_settled(page)
     assert page.text_content(info) == f"Preset fast · mode {p0['mode']}"
-    regenerated = page.evaluate(SAMPLED_TICKS)
+    regenerated = sampled_ticks(page)
     assert regenerated != before, "the fast preset's timeline is on show"
     assert s1["nOps"] == 1 and s1["cursor"] == 1
     # Undo: the balanced preset and its timeline again (from the analysis the regeneration kept).
@@ -107,11 +104,11 @@ def test_a_regeneration_with_another_preset_is_undone_and_redone(page, api, proj
     s2 = wait_jobs_settled(page)
     assert page.text_content(info) == f"Preset balanced · mode {p0['mode']}"
     assert api.get(f"/api/projects/{pid}").json()["params"] == p0
-    assert page.evaluate(SAMPLED_TICKS) == before
+    assert sampled_ticks(page) == before
     # Redo: the regeneration's preset and timeline again.
     click_when_enabled(page, "redo")
     wait_revision_above(page, s2["revision"])
     wait_jobs_settled(page)
     assert page.text_content(info) == f"Preset fast · mode {p0['mode']}"
     assert api.get(f"/api/projects/{pid}").json()["params"]["preset"] == "fast"
-    assert page.evaluate(SAMPLED_TICKS) == regenerated
+    assert sampled_ticks(page) == regenerated
