@@ -10,6 +10,7 @@ from browser_support import open_editor, sampled_ticks, state, wait_jobs_settled
 
 pytestmark = pytest.mark.browser
 
+
 def click_when_enabled(pg, testid: str) -> None:
     pg.wait_for_function(f"() => !document.querySelector('[data-testid={testid}]').disabled")
     pg.click(f"[data-testid={testid}]")

@@ -1,5 +1,6 @@
 """Video proxies (autohaptics.media.Frame): the saliency luma read with the proxies equals the
-full frame's area average, in display orientation."""
+full frame's area average, in display orientation; the RGB proxy is close to FFmpeg's own scaled
+conversion; decoding modes and threads."""
 
 from __future__ import annotations
 
