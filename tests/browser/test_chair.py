@@ -421,6 +421,24 @@ def test_a_push_shows_where_the_chair_is_and_how_far_it_has_got(cpage, chair_api
     assert pg.text_content("[data-testid=chair-frames]") != "–"
 
 
+def test_the_editors_report_on_connecting_leaves_a_running_push_alone(cpage, chair_api, film, chair):
+    pg, pid = cpage, film["id"]
+    # The editor's first report (where its player is) held back until the push below is under way.
+    pg.add_init_script("""(() => { const send = window.fetch; window.fetch = async (...args) => {
+        if (String(args[0] && args[0].url || args[0]).includes('/api/chair/playback'))
+            await new Promise((done) => setTimeout(done, 250));
+        return send(...args); }; })()""")
+    open_editor(pg, pid)
+    connect_in_the_panel(pg, chair.device)
+    r = chair_api.post("/api/chair/push", json={"project_id": pid, "start_s": 1.0, "end_s": 2.0})
+    assert r.status_code == 202, r.text
+    pg.wait_for_function("() => !window.autohaptics.state().chair.reportsPending")  # the report landed
+    assert chair_api.get("/api/chair/status").json()["push"]["state"] in ("running", "done")
+    chair.wait_for(lambda e: e["ev"] == "stop", timeout_s=10.0)
+    pg.wait_for_function("() => document.querySelector('[data-testid=chair-push-text]').textContent.endsWith('done')")
+    assert [e["tick"] for e in chair.frames()] == list(range(10, 20)), "the whole range reached the chair"
+
+
 def test_the_chair_counters_are_the_open_projects_own(cpage, chair_api, film, chair):
     pg, pid = cpage, film["id"]
     other = chair_api.post(f"/api/projects/{pid}/duplicate").json()

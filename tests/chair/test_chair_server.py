@@ -339,6 +339,20 @@ def test_the_service_reconnects_and_resumes_when_the_chair_comes_back(client, pr
         second.stop()
 
 
+def test_a_pages_initial_report_leaves_a_push_running_and_a_viewers_report_stops_it(client, project, connected):
+    chair, pid = connected, project["id"]
+    r = client.post("/api/chair/push", json={"project_id": pid, "start_s": 10.0, "end_s": 30.0})
+    assert r.status_code == 202, r.text
+    chair.wait_for(lambda e: e["ev"] == "frame" and e["tick"] >= 102)
+    for state in ("seek", "play"):  # a page that connects tells where its player is: no viewer's action
+        st = play(client, pid, 3.0, state, initial=True)
+        assert st["push"]["state"] == "running", st["push"]
+    chair.wait_for(lambda e: e["ev"] == "frame" and e["tick"] >= 106)
+    assert client.get("/api/chair/status").json()["push"]["state"] == "running"
+    st = play(client, pid, 3.0, "seek")  # the viewer seeks: the player takes the chair over
+    assert st["push"]["state"] == "cancelled"
+
+
 def test_push_a_range_and_stop_cancels_a_push(client, project, connected):
     chair, pid = connected, project["id"]
     tl = composed(client, pid)

@@ -176,10 +176,13 @@ class ChairService:
         self._wake.set()
 
     # ---------------------------------------------------------------- playback
-    def playback(self, project_id: str, state: str, position_s: float, *, heartbeat: bool = False) -> dict:
+    def playback(self, project_id: str, state: str, position_s: float, *, heartbeat: bool = False,
+                 initial: bool = False) -> dict:
         """The browser's report: ``state`` play / pause / seek at ``position_s`` (seconds of video).
 
-        A heartbeat only corrects the clock while the chair already plays this project."""
+        A heartbeat only corrects the clock while the chair already plays this project. An initial
+        report (where a page's player is when it connects: no viewer's action) leaves a running push
+        alone; any other report stops it."""
         if not math.isfinite(position_s) or position_s < 0:
             raise ParameterError(f"position_s must be a finite number of seconds >= 0, got {position_s!r}")
         with self._lock:
@@ -187,8 +190,9 @@ class ChairService:
             player, pushing, current = self._player, self._push, self._project
         if player is None:
             raise Conflict("no chair is connected; connect one first")
-        if heartbeat and (state != "play" or player.state != "playing" or current != project_id
-                          or (pushing is not None and pushing.state == "running")):
+        pushing_now = pushing is not None and pushing.state == "running"
+        if (initial and pushing_now) or (heartbeat and (state != "play" or player.state != "playing"
+                                                        or current != project_id or pushing_now)):
             return self.status()
         with self._commands:
             self._cancel_push()

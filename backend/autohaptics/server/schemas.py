@@ -203,6 +203,7 @@ class ChairPlaybackIn(_In):
     state: Literal["play", "pause", "seek"]
     position_s: float = Field(ge=0, le=MAX_SECONDS)
     heartbeat: bool = False
+    initial: bool = False
 
 
 class ChairMuteIn(_In):

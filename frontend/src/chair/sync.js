@@ -5,6 +5,9 @@
  * frames; the reports anchor it and correct its drift. A heartbeat never restarts a stopped chair,
  * so after STOP only the viewer's next play does.
  *
+ * On connecting, the page tells the chair where its player is (an `initial` report: not a viewer's
+ * action, so it leaves a push that is running alone).
+ *
  * Reports go out one at a time, in order. A heartbeat is skipped while another report is pending,
  * and the position of a play report or heartbeat is read when it is sent, not when it was queued.
  * `halt()` drops whatever is still queued (used by STOP).
@@ -50,8 +53,8 @@ export class ChairSync {
     if (active === this.active) return;
     this.active = active;
     if (active) {
-      if (this.running) this._send("play");
-      else this._send("seek", this.player.currentTime);
+      if (this.running) this._send("play", null, { initial: true });
+      else this._send("seek", this.player.currentTime, { initial: true });
     }
     this._updateTimer();
   }
@@ -81,7 +84,7 @@ export class ChairSync {
     const want = this.active && this.running;
     if (want && !this.timer) {
       this.timer = setInterval(() => {
-        if (this.pending === 0 && this.running && this.active) this._send("play", null, true);
+        if (this.pending === 0 && this.running && this.active) this._send("play", null, { heartbeat: true });
       }, this.heartbeatMs);
     } else if (!want && this.timer) {
       clearInterval(this.timer);
@@ -93,10 +96,10 @@ export class ChairSync {
    * Queue one report. `timeS` null: the player's position when the report is sent.
    * @param {"play"|"pause"|"seek"} state
    * @param {number|null} [timeS]
-   * @param {boolean} [heartbeat]
-   * @param {boolean} [last] the final report of this page (sent although it is no longer active)
+   * @param {{heartbeat?: boolean, initial?: boolean, last?: boolean}} [kind] a heartbeat; the page's
+   *   report on connecting; the final report of this page (sent although it is no longer active)
    */
-  _send(state, timeS = null, heartbeat = false, last = false) {
+  _send(state, timeS = null, { heartbeat = false, initial = false, last = false } = {}) {
     const generation = this.generation;
     this.pending++;
     this.chain = this.chain.then(async () => {
@@ -106,6 +109,7 @@ export class ChairSync {
         /** @type {import("../data/api.js").ChairReport} */
         const report = { project_id: this.projectId, state, position_s: Math.round(position * 1000) / 1000 };
         if (heartbeat) report.heartbeat = true;
+        if (initial) report.initial = true;
         const sending = this.api.chairPlayback(report);
         this.inflight = sending.then(() => {}, () => {});
         await sending;
@@ -121,7 +125,7 @@ export class ChairSync {
 
   destroy() {
     this.off();
-    if (this.active && this.running) this._send("pause", this.player.currentTime, false, true);
+    if (this.active && this.running) this._send("pause", this.player.currentTime, { last: true });
     this.active = false;
     this._updateTimer();
   }

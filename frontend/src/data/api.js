@@ -31,7 +31,7 @@ import { watchChair, watchJob } from "./streams.js";
  *   playback: {state: string, project_id: string|null, revision: number|null, ticks_skipped: number,
  *     drift_s: number|null, drift_seeks: number},
  *   push: ChairPush|null, settings: ChairSettings}} ChairStatus
- * @typedef {{project_id: string, state: "play"|"pause"|"seek", position_s: number, heartbeat?: boolean}} ChairReport
+ * @typedef {{project_id: string, state: "play"|"pause"|"seek", position_s: number, heartbeat?: boolean, initial?: boolean}} ChairReport
  */
 
 export class Api {

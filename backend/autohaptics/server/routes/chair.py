@@ -40,7 +40,8 @@ def status(chair: ChairDep) -> dict:
 
 @router.post("/api/chair/playback", response_model=ChairStatusOut, responses=_CONFLICT)
 def playback(body: ChairPlaybackIn, chair: ChairDep) -> dict:
-    return chair.playback(body.project_id, body.state, body.position_s, heartbeat=body.heartbeat)
+    return chair.playback(body.project_id, body.state, body.position_s, heartbeat=body.heartbeat,
+                          initial=body.initial)
 
 
 @router.post("/api/chair/stop", response_model=ChairStatusOut)

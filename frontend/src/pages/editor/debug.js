@@ -39,7 +39,8 @@ export function debugState(page) {
     saveState: saveEl ? saveEl.dataset.state || "" : "",
     jobActive: page.jobs.followed > 0,
     chair: chair.panel && chair.panel.status
-      ? { active: chair.panel.active, state: chair.panel.status.state, reporting: chair.sync.active }
+      ? { active: chair.panel.active, state: chair.panel.status.state, reporting: chair.sync.active,
+          reportsPending: chair.sync.pending }
       : null,
   };
 }
