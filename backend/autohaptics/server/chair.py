@@ -9,8 +9,8 @@ It owns at most one :class:`~autohaptics.chair.ChairLink` (which reconnects by i
   position). The player's own 10 Hz clock sends the frames of the project's composed timeline
   (generated + edits at the current revision). A report while playing corrects the clock's drift
   without resending or skipping ticks (:meth:`ChairPlayer.sync`); a drift beyond
-  ``DRIFT_SEEK_S`` is a seek. A ``heartbeat`` report (once a second while the video plays) never
-  starts playback, so a STOP stays in force until the viewer presses play.
+  ``DRIFT_SEEK_S`` is a seek. A ``heartbeat`` (once a second while the video plays) never starts
+  playback; an ``initial`` report (a page connecting) never stops a running push.
 - A monitor thread follows the project's revision (an edit, undo, a re-derive, a finished job)
   and hands the new composed timeline to the player; it also publishes the status to the SSE
   subscribers, at once on a change and at least every ``STATUS_INTERVAL_S``.
@@ -21,8 +21,8 @@ It owns at most one :class:`~autohaptics.chair.ChairLink` (which reconnects by i
 - :meth:`~ChairService.push`: a range of a timeline played by :func:`autohaptics.chair.push` in a
   thread; its progress is part of the status.
 
-Temperature is clamped to the connected chair's safe range by :func:`autohaptics.chair.compose_frame`
-(the range comes from the chair's HELLO); the chair clamps again on its side.
+Temperature is clamped to the chair's safe range (from its HELLO) by
+:func:`autohaptics.chair.compose_frame`; the chair clamps again on its side.
 """
 
 from __future__ import annotations
