@@ -119,10 +119,7 @@ def export_digests(timeline_bytes: bytes, workdir: Path) -> dict[str, dict[str, 
     out: dict[str, dict[str, str]] = {}
     for fmt in EXPORT_FORMATS:
         dest = workdir / f"export.{fmt}"
-        argv = ["export", str(src), "--format", fmt, "-o", str(dest)]
-        if fmt == "hjif":
-            argv += ["--date", EXPORT_DATE]
-        _cli(argv)
+        _cli(["export", str(src), "--format", fmt, "-o", str(dest), "--date", EXPORT_DATE])
         if zipfile.is_zipfile(dest):
             with zipfile.ZipFile(dest) as z:
                 out[fmt] = {i.filename: hashlib.sha256(z.read(i)).hexdigest() for i in z.infolist()}

@@ -190,7 +190,8 @@ def test_a_silent_actuator_is_one_event_that_plays_nothing():
         np.testing.assert_array_equal(decode_pattern(json.loads(short.read(f"{aid}.ahap")), 50), 0.0)
 
 
-def test_zip_entries_are_readable_and_carry_the_export_time():
+def test_zip_entries_are_readable_and_carry_the_export_time(monkeypatch):
+    monkeypatch.delenv("SOURCE_DATE_EPOCH", raising=False)
     before = datetime.datetime.now().replace(microsecond=0) - datetime.timedelta(seconds=2)
     zf = _export(_timeline())
     after = datetime.datetime.now() + datetime.timedelta(seconds=2)

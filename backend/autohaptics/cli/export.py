@@ -27,7 +27,10 @@ def register(sub) -> None:
                         "layout), which 'autohaptics import' picks up")
     p.add_argument("--sharpness", type=float, default=None,
                    help="ahap only: HapticSharpness of every event, 0..1 (default 0.5)")
-    p.add_argument("--date", default=None, help="hjif only: the file's date field (default: today)")
+    p.add_argument("--date", default=None,
+                   help="the date the export carries, YYYY-MM-DD (ahap: Created and the zip entries; "
+                        "hjif: its date field; the other formats carry none). Default: "
+                        "$SOURCE_DATE_EPOCH where set, else today")
     p.set_defaults(func=run)
 
 
@@ -43,6 +46,8 @@ def run(args: argparse.Namespace) -> int:
     if args.meta and args.output == "-":
         raise ParameterError("--meta needs an output file, not '-'")
     options = {k: v for k, v in (("sharpness", args.sharpness), ("date", args.date)) if v is not None}
+    if "date" in options and "date" not in spec.options:
+        del options["date"]  # formats without a date carry nothing to pin
     tl = Timeline.load(args.timeline)
     if args.output == "-":
         export_timeline(tl, spec.name, sys.stdout.buffer, **options)

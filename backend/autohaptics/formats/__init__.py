@@ -38,6 +38,12 @@ class ExportFormat:
     write: Callable[..., None]
     description: str
 
+    @property
+    def options(self) -> tuple[str, ...]:
+        """The keyword options its writer takes (e.g. ``date``, ``sharpness``)."""
+        params = inspect.signature(self.write).parameters
+        return tuple(p for p, v in params.items() if v.kind is inspect.Parameter.KEYWORD_ONLY)
+
 
 FORMATS: dict[str, ExportFormat] = {
     f.name: f
@@ -71,7 +77,7 @@ def export_timeline(tl: Timeline, fmt: str, out: str | os.PathLike | IO, **optio
     A text format accepts a text stream or a binary one (written as UTF-8); ``ahap`` needs a binary
     stream. Every format carries the temperature the chair plays (:func:`~autohaptics.formats.common.as_played`).
     ``options`` go to the format's writer (e.g. ``sharpness=`` for ahap, ``date=`` for
-    hjif); an option the writer does not take is a ParameterError.
+    ahap and hjif, the formats that carry a date); an option the writer does not take is a ParameterError.
     """
     spec = get_format(fmt)
     _check_options(spec, options)
@@ -99,8 +105,7 @@ def export_timeline(tl: Timeline, fmt: str, out: str | os.PathLike | IO, **optio
 
 
 def _check_options(spec: ExportFormat, options: dict) -> None:
-    params = inspect.signature(spec.write).parameters
-    allowed = [p for p, v in params.items() if v.kind is inspect.Parameter.KEYWORD_ONLY]
+    allowed = spec.options
     unknown = sorted(set(options) - set(allowed))
     if unknown:
         raise ParameterError(

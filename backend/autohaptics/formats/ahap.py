@@ -17,7 +17,7 @@ belongs to. Mapping (docs/EXPORT.md has the full table):
   and the next run starts at least one tick later).
 - AHAP requires at least one event per pattern: an actuator silent for the whole film gets one
   continuous event at intensity 0 (it plays nothing).
-- Zip entries carry mode 0644 and the export's local time.
+- Zip entries carry mode 0644 and the export's time (the ``date`` given: that day at 00:00).
 """
 
 from __future__ import annotations
@@ -34,6 +34,7 @@ import numpy as np
 from autohaptics.formats.common import (
     breakpoints,
     ensure_valid,
+    export_time,
     fmt_q,
     fmt_ticks_s,
     quantise,
@@ -54,18 +55,19 @@ _FLUSH_CHARS = 1 << 16
 
 
 def write_ahap_zip(tl: Timeline, fh: IO[bytes], *, sharpness: float = DEFAULT_SHARPNESS,
-                   created: str | None = None) -> None:
+                   date: str | None = None) -> None:
     """Write the nine per-actuator AHAP patterns, ``manifest.json`` and ``README.txt`` as a zip.
 
     fh : binary stream (seekable or not). ``sharpness`` : HapticSharpness of every event, 0..1.
-    ``created`` : the Metadata "Created" date (default: today, ISO 8601).
+    ``date`` : the Metadata "Created" date and the manifest's ``created``, ISO 8601; the zip
+    entries are stamped with that day at 00:00 (default: :func:`~autohaptics.formats.common.export_time`).
     """
     tl = ensure_valid(tl)
     sharpness = float(sharpness)
     if not 0.0 <= sharpness <= 1.0:
         raise ParameterError(f"AHAP sharpness must lie in [0, 1], got {sharpness!r}")
-    now = _dt.datetime.now()
-    created = created or now.date().isoformat()
+    now = export_time(date)
+    created = now.date().isoformat()
     title = timeline_title(tl.source)
     q = quantise(tl.vibration)  # (n, 9) int
     files = []

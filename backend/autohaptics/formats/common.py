@@ -9,10 +9,14 @@ sample points (see docs/EXPORT.md, "Keyframes only where the slope changes").
 from __future__ import annotations
 
 import dataclasses
+import datetime as _dt
 import math
+import os
+import re
 
 import numpy as np
 
+from autohaptics.errors import ParameterError
 from autohaptics.layout import ACTUATORS, FAN_COLS, FAN_ROWS, N_ACTUATORS
 from autohaptics.temperature.device import played_curve, profile_of
 from autohaptics.timebase import TICK_S
@@ -77,6 +81,34 @@ def fmt_ticks_s(ticks: int) -> str:
     """A tick count as seconds with one decimal, exact: 123 -> '12.3'."""
     whole, frac = divmod(int(ticks), 10)
     return f"{whole}.{frac}"
+
+
+DATE_ENV = "SOURCE_DATE_EPOCH"  # the reproducible-builds convention: seconds since 1970, UTC
+_ISO_DATE = re.compile(r"\d{4}-\d{2}-\d{2}")
+
+
+def export_time(date: str | None = None) -> _dt.datetime:
+    """The date and time an export carries (a file's date field, its zip entries' stamps).
+
+    ``date`` (ISO 8601 ``YYYY-MM-DD``) gives that day at 00:00; without it, the instant in
+    ``$SOURCE_DATE_EPOCH`` (UTC) where that is set, else now (local time). The one place an
+    exporter reads the clock, so an export is reproducible whenever either is given.
+    """
+    if date is not None:
+        text = str(date).strip()
+        try:
+            if not _ISO_DATE.fullmatch(text):
+                raise ValueError
+            return _dt.datetime.combine(_dt.date.fromisoformat(text), _dt.time())
+        except ValueError:
+            raise ParameterError(f"the export date must be an ISO 8601 date YYYY-MM-DD, got {date!r}") from None
+    epoch = os.environ.get(DATE_ENV, "").strip()
+    if epoch:
+        try:
+            return _dt.datetime.fromtimestamp(int(epoch), _dt.timezone.utc).replace(tzinfo=None)
+        except (ValueError, OverflowError, OSError):
+            raise ParameterError(f"{DATE_ENV} must be whole seconds since 1970, got {epoch!r}") from None
+    return _dt.datetime.now()
 
 
 def fan_name(row: int, col: int) -> str:

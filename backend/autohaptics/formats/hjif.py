@@ -27,7 +27,6 @@ Layout of the file (field names as written by the MPEG reference software's HJIF
 
 from __future__ import annotations
 
-import datetime as _dt
 import json
 from collections.abc import Callable, Iterator
 from typing import IO
@@ -40,6 +39,7 @@ from autohaptics.formats.common import (
     QUANTUM,
     breakpoints,
     ensure_valid,
+    export_time,
     fmt_q,
     quantise,
     runs,
@@ -119,7 +119,7 @@ LEVEL = level_for(PERCEPTION_CHANNELS)
 def write_hjif(tl: Timeline, fh: IO[str], *, date: str | None = None) -> None:
     """Write ``tl`` as an HJIF document to the text stream ``fh``, channel by channel.
 
-    ``date`` : the ``date`` field (default: today, ISO 8601).
+    ``date`` : the ``date`` field, ISO 8601 (default: :func:`~autohaptics.formats.common.export_time`).
     """
     tl = ensure_valid(tl)
     n = tl.n_ticks
@@ -128,7 +128,7 @@ def write_hjif(tl: Timeline, fh: IO[str], *, date: str | None = None) -> None:
         "version": HJIF_VERSION,
         "profile": PROFILE,
         "level": LEVEL,
-        "date": date or _dt.date.today().isoformat(),
+        "date": export_time(date).date().isoformat(),
         "description": (f"autohaptics export of {title}: chair vibration A1..A9, temperature, "
                         f"{FAN_ROWS}x{FAN_COLS} fan grid; {n} ticks of 100 ms"),
         "timescale": TIMESCALE,
