@@ -111,7 +111,7 @@ def test_the_cli_date_applies_to_every_format(tmp_path, monkeypatch):
 
 @pytest.mark.slow
 def test_the_export_goldens_hold_with_the_clock_a_year_ahead(tmp_path):
-    """The golden export check in a process whose clock libfaketime moves a year and a day ahead."""
+    """The golden export check in a process whose clock libfaketime sets a year and a day ahead, at 23:30."""
     faketime = shutil.which("faketime")
     if faketime is None:
         pytest.fail("faketime not found on PATH: install it with `apt-get install faketime`")
@@ -127,10 +127,10 @@ def test_the_export_goldens_hold_with_the_clock_a_year_ahead(tmp_path):
         "print(json.dumps({'today': datetime.date.today().isoformat(), 'same': same}))\n"
     )
     env = {k: v for k, v in os.environ.items() if k != DATE_ENV}
-    proc = subprocess.run([faketime, "-f", "+366d", sys.executable, "-c", script, str(tmp_path)],
-                          capture_output=True, text=True, env=env, timeout=600)
+    ahead = datetime.date.today() + datetime.timedelta(days=366)
+    argv = [faketime, "-f", f"@{ahead.isoformat()} 23:30:00", sys.executable, "-c", script, str(tmp_path)]
+    proc = subprocess.run(argv, capture_output=True, text=True, env=env, timeout=600)
     assert proc.returncode == 0, proc.stderr[-2000:]
     got = json.loads(proc.stdout.strip().splitlines()[-1])
-    moved = datetime.date.fromisoformat(got["today"]) - datetime.date.today()
-    assert datetime.timedelta(days=365) <= moved <= datetime.timedelta(days=367), got
+    assert got["today"] == ahead.isoformat(), got  # the clock really moved
     assert got["same"], "an export golden differs with the clock a year ahead"
