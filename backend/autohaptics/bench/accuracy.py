@@ -2,7 +2,7 @@
 
 For each clip, every configuration (``reference``, ``balanced``, ``fast``, ``balanced`` without
 skipping, and any ``--config``) runs ``generate`` in a FRESH process, so its peak memory is its
-own; the bare decode of the same file (:func:`autohaptics.media.decode_all`) also runs in its own
+own; the bare decode of the same file (:func:`autohaptics.bench.decode.bare_decode`) also runs in its own
 process in the same run. Wall time is the ``generate`` call itself (after imports and a warm-up of
 the compiled audio kernels, which a long film pays once); peak RSS is the whole process's
 (``ru_maxrss`` from ``wait4``). Each timeline is compared with the reference one
@@ -17,8 +17,8 @@ and against each other).
 
 Each ratio is given twice: in-process (``x_decode``: the ``generate`` call against the decode
 call) and whole-process (``x_decode_process``: from process start to exit, imports, kernel loading
-and writing the timeline included, against a process that only decodes). ``--films`` adds the two
-film-like clips of :mod:`autohaptics.bench.clips` (1080p24 stereo, 480p25 5.1), written into ``--out``.
+and writing the timeline included, against a process that only decodes). ``--films`` adds the
+film-like clips of :mod:`autohaptics.bench.clips`, written into ``--out``.
 
 Targets (checked here, never by timed assertions): balanced <= 1.25 x decode on a 1080p clip with
 vibration MAE <= 0.02, onset F1 >= 0.97, temperature MAE <= 0.3 C and fan IoU >= 0.9 against
@@ -237,7 +237,8 @@ def register(sub) -> None:
     p.add_argument("--synth", action="append", default=[], metavar="WxH@FPS:SECONDS",
                    help="also benchmark a synthetic clip of that size and length (written into --out)")
     p.add_argument("--films", action="store_true",
-                   help="also benchmark the 1080p24 and 480p25 5.1 clips made from the shared clips (into --out)")
+                   help="also benchmark the film-like clips made from the shared clips (1080p24 letterboxed and "
+                        "full-frame, 480p25 5.1; into --out)")
     p.add_argument("--format", choices=("png", "svg"), default="png", help="plot format (default png)")
     p.set_defaults(func=run)
 

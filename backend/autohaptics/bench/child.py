@@ -110,7 +110,8 @@ def _child_json(cmd: list[str], result: Path) -> dict:
 
 
 def measure_decode(video: Path, work: Path) -> dict:
-    """Bare decode of ``video`` in a fresh process: {"wall_s", "cpu_s", "peak_rss_mb", counts}."""
+    """Bare decode of ``video`` (:func:`autohaptics.bench.decode.bare_decode`) in a fresh process:
+    {"wall_s", "cpu_s", "peak_rss_mb", counts}."""
     res = work / "decode.result.json"
     return _child_json(_worker_cmd("_decode", str(video), str(res)), res)
 
@@ -124,11 +125,11 @@ def measure_generate(video: Path, config, work: Path) -> dict:
 
 # ------------------------------------------------------------------ workers (in the child)
 def _worker_decode(argv: list[str]) -> None:
-    from autohaptics import media
+    from autohaptics.bench.decode import bare_decode
 
     video, result = argv
     cpu0, t0 = time.process_time(), time.perf_counter()
-    counts = media.decode_all(video)
+    counts = bare_decode(video)
     wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
     Path(result).write_text(json.dumps({"wall_s": wall, "cpu_s": cpu, **counts}))
 

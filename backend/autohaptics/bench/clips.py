@@ -1,10 +1,12 @@
 """Clips the benchmarks write for themselves from the shared clips (nothing large is committed).
 
 :func:`reencode` re-encodes a clip (x264 veryfast crf 20 with its B-frames and long GOP, AAC),
-optionally played several times in a row, scaled and letterboxed, at another frame rate, with the
-sound upmixed to 5.1; :func:`film_clips` makes the two film-like clips of ``--films``: 1080p at
-24 fps with stereo sound (the Sintel trailer upscaled) and 854x480 at 25 fps with 5.1 sound (the
-Big Buck Bunny opening). Files are written once and reused.
+optionally played several times in a row, scaled and letterboxed (or scaled to fill the frame and
+cropped), at another frame rate, with the sound upmixed to 5.1; :func:`film_clips` makes the
+film-like clips of ``--films``: 1080p at 24 fps with stereo sound (the Sintel trailer upscaled,
+letterboxed as the 2.35:1 film it is, and filling the whole 16:9 frame as a 16:9 or 1.85:1 film
+does) and 854x480 at 25 fps with 5.1 sound (the Big Buck Bunny opening). Files are written once and
+reused.
 """
 
 from __future__ import annotations
@@ -15,9 +17,11 @@ from pathlib import Path
 from autohaptics.errors import ParameterError
 
 SHARED_ENV = "AUTOHAPTICS_SHARED"
-# (output name, shared clip, width, height, fps, audio layout)
-FILMS = (("film_1080p24_stereo", "sintel_trailer_640x272_vp8_vorbis.webm", 1920, 1080, 24, "stereo"),
-         ("film_480p25_5.1", "bbb_opening_30s_1280x720_vp8_vorbis.webm", 854, 480, 25, "5.1"))
+FITS = ("letterbox", "fill")
+# (output name, shared clip, width, height, fps, audio layout, fit: one of FITS)
+FILMS = (("film_1080p24_stereo", "sintel_trailer_640x272_vp8_vorbis.webm", 1920, 1080, 24, "stereo", "letterbox"),
+         ("film_1080p24_full_frame", "sintel_trailer_640x272_vp8_vorbis.webm", 1920, 1080, 24, "stereo", "fill"),
+         ("film_480p25_5.1", "bbb_opening_30s_1280x720_vp8_vorbis.webm", 854, 480, 25, "5.1", "letterbox"))
 
 
 def shared_media() -> Path:
@@ -30,11 +34,11 @@ def shared_media() -> Path:
 def film_clips(out_dir: Path) -> list[Path]:
     """The film-like clips of :data:`FILMS`, written into ``out_dir`` from the shared clips."""
     clips = []
-    for name, src, width, height, fps, layout in FILMS:
+    for name, src, width, height, fps, layout, fit in FILMS:
         path = shared_media() / src
         if not path.is_file():
             raise ParameterError(f"{path}: shared clip not found (set {SHARED_ENV} to the shared folder)")
-        clips.append(reencode(path, out_dir / f"{name}.mp4", size=(width, height), fps=fps, layout=layout))
+        clips.append(reencode(path, out_dir / f"{name}.mp4", size=(width, height), fps=fps, layout=layout, fit=fit))
     return clips
 
 
@@ -45,10 +49,12 @@ def looped_clip(src: str | Path, times: int, out_dir: Path) -> Path:
 
 
 def reencode(src: Path, out: Path, *, times: int = 1, size: tuple[int, int] | None = None, fps: int | None = None,
-             layout: str | None = None) -> Path:
+             layout: str | None = None, fit: str = "letterbox") -> Path:
     """Write ``src`` re-encoded to ``out`` (H.264 + AAC at 48 kHz), reusing an existing file.
 
     size : (width, height); the picture is scaled to the width, letterboxed (or cropped) to the height.
+    fit : "letterbox" (as ``size`` says) or "fill": scaled to cover the whole frame, the overhanging
+        sides (or top and bottom) cropped evenly, so no bar is left.
     fps : output frame rate; each output frame shows the source frame on screen at its time.
     layout : "stereo" or "5.1" (front from left/right, centre and LFE from their mean, surrounds
         at half level); default the source's own (mono, stereo or 5.1).
@@ -57,6 +63,8 @@ def reencode(src: Path, out: Path, *, times: int = 1, size: tuple[int, int] | No
 
     from autohaptics import media
 
+    if fit not in FITS:
+        raise ParameterError(f"fit must be one of {FITS}, got {fit!r}")
     if out.exists():
         return out
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -75,7 +83,7 @@ def reencode(src: Path, out: Path, *, times: int = 1, size: tuple[int, int] | No
         counts = [0, 0]  # video frames, audio samples written
         rates = (info.video.fps, fps or round(info.video.fps)) if info.video else (0.0, 0)
         for _ in range(times):
-            _copy(src, dst, vs, as_, counts, rates)
+            _copy(src, dst, vs, as_, counts, rates, fit)
         for stream in (vs, as_):
             if stream is not None:
                 dst.mux(stream.encode(None))
@@ -83,8 +91,8 @@ def reencode(src: Path, out: Path, *, times: int = 1, size: tuple[int, int] | No
     return out
 
 
-def _copy(src: Path, dst, vs, as_, counts: list[int], rates: tuple[float, int]) -> None:
-    """One play of ``src`` into ``dst``; ``rates`` = (source fps, output fps)."""
+def _copy(src: Path, dst, vs, as_, counts: list[int], rates: tuple[float, int], fit: str) -> None:
+    """One play of ``src`` into ``dst``; ``rates`` = (source fps, output fps); ``fit`` as :func:`reencode`."""
     import av
 
     resampler = av.AudioResampler(format="fltp", layout="stereo", rate=48000) if as_ is not None else None
@@ -98,7 +106,7 @@ def _copy(src: Path, dst, vs, as_, counts: list[int], rates: tuple[float, int]) 
                 # the output frames whose time falls on this source frame (the i-th)
                 while (counts[0] - start) * src_fps < i * fps:
                     if picture is None:
-                        picture = _picture(frame, vs.width, vs.height)
+                        picture = _picture(frame, vs.width, vs.height, fill=fit == "fill")
                     f = av.VideoFrame.from_ndarray(picture, format="yuv420p")
                     f.pts = counts[0]
                     counts[0] += 1
@@ -108,24 +116,29 @@ def _copy(src: Path, dst, vs, as_, counts: list[int], rates: tuple[float, int]) 
                     _write_audio(dst, as_, r.to_ndarray(), counts)
 
 
-def _picture(frame, width: int, height: int):
+def _picture(frame, width: int, height: int, *, fill: bool = False):
     """The frame as a yuv420p array [shape=(height * 3 // 2, width)], scaled to ``width`` and
-    letterboxed or cropped to ``height``."""
+    letterboxed or cropped to ``height``; with ``fill``, scaled to cover ``width`` x ``height`` and
+    cropped evenly on the axis that overhangs."""
     import numpy as np
 
-    h = max(2, int(round(frame.height * width / frame.width / 2)) * 2)
-    yuv = frame.reformat(width=width, height=h, format="yuv420p").to_ndarray()
-    y, u, v = yuv[:h], yuv[h:].reshape(-1)[: h * width // 4], yuv[h:].reshape(-1)[h * width // 4:]
+    scale = max(width / frame.width, height / frame.height) if fill else width / frame.width
+    w = width if not fill else max(2, int(round(frame.width * scale / 2)) * 2)
+    h = max(2, int(round(frame.height * scale / 2)) * 2)
+    yuv = frame.reformat(width=w, height=h, format="yuv420p").to_ndarray()
+    y, u, v = yuv[:h], yuv[h:].reshape(-1)[: h * w // 4], yuv[h:].reshape(-1)[h * w // 4:]
     out_y = np.full((height, width), 16, np.uint8)
     out_c = np.full((2, height // 2, width // 2), 128, np.uint8)
     top = (height - h) // 2
     src_top = max(0, -top)
     rows = min(h - src_top, height)
     dst_top = max(0, top)
-    out_y[dst_top:dst_top + rows] = y[src_top:src_top + rows]
+    left = (w - width) // 4 * 2  # columns cropped on the left (even: the chroma keeps its place)
+    out_y[dst_top:dst_top + rows] = y[src_top:src_top + rows, left:left + width]
     for k, c in enumerate((u, v)):
-        c = c.reshape(h // 2, width // 2)
-        out_c[k, dst_top // 2:(dst_top + rows) // 2] = c[src_top // 2:(src_top + rows) // 2]
+        c = c.reshape(h // 2, w // 2)
+        out_c[k, dst_top // 2:(dst_top + rows) // 2] = c[src_top // 2:(src_top + rows) // 2,
+                                                        left // 2:left // 2 + width // 2]
     return np.concatenate([out_y, out_c[0].reshape(-1, width), out_c[1].reshape(-1, width)])
 
 

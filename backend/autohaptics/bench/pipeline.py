@@ -2,11 +2,12 @@
 
 Both are measured in this one run, alternating, each repeated, so machine noise hits both alike;
 the figure that matters is the ratio (target <= 1.25 on a 1080p clip with the balanced preset).
-It is given in-process (the ``generate`` call against ``decode_all``, warmed up) and for whole
-processes (start to exit, imports and kernel loading included, against a process that only
-decodes). ``--loop N`` first writes a longer clip by playing VIDEO N times in a row (re-encoded
-with x264 and AAC at the source resolution), for clips too short to measure; ``--films`` adds the
-1080p24 and 480p25 5.1 clips of :mod:`autohaptics.bench.clips`.
+It is given in-process (the ``generate`` call against :func:`autohaptics.bench.decode.bare_decode`,
+warmed up) and for whole processes (start to exit, imports and kernel loading included, against a
+process that only decodes). ``--loop N`` first writes a longer clip by playing VIDEO N times in a
+row (re-encoded with x264 and AAC at the source resolution), for clips too short to measure;
+``--films`` adds the film-like clips of :mod:`autohaptics.bench.clips` (1080p24 letterboxed and
+full-frame, 480p25 5.1).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from pathlib import Path
 from autohaptics import media
 from autohaptics.bench.clips import film_clips, looped_clip
 from autohaptics.bench.common import measure, table
+from autohaptics.bench.decode import bare_decode
 from autohaptics.errors import ParameterError
 from autohaptics.params import add_generation_options, params_from_args
 
@@ -29,7 +31,8 @@ def register(sub) -> None:
     p = sub.add_parser("pipeline", help="generation wall time divided by bare decode time, per-stage seconds")
     p.add_argument("video", nargs="*", help="input media files")
     p.add_argument("--films", action="store_true",
-                   help="also the 1080p24 and 480p25 5.1 clips made from the shared clips (into --out)")
+                   help="also the film-like clips made from the shared clips (1080p24 letterboxed and full-frame, "
+                        "480p25 5.1; into --out)")
     p.add_argument("--repeat", type=int, default=3, help="measurements of each (default 3; the median is reported)")
     p.add_argument("--loop", type=int, default=1, help="first write a clip that plays VIDEO this many times")
     p.add_argument("--out", default="out/bench", help="folder for the looped clip and the JSON figures")
@@ -95,7 +98,7 @@ def bench_one(path: Path, args, params, preset: str, generate) -> None:
     decode_s, gen_s, rss = [], [], []
     tl = None
     for _ in range(max(1, args.repeat)):
-        decode_s.append(measure(lambda: media.decode_all(path, info=info)).wall_s)
+        decode_s.append(measure(lambda: bare_decode(path)).wall_s)
         m = measure(lambda: generate(path, params, preset=preset))
         gen_s.append(m.wall_s)
         rss.append(m.peak_rss_mb)

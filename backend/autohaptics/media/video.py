@@ -9,8 +9,6 @@ import queue
 import threading
 from collections.abc import Callable, Iterator
 
-import av
-
 from autohaptics.errors import MediaError, ParameterError
 from autohaptics.media.frames import Frame
 from autohaptics.media.probe import AudioReport, MediaInfo, decode_tolerant, norm_rotation, open_container, probe, stream_by_index
@@ -159,28 +157,3 @@ def _prefetched(make_iter, depth: int, prepare: Callable | None = None) -> Itera
                 pass
         worker.join()
 
-
-def decode_all(path: str | os.PathLike, *, info: MediaInfo | None = None) -> dict:
-    """Bare decode of every audio and video frame, nothing converted: the speed baseline.
-
-    Returns {"video_frames": int, "audio_samples": int}.
-    """
-    info = info or probe(path)
-    counts = {"video_frames": 0, "audio_samples": 0}
-    with open_container(info.path) as c:
-        streams = []
-        if info.video is not None:
-            vs = stream_by_index(c, info.video.index)
-            vs.thread_type = "AUTO"
-            streams.append(vs)
-        if info.audio is not None:
-            as_ = stream_by_index(c, info.audio.index)
-            as_.thread_type = "AUTO"
-            streams.append(as_)
-        report = AudioReport()
-        for frame in decode_tolerant(c, streams, report, info.path):
-            if isinstance(frame, av.VideoFrame):
-                counts["video_frames"] += 1
-            else:
-                counts["audio_samples"] += frame.samples
-    return counts

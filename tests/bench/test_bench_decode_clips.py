@@ -1,0 +1,48 @@
+"""The benchmarks' bare decode (every frame and sample, counted) and the full-frame film clip's
+picture (scaled to cover the frame and cropped: no bar left, unlike the letterboxed one)."""
+
+from __future__ import annotations
+
+import av
+import numpy as np
+import pytest
+
+from autohaptics.bench.clips import _picture, reencode
+from autohaptics.bench.decode import bare_decode
+from autohaptics.errors import ParameterError
+
+
+def test_the_bare_decode_counts_every_frame_and_sample(media_dir):
+    path = media_dir / "sintel_trailer_480x204_h264_aac.mp4"
+    frames = samples = 0
+    with av.open(str(path)) as c:
+        for f in c.decode(video=0, audio=0):
+            if isinstance(f, av.VideoFrame):
+                frames += 1
+            else:
+                samples += f.samples
+    assert bare_decode(path) == {"video_frames": frames, "audio_samples": samples}
+    assert frames > 1000 and samples > 44100 * 50  # a 52 s trailer, 44.1 kHz
+
+
+def _wide_frame(width: int = 64, height: int = 16) -> av.VideoFrame:
+    """A 4:1 picture: a white left edge column band, grey elsewhere, a black right band."""
+    rgb = np.full((height, width, 3), 128, np.uint8)
+    rgb[:, : width // 8] = 255
+    rgb[:, -width // 8:] = 0
+    return av.VideoFrame.from_ndarray(rgb, format="rgb24")
+
+
+def test_fill_covers_the_frame_and_crops_the_overhanging_sides():
+    frame = _wide_frame()
+    boxed = _picture(frame, 32, 20)[:20]
+    filled = _picture(frame, 32, 20, fill=True)[:20]
+    assert (boxed[:6] == 16).all() and (boxed[-6:] == 16).all()  # 32 x 8 picture between bars
+    assert (filled[:, 8:24] > 100).all()  # the grey middle fills every row: no bar
+    # the 80 px wide scaled picture loses 24 px on each side: the white and black bands (10 px) are gone
+    assert filled.min() > 100 and filled.max() < 160
+
+
+def test_reencode_rejects_an_unknown_fit(tmp_path, media_dir):
+    with pytest.raises(ParameterError, match="fit"):
+        reencode(media_dir / "bbb_1s_1280x720_vp8_vorbis.webm", tmp_path / "x.mp4", fit="stretch")
