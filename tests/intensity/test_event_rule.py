@@ -11,7 +11,7 @@ from autohaptics import intensity as it
 from autohaptics.errors import ParameterError
 from autohaptics.params import THESIS_RULES, resolve_params
 from autohaptics.pipeline.generate import generate
-from autohaptics.testing import sounds, write_scene
+from autohaptics.testing import Noise, Scene, sounds, write_scene
 from autohaptics.timebase import FRAMES_PER_TICK, TICK_S
 
 
@@ -70,6 +70,64 @@ def test_a_rising_rumble_vibrates_ever_harder(tmp_path):
     per_second = [on[k:k + 10].mean() for k in range(0, on.size - 9, 10)]
     assert all(b > a for a, b in zip(per_second, per_second[1:])), per_second
     assert np.corrcoef(np.arange(on.size), on)[0, 1] > 0.95
+
+
+@pytest.mark.parametrize("start_s", [4.0, 5.23, 7.61])
+@pytest.mark.parametrize("impacts", [False, True])
+def test_a_file_cut_inside_the_score_does_not_jolt_at_its_start(tmp_path, start_s, impacts):
+    """A reel or trailer that begins mid-score: the music was there before the file began."""
+    audio = sounds.music_bed(0.0, 16.0, level_dbfs=-20.0)
+    audio += [e for i, t in enumerate(sounds.IMPACT_TIMES_S) for e in sounds.impact(t, seed=i)] if impacts else []
+    film = Scene(duration_s=16.0, audio=tuple(audio), name=f"score_{impacts}")
+    scene = sounds.cut_in(film, start_s, 6.0)
+    _, chair, _ = _run(tmp_path, scene)
+    assert chair[_ticks(0.0, 0.5)].max() <= 0.2, chair[:8]
+    later = [t - start_s for t in sounds.IMPACT_TIMES_S if 0.5 <= t - start_s <= scene.duration_s - 0.5]
+    assert later or not impacts  # an impact after the cut still vibrates as the uncut film's does
+    for t in later if impacts else []:
+        assert chair[_ticks(t, t + sounds.IMPACT_LENGTH_S)].min() >= 0.7 * chair.max()
+
+
+@pytest.mark.parametrize("at_s", [0.3, 0.6, 1.5])
+def test_a_boom_out_of_silence_at_the_start_vibrates_at_its_level(tmp_path, at_s):
+    boom = Scene(duration_s=4.0, audio=tuple(sounds.impact(at_s)), name=f"boom_{at_s:g}")
+    intensity, chair, _ = _run(tmp_path, boom)
+    hit = _ticks(at_s, at_s + sounds.IMPACT_LENGTH_S)
+    assert (chair[hit] >= 0.7).all() and (intensity[hit] >= 0.7).all(), chair[:20]
+    assert not chair[_ticks(0.0, at_s)].any()
+    # the same boom over room tone, or under a score, that starts with the file: the boom vibrates
+    for name, bed in (("room", [Noise(0.0, 4.0, level_dbfs=-60.0, colour="pink", seed=3)]),
+                      ("score", sounds.music_bed(0.0, 4.0))):
+        scene = Scene(duration_s=4.0, audio=tuple(bed) + tuple(sounds.impact(at_s)), name=f"{name}_boom_{at_s:g}")
+        _, chair, _ = _run(tmp_path, scene)
+        assert (chair[hit] >= 0.7 * chair.max()).all() and chair.max() > 0.5, (name, chair[:20])
+        assert not chair[_ticks(0.0, at_s)].any(), (name, chair[:20])
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(1e-6, 1e6), st.integers(1, 400), st.floats(0.5, 30.0))
+def test_a_level_held_from_the_first_frame_is_never_novel(level, n, baseline_s):
+    from autohaptics.intensity.novelty import feature_novelty
+
+    flat = np.full(n, level)
+    out = feature_novelty({f: flat for f in it.rule.FEATURES}, baseline_s=baseline_s)
+    assert all(not v.any() for v in out.values())
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 100), st.integers(1, 200), st.floats(1e-3, 1e3))
+def test_a_sound_after_an_opening_silence_is_an_onset_and_one_under_way_is_not(silent_frames, n, level):
+    """At least GAP_S of opening silence: the sound after it is an onset; less (an encoder's priming,
+    the fade of a cut): the sound was under way before the file began."""
+    from autohaptics.intensity.novelty import GAP_S, novelty
+
+    x = np.r_[np.zeros(silent_frames), np.full(n, level)]
+    out = novelty(x)
+    assert not out[:silent_frames].any()
+    if silent_frames * 0.02 >= GAP_S - 1e-9:
+        assert out[silent_frames] == 1.0
+    else:
+        assert not out.any()
 
 
 @pytest.mark.parametrize("make", [sounds.speech, sounds.rising_rumble, sounds.music_with_impacts])

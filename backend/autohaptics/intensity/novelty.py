@@ -11,8 +11,12 @@ Per 20 ms frame:
 - its envelope is the maximum over the last ``ENVELOPE_S`` (1 s: the loud level of speech or music
   between its syllables and notes, so that they do not count as events one by one);
 - the baseline is the mean envelope over ``baseline_s`` seconds ending ``GAP_S`` (0.1 s) before
-  the frame (only the frames the film has: before the first ``GAP_S`` the baseline is silence,
-  so sound that starts the film is an onset);
+  the frame. Before the file began: a file whose sound is under way within its first ``GAP_S``
+  (cut inside a score or a noise bed; a shorter gap is an encoder's priming or the cut's fade) is
+  taken to have had that sound all along, at its largest level over the ``OPENING_S`` (0.5 s)
+  after the sound begins, short of a hit (:func:`opening_frames`), so its start is no event; a
+  file that opens on silence has only its own frames in the baseline, so a sound after the
+  silence is an onset however early it comes;
 - novelty = log2(value / baseline) / ``FULL_OCTAVES``, at least 0: 0 at or below the baseline,
   1 at a rise of 2^0.5 (+5 phon for loudness); :func:`novelty` clips it at 1 for display, the
   rule compares the unclipped value (so that a density can rank ticks that all passed 1).
@@ -31,6 +35,8 @@ from autohaptics.timebase import FRAME_S
 
 ENVELOPE_S = 1.0
 GAP_S = 0.1
+OPENING_S = 0.5
+OPENING_RISE = 2.0  # loudness doubles at +10 phon; the loudness model's attack rises less after GAP_S
 FULL_OCTAVES = 0.5
 EXPONENTS = {"sharpness": 1.0, "booming": 1.0, "low_energy": 0.3, "loudness": 1.0}
 FLOOR = 1e-2  # of the feature's maximum over the film, added to value and baseline: no 0/0
@@ -39,17 +45,23 @@ FLOOR = 1e-2  # of the feature's maximum over the film, added to value and basel
 def feature_novelty(features: dict[str, np.ndarray], *, baseline_s: float = 3.0) -> dict[str, np.ndarray]:
     """Unclipped novelty (>= 0, finite) of each of the four features, sharpness kept only where the
     loudness rises too (module docstring). features : {name: [shape=(n,)] per 20 ms frame}."""
-    out = {f: novelty(x, exponent=EXPONENTS[f], baseline_s=baseline_s, clip=False) for f, x in features.items()}
+    sound = features.get("loudness")
+    opening = opening_frames(np.asarray(sound, dtype=np.float64)) if sound is not None else None
+    out = {f: novelty(x, exponent=EXPONENTS[f], baseline_s=baseline_s, clip=False, opening_n=opening)
+           for f, x in features.items()}
     if "sharpness" in out and "loudness" in out:
         out["sharpness"] = np.where(out["loudness"] > 0, out["sharpness"], 0.0)
     return out
 
 
-def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, clip: bool = True) -> np.ndarray:
+def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, clip: bool = True,
+            opening_n: int | None = None) -> np.ndarray:
     """Novelty of one feature curve (module docstring).
 
     x : float [shape=(n,)], one value per 20 ms frame, >= 0 (non-finite values count as 0).
     baseline_s : length of the recent baseline, seconds (> 0).
+    opening_n : the frames whose largest value the feature had before the file began, 0 for a
+        file that opens on silence (:func:`opening_frames` of the loudness; default: of ``x``).
     Returns float64 [shape=(n,)], finite, >= 0 and (with ``clip``) <= 1; all zeros for silence.
     """
     v = np.asarray(x, dtype=np.float64)
@@ -60,15 +72,42 @@ def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, cl
         return np.zeros(n)
     v = v / top  # the ratio below is scale-free; at 0..1 its floor cannot underflow (a denormal top)
     env_n = max(1, int(round(ENVELOPE_S / FRAME_S)))
-    env = trailing_max(v, env_n)
+    gap_n = int(round(GAP_S / FRAME_S))
+    base_n = max(1, int(round(baseline_s / FRAME_S)))
+    opening_n = opening_frames(v) if opening_n is None else min(int(opening_n), n)
+    pre_n = env_n + gap_n + base_n if opening_n > 0 else 0  # history for every window before t = 0
+    env = trailing_max(np.concatenate([np.full(pre_n, v[:opening_n].max() if pre_n else 0.0), v]), env_n)
     cum = np.concatenate([[0.0], np.cumsum(env)])
-    idx = np.arange(n)
-    hi = np.clip(idx - int(round(GAP_S / FRAME_S)), 0, n)
-    lo = np.clip(hi - max(1, int(round(baseline_s / FRAME_S))), 0, n)
+    hi = np.clip(np.arange(n) + pre_n - gap_n, 0, n + pre_n)
+    lo = np.clip(hi - base_n, 0, n + pre_n)
     count = hi - lo
     base = np.where(count > 0, (cum[hi] - cum[lo]) / np.maximum(count, 1), 0.0)
     out = np.maximum(np.log2((v + FLOOR) / (np.maximum(base, 0.0) + FLOOR)) / FULL_OCTAVES, 0.0)
     return np.minimum(out, 1.0) if clip else out
+
+
+def opening_frames(x: np.ndarray) -> int:
+    """The frames of a file's opening whose level its sound had before the file began (module
+    docstring): up to ``OPENING_S`` after the sound begins, ending early where it falls silent or
+    rises ``OPENING_RISE`` times above its level over its first ``GAP_S`` (a hit, not the loudness
+    model's attack); 0 where the file opens on at least ``GAP_S`` of silence (at most ``FLOOR`` of
+    the film's top).
+
+    x : [shape=(n,)] per 20 ms frame, >= 0 (non-finite values count as 0): the loudness, or any level.
+    """
+    v = np.where(np.isfinite(x), np.maximum(x, 0.0), 0.0)
+    top = float(v.max()) if v.size else 0.0
+    if top <= 0.0:
+        return 0
+    gap_n = int(round(GAP_S / FRAME_S))
+    sounding = v > FLOOR * top
+    first = int(np.argmax(sounding))
+    if first >= gap_n:
+        return 0
+    end = min(v.size, first + int(round(OPENING_S / FRAME_S)))
+    early = float(v[first:first + gap_n].max())
+    stop = np.flatnonzero(~sounding[first:end] | (v[first:end] > OPENING_RISE * early))
+    return first + int(stop[0]) if stop.size else end
 
 
 def trailing_max(v: np.ndarray, n: int) -> np.ndarray:

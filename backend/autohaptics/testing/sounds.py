@@ -9,8 +9,11 @@ dialogue level, and the impacts about 18 dB above it.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
+from autohaptics.errors import ParameterError
 from autohaptics.testing.scenes import Noise, Scene, Tone
 
 # a I-vi-IV-V progression in C, one chord a second, as (bass, three chord notes) in Hz
@@ -90,6 +93,54 @@ def rising_rumble(duration_s: float = 10.0, *, start_s: float = 1.0, from_dbfs: 
     audio.append(Noise(start_s, duration_s, level_dbfs=from_dbfs - 18.0, level_end_dbfs=to_dbfs - 18.0,
                        colour="pink", seed=5, ramp_s=0.05))
     return Scene(duration_s=duration_s, audio=tuple(audio), name="rumble")
+
+
+def booms_and_blips(duration_s: float = 180.0, *, floor_db: float | None = None, seed: int = 0) -> Scene:
+    """Booms (:func:`impact`) every 6-10 s, each followed 2-4 s later by a 0.1 s blip (a 1-3 kHz
+    tone at -30 dBFS), over exact digital silence, or with ``floor_db`` over white noise at that
+    level (dBFS RMS, e.g. -100, below a 16-bit LSB: a master's noise floor). Why: recursive filters
+    ring down towards subnormal floats over exact silence (docs/BENCHMARKS.md, "Digital silence");
+    the floor version is the same work without that. Write it with a float codec (pcm_f32le): a
+    lossy or 16-bit one may round the floor to silence.
+    """
+    rng = np.random.default_rng(seed)
+    audio: list[Tone | Noise] = [] if floor_db is None else [noise_floor(duration_s, floor_db, seed=seed)]
+    t, k = 1.0, 0
+    while t + IMPACT_LENGTH_S < duration_s:
+        audio += impact(t, level_dbfs=float(rng.uniform(-14.0, -6.0)), seed=seed + k + 1)
+        blip = t + float(rng.uniform(2.0, 4.0))
+        if blip + 0.1 < duration_s:
+            audio.append(Tone(blip, blip + 0.1, float(rng.uniform(1000.0, 3000.0)), level_dbfs=-30.0, ramp_s=0.01))
+        t += float(rng.uniform(6.0, 10.0))
+        k += 1
+    name = "booms_blips" if floor_db is None else f"booms_blips_floor{floor_db:g}"
+    return Scene(duration_s=duration_s, audio=tuple(audio), name=name)
+
+
+def noise_floor(duration_s: float, floor_db: float, *, seed: int = 0) -> Noise:
+    """Steady white noise at ``floor_db`` dBFS RMS over the whole clip: a recording's noise floor."""
+    return Noise(0.0, duration_s, level_dbfs=float(floor_db), colour="white", seed=10_000 + seed, ramp_s=0.0)
+
+
+def cut_in(scene: Scene, start_s: float, duration_s: float | None = None) -> Scene:
+    """The sound of ``scene`` as a file that begins ``start_s`` into it (a reel or trailer cut
+    mid-score): its audio events shifted back by ``start_s``, those under way at the cut starting
+    abruptly at 0 s (no attack ramp), for ``duration_s`` (default: the rest). Pictures are dropped."""
+    end = scene.duration_s - start_s if duration_s is None else float(duration_s)
+    if not (0.0 <= start_s and 0.0 < end <= scene.duration_s - start_s + 1e-9):
+        raise ParameterError(f"cannot cut {end!r} s at {start_s!r} s from a {scene.duration_s} s scene")
+    audio = []
+    for ev in scene.audio:
+        t0, t1 = ev.t0 - start_s, min(ev.t1 - start_s, end)
+        if t1 <= 0.0 or t0 >= end:
+            continue
+        if t0 < 0.0 and ev.level_end_dbfs is not None:  # the glide's level at the cut
+            share = (start_s - ev.t0) / (ev.t1 - ev.t0)
+            level = ev.level_dbfs + share * (ev.level_end_dbfs - ev.level_dbfs)
+            ev = dataclasses.replace(ev, level_dbfs=level)
+        audio.append(dataclasses.replace(ev, t0=0.0, t1=t1, ramp_s=0.0) if t0 < 0.0
+                     else dataclasses.replace(ev, t0=t0, t1=t1))
+    return Scene(duration_s=end, audio=tuple(audio), name=f"{scene.name}_from_{start_s:g}s")
 
 
 def silence(duration_s: float = 5.0) -> Scene:
