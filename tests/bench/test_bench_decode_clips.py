@@ -36,7 +36,7 @@ def _wide_frame(width: int = 64, height: int = 16) -> av.VideoFrame:
 def test_fill_covers_the_frame_and_crops_the_overhanging_sides():
     frame = _wide_frame()
     boxed = _picture(frame, 32, 20)[:20]
-    filled = _picture(frame, 32, 20, fill=True)[:20]
+    filled = _picture(frame, 32, 20, fit="fill")[:20]
     assert (boxed[:6] == 16).all() and (boxed[-6:] == 16).all()  # 32 x 8 picture between bars
     assert (filled[:, 8:24] > 100).all()  # the grey middle fills every row: no bar
     # the 80 px wide scaled picture loses 24 px on each side: the white and black bands (10 px) are gone
@@ -46,3 +46,14 @@ def test_fill_covers_the_frame_and_crops_the_overhanging_sides():
 def test_reencode_rejects_an_unknown_fit(tmp_path, media_dir):
     with pytest.raises(ParameterError, match="fit"):
         reencode(media_dir / "bbb_1s_1280x720_vp8_vorbis.webm", tmp_path / "x.mp4", fit="stretch")
+
+
+def test_pad_fits_the_picture_inside_with_even_bars():
+    frame = _wide_frame()  # 64 x 16: fits 32 x 20 as 32 x 8, bars above and below
+    boxed = _picture(frame, 32, 20, fit="pad")[:20]
+    assert (boxed[:6] == 16).all() and (boxed[-6:] == 16).all() and (boxed[6:14, 8:24] > 100).all()
+    tall = av.VideoFrame.from_ndarray(np.full((16, 8, 3), 200, np.uint8), format="rgb24")
+    pillar = _picture(tall, 32, 16, fit="pad")  # 8 x 16 in 32 x 16: 12 px bars on each side
+    y, u = pillar[:16], pillar[16:20].reshape(8, 16)
+    assert (y[:, :12] == 16).all() and (y[:, -12:] == 16).all() and (y[:, 12:20] > 150).all()
+    assert (u[:, :6] == 128).all() and (u[:, -6:] == 128).all()

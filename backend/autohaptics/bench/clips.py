@@ -5,8 +5,9 @@ optionally played several times in a row, scaled and letterboxed (or scaled to f
 cropped), at another frame rate, with the sound upmixed to 5.1; :func:`film_clips` makes the
 film-like clips of ``--films``: 1080p at 24 fps with stereo sound (the Sintel trailer upscaled,
 letterboxed as the 2.35:1 film it is, and filling the whole 16:9 frame as a 16:9 or 1.85:1 film
-does) and 854x480 at 25 fps with 5.1 sound (the Big Buck Bunny opening). Files are written once and
-reused.
+does) and 854x480 at 25 fps with 5.1 sound (the Big Buck Bunny opening). ``fit="pad"`` fits the
+whole picture inside the frame with bars where it is narrower (a pillarbox) or wider (a letterbox).
+Files are written once and reused.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from pathlib import Path
 from autohaptics.errors import ParameterError
 
 SHARED_ENV = "AUTOHAPTICS_SHARED"
-FITS = ("letterbox", "fill")
+FITS = ("letterbox", "fill", "pad")
 # (output name, shared clip, width, height, fps, audio layout, fit: one of FITS)
 FILMS = (("film_1080p24_stereo", "sintel_trailer_640x272_vp8_vorbis.webm", 1920, 1080, 24, "stereo", "letterbox"),
          ("film_1080p24_full_frame", "sintel_trailer_640x272_vp8_vorbis.webm", 1920, 1080, 24, "stereo", "fill"),
@@ -53,8 +54,9 @@ def reencode(src: Path, out: Path, *, times: int = 1, size: tuple[int, int] | No
     """Write ``src`` re-encoded to ``out`` (H.264 + AAC at 48 kHz), reusing an existing file.
 
     size : (width, height); the picture is scaled to the width, letterboxed (or cropped) to the height.
-    fit : "letterbox" (as ``size`` says) or "fill": scaled to cover the whole frame, the overhanging
-        sides (or top and bottom) cropped evenly, so no bar is left.
+    fit : "letterbox" (as ``size`` says), "fill": scaled to cover the whole frame, the overhanging
+        sides (or top and bottom) cropped evenly, so no bar is left, or "pad": scaled to fit inside
+        the frame, black bars on the sides (pillarbox) or top and bottom (letterbox) evenly.
     fps : output frame rate; each output frame shows the source frame on screen at its time.
     layout : "stereo" or "5.1" (front from left/right, centre and LFE from their mean, surrounds
         at half level); default the source's own (mono, stereo or 5.1).
@@ -106,7 +108,7 @@ def _copy(src: Path, dst, vs, as_, counts: list[int], rates: tuple[float, int], 
                 # the output frames whose time falls on this source frame (the i-th)
                 while (counts[0] - start) * src_fps < i * fps:
                     if picture is None:
-                        picture = _picture(frame, vs.width, vs.height, fill=fit == "fill")
+                        picture = _picture(frame, vs.width, vs.height, fit=fit)
                     f = av.VideoFrame.from_ndarray(picture, format="yuv420p")
                     f.pts = counts[0]
                     counts[0] += 1
@@ -116,30 +118,40 @@ def _copy(src: Path, dst, vs, as_, counts: list[int], rates: tuple[float, int], 
                     _write_audio(dst, as_, r.to_ndarray(), counts)
 
 
-def _picture(frame, width: int, height: int, *, fill: bool = False):
-    """The frame as a yuv420p array [shape=(height * 3 // 2, width)], scaled to ``width`` and
-    letterboxed or cropped to ``height``; with ``fill``, scaled to cover ``width`` x ``height`` and
-    cropped evenly on the axis that overhangs."""
+def _picture(frame, width: int, height: int, *, fit: str = "letterbox"):
+    """The frame as a yuv420p array [shape=(height * 3 // 2, width)], placed as ``fit`` says
+    (:func:`reencode`): scaled to ``width`` and letterboxed or cropped to ``height``; "fill": scaled
+    to cover ``width`` x ``height`` and cropped evenly on the axis that overhangs; "pad": scaled to
+    fit inside, with even black bars on the axis that falls short."""
     import numpy as np
 
-    scale = max(width / frame.width, height / frame.height) if fill else width / frame.width
-    w = width if not fill else max(2, int(round(frame.width * scale / 2)) * 2)
+    if fit == "fill":
+        scale = max(width / frame.width, height / frame.height)
+    elif fit == "pad":
+        scale = min(width / frame.width, height / frame.height)
+    else:
+        scale = width / frame.width
+    w = width if fit == "letterbox" else max(2, int(round(frame.width * scale / 2)) * 2)
     h = max(2, int(round(frame.height * scale / 2)) * 2)
     yuv = frame.reformat(width=w, height=h, format="yuv420p").to_ndarray()
     y, u, v = yuv[:h], yuv[h:].reshape(-1)[: h * w // 4], yuv[h:].reshape(-1)[h * w // 4:]
     out_y = np.full((height, width), 16, np.uint8)
     out_c = np.full((2, height // 2, width // 2), 128, np.uint8)
-    top = (height - h) // 2
-    src_top = max(0, -top)
-    rows = min(h - src_top, height)
-    dst_top = max(0, top)
-    left = (w - width) // 4 * 2  # columns cropped on the left (even: the chroma keeps its place)
-    out_y[dst_top:dst_top + rows] = y[src_top:src_top + rows, left:left + width]
+    # (source start, destination start, length) per axis, even so the chroma keeps its place
+    (sy, dy, rows), (sx, dx, cols) = (_placement(h, height), _placement(w, width))
+    out_y[dy:dy + rows, dx:dx + cols] = y[sy:sy + rows, sx:sx + cols]
     for k, c in enumerate((u, v)):
         c = c.reshape(h // 2, w // 2)
-        out_c[k, dst_top // 2:(dst_top + rows) // 2] = c[src_top // 2:(src_top + rows) // 2,
-                                                        left // 2:left // 2 + width // 2]
+        out_c[k, dy // 2:(dy + rows) // 2, dx // 2:(dx + cols) // 2] = \
+            c[sy // 2:(sy + rows) // 2, sx // 2:(sx + cols) // 2]
     return np.concatenate([out_y, out_c[0].reshape(-1, width), out_c[1].reshape(-1, width)])
+
+
+def _placement(size: int, frame: int) -> tuple[int, int, int]:
+    """(source start, destination start, length) px of a picture ``size`` long centred in a frame
+    ``frame`` long: cropped evenly where longer, padded evenly where shorter (starts even)."""
+    offset = (frame - size) // 4 * 2
+    return (0, offset, size) if offset >= 0 else (-offset, 0, frame)
 
 
 def _write_audio(dst, as_, stereo, counts: list[int]) -> None:
