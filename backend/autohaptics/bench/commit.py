@@ -49,15 +49,21 @@ def register(sub) -> None:
     p.add_argument("--hours", type=float, default=2.0, help="length of the written film (default 2)")
     p.add_argument("--bed", action="store_true",
                    help="write the other film: events over a steady bed of tone and room noise, other colours")
+    p.add_argument("--floor-db", type=float, default=None,
+                   help="write the film over a white noise floor at this level (dBFS RMS, e.g. -100) "
+                        "instead of exact digital silence")
     p.add_argument("--repeat", type=int, default=5, help="answer-time measurements of each commit (default 5)")
     p.set_defaults(func=run)
 
 
-def write_film(path: Path, duration_s: float = 7200.0, *, bed: bool = False) -> Path:
+def write_film(path: Path, duration_s: float = 7200.0, *, bed: bool = False, floor_db: float | None = None) -> Path:
     """A ``duration_s`` film at 64 x 36, 5 fps: 45 s textured colour segments, every 9-13 s a
     bright disc (left or right) with, alternately, a low tone or pink noise, over silence; with
-    ``bed`` over a steady 220 Hz tone and pink room noise, in other colours, the discs high or low."""
+    ``bed`` over a steady 220 Hz tone and pink room noise, in other colours, the discs high or low;
+    with ``floor_db`` (dBFS RMS) over a white noise floor (:func:`~autohaptics.testing.sounds.noise_floor`;
+    -100 survives the AAC encoding) instead of exact digital silence, the pictures the same."""
     from autohaptics.testing import Noise, Scene, Segment, Shape, Texture, Tone, write_scene
+    from autohaptics.testing.sounds import noise_floor
 
     colours = [(40, 45, 60), (170, 60, 40), (50, 140, 70), (60, 80, 160)]
     if bed:
@@ -77,6 +83,8 @@ def write_film(path: Path, duration_s: float = 7200.0, *, bed: bool = False) -> 
         k += 1
     if bed:
         audio += [Tone(0.0, duration_s, 220.0, level_dbfs=-30.0), Noise(0.0, duration_s, level_dbfs=-42.0, colour="pink", seed=99)]
+    if floor_db is not None:
+        audio.append(noise_floor(duration_s, floor_db))
     scene = Scene(duration_s, background=segments, shapes=tuple(shapes), audio=tuple(audio), name="bench-commit")
     return write_scene(path, scene, width=64, height=36, fps=5, long=True, quality="low", sample_rate=24000)
 
@@ -206,10 +214,11 @@ def restart_mid_refinement(api: httpx.Client, proc: subprocess.Popen, data: Path
 def run(args) -> int:
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
-    film = Path(args.film) if args.film else work / f"film-{args.hours:g}h-64x36-5fps{'-bed' if args.bed else ''}.mp4"
+    floor = "" if args.floor_db is None else f"-floor{args.floor_db:g}"
+    film = Path(args.film) if args.film else work / f"film-{args.hours:g}h-64x36-5fps{'-bed' if args.bed else ''}{floor}.mp4"
     if not film.exists():
         print(f"writing {film} …", flush=True)
-        write_film(film, args.hours * 3600.0, bed=args.bed)
+        write_film(film, args.hours * 3600.0, bed=args.bed, floor_db=args.floor_db)
     proc, url = start_server(work / "data")
     try:
         api = httpx.Client(base_url=url, timeout=600)
