@@ -40,6 +40,7 @@ from autohaptics.temperature import ThermalParams
 
 TRACKS = ("vibration", "temperature", "fans")
 ANALYSIS_MODES = ("tick", "every")
+ACTIVE_AREAS = ("auto", "full")
 
 
 @dataclass(frozen=True)
@@ -67,6 +68,10 @@ class VideoParams(Record):
         successor for flow) and every tick of the group gets its values: the picture is read at
         10/s Hz instead of 10 Hz, and each tick's frame is at most s x 50 ms off its own centre.
         Audio features stay at 10 Hz. Only with ``analysis="tick"``.
+    active_area : "auto" (default): every stage reads only the active picture, the rectangle inside
+        constant black bars found from a few keyframes before the pass
+        (:func:`media.find_active_area`; recorded as ``stats["active_area"]``); a film without
+        bars is read whole. "full": the whole frame, bars included (the thesis's reading).
     """
 
     STAGE: ClassVar[str] = ANALYSIS
@@ -77,6 +82,7 @@ class VideoParams(Record):
     prefetch: int = param(8, 0, 256, unit="frames", whole=True)
     decode: str = param("nonref", choices=DECODE_MODES)
     stride: int = param(1, 1, 10, unit="ticks", whole=True)
+    active_area: str = param("auto", choices=ACTIVE_AREAS)
 
     def check(self) -> None:
         if self.stride > 1 and self.analysis != "tick":

@@ -4,6 +4,10 @@ only when a stage asks (converting every 1080p frame to RGB costs as much as dec
 For 8-bit planar YUV the planes are area-averaged in place by OpenCV and converted on the small
 proxy (BT.709 for BT.709-tagged frames, BT.601 otherwise, as FFmpeg's scaler does), within about 2
 grey levels of FFmpeg's scaled conversion of the full frame and about 3x cheaper.
+
+A frame may be cropped to a rectangle (the active picture inside black bars,
+:mod:`autohaptics.media.active`): its size, proxies and copies are then those of the rectangle,
+read as a view of the decoded planes (a letterboxed film's bars are never read).
 """
 
 from __future__ import annotations
@@ -18,14 +22,23 @@ _PLANAR_YUV8 = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj44
 class Frame:
     """One decoded picture. Valid only inside the iteration step that yielded it."""
 
-    __slots__ = ("_frame", "index", "time_s", "rotation", "width", "height", "_ready", "_luma_kept")
+    __slots__ = ("_frame", "index", "time_s", "rotation", "width", "height", "_crop", "_ready", "_luma_kept")
 
-    def __init__(self, frame: av.VideoFrame, index: int, time_s: float, rotation: int):
+    def __init__(self, frame: av.VideoFrame, index: int, time_s: float, rotation: int,
+                 crop: tuple[int, int, int, int] | None = None):
+        """crop : (x, y, width, height) px in display orientation, even: the frame is that
+        rectangle of the decoded picture (None, or a rectangle that does not fit inside it, as
+        after a change of size mid-stream: the whole picture)."""
         self._frame = frame
         self.index = index  # decoded frame number, 0-based
         self.time_s = time_s  # presentation time relative to the container start, seconds
         self.rotation = rotation
         self.width, self.height = (frame.height, frame.width) if rotation % 180 else (frame.width, frame.height)
+        self._crop = None  # (x, y, w, h) of the decoded (stored) picture, None: all of it
+        if crop is not None and tuple(crop) != (0, 0, self.width, self.height):
+            self._crop = _stored_rect(crop, rotation, frame.width, frame.height)
+            if self._crop is not None:
+                self.width, self.height = int(crop[2]), int(crop[3])
         self._ready: dict = {}  # planes made ahead by prepare(), each taken once
         self._luma_kept: tuple | None = None  # (w, h, luma plane as stored) of the last gray proxy read
 
@@ -70,8 +83,15 @@ class Frame:
             self._luma_kept = (width, height, planes[0])  # for rgb(): the plane is not read again
             return _luma_full_range(planes[0], self._frame)
         w, h = (height, width) if self.rotation % 180 else (width, height)
-        arr = self._frame.to_ndarray(width=max(1, w), height=max(1, h), format=fmt,
-                                     interpolation=interpolation)
+        if self._crop is not None:  # the whole picture converted, the rectangle taken and scaled
+            x, y, cw, ch = self._crop
+            arr = self._frame.to_ndarray(format=fmt)[y:y + ch, x:x + cw]
+            if (cw, ch) != (w, h):
+                arr = cv2.resize(arr, (max(1, w), max(1, h)),
+                                 interpolation=cv2.INTER_AREA if w <= cw and h <= ch else cv2.INTER_LINEAR)
+        else:
+            arr = self._frame.to_ndarray(width=max(1, w), height=max(1, h), format=fmt,
+                                         interpolation=interpolation)
         if self.rotation:
             arr = np.ascontiguousarray(np.rot90(arr, k=self.rotation // 90))
         return arr
@@ -161,6 +181,7 @@ class Frame:
             return None
         k = self.rotation // 90
         dw, dh = (height, width) if k % 2 else (width, height)  # target (w, h) before rotation
+        fw, fh = (self._crop[2], self._crop[3]) if self._crop is not None else (f.width, f.height)
         out = []
         for i in range(3 if colour else 1):
             if i == 0 and not luma:
@@ -169,6 +190,11 @@ class Frame:
             plane = f.planes[i]
             ph, pw = plane.height, plane.width
             arr = np.frombuffer(plane, np.uint8).reshape(-1, plane.line_size)[:ph, :pw]
+            if self._crop is not None:  # a view of the rectangle, at the plane's own sub-sampling
+                x, y, cw_, ch_ = self._crop
+                sx, sy = pw / f.width, ph / f.height
+                arr = arr[round(y * sy):round((y + ch_) * sy), round(x * sx):round((x + cw_) * sx)]
+                ph, pw = arr.shape
             if i == 0 and pw >= 4 * dw and ph >= 4 * dh:
                 # 4x or more: average 2 x 2 blocks first (cv2.pyrDown-like), then area-scale: half
                 # the memory traffic of one big area pass, the same proxy within a grey level
@@ -180,13 +206,26 @@ class Frame:
                     g = area_resize(arr, (gw_, gh_))
                     grid_out.append(np.ascontiguousarray(np.rot90(g, k=k)) if k else g)
             else:  # chroma: average at its own (sub-sampled) scale, then up to the luma size
-                cw = max(1, round(dw * pw / f.width))
-                ch = max(1, round(dh * ph / f.height))
+                cw = max(1, round(dw * pw / fw))
+                ch = max(1, round(dh * ph / fh))
                 small = _shrink(arr, (cw, ch))
                 if (cw, ch) != (dw, dh):
                     small = cv2.resize(small, (dw, dh), interpolation=cv2.INTER_LINEAR)
             out.append(np.ascontiguousarray(np.rot90(small, k=k)) if k else small)
         return out if colour else (out[0], None, None)
+
+
+def _stored_rect(rect, rotation: int, width: int, height: int) -> tuple[int, int, int, int] | None:
+    """A rectangle (x, y, w, h) in display orientation as the same rectangle of the decoded
+    picture (``width`` x ``height``), which display orientation rotates by ``rotation`` degrees
+    counter-clockwise (``np.rot90``); None when it does not fit inside."""
+    x, y, w, h = (int(v) for v in rect)
+    k = rotation // 90 % 4
+    sx, sy, sw, sh = [(x, y, w, h), (width - y - h, x, h, w), (width - x - w, height - y - h, w, h),
+                      (y, height - x - w, h, w)][k]
+    if min(sx, sy) < 0 or min(sw, sh) <= 0 or sx + sw > width or sy + sh > height:
+        return None
+    return sx, sy, sw, sh
 
 
 def _shrink(arr: np.ndarray, size: tuple[int, int]) -> np.ndarray:

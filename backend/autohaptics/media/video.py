@@ -23,7 +23,8 @@ SPARSE_MIN_FPS = 40.0
 
 def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefetch: int = 0,
                decode: str = "full", start_s: float = 0.0,
-               prepare: Callable[[Frame], None] | None = None) -> Iterator[Frame]:
+               prepare: Callable[[Frame], None] | None = None,
+               crop: tuple[int, int, int, int] | None = None) -> Iterator[Frame]:
     """Decode the video stream frame by frame (presentation order); nothing is converted here.
 
     decode : "full" decodes every frame exactly; "nonref" asks FFmpeg to skip non-reference
@@ -46,6 +47,8 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
         at least half the queue ahead of the caller (it has time to spare), e.g.
         :meth:`Frame.prepare`, so the work runs beside the caller's analysis; never when the
         caller waits for frames.
+    crop : (x, y, width, height) px in display orientation, even: each frame is that rectangle of
+        the picture (:class:`Frame`; e.g. the active picture of :func:`autohaptics.media.active.find_active_area`).
     Raises MediaError when there is no video stream or no frame decodes.
     """
     info = info or probe(path)
@@ -54,9 +57,10 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
     if decode not in DECODE_MODES:
         raise ParameterError(f"decode must be one of {DECODE_MODES}, got {decode!r}")
     if prefetch > 0:
-        yield from _prefetched(lambda: _iter_video(info, decode, start_s, beside=True), prefetch, prepare)
+        yield from _prefetched(lambda: _iter_video(info, decode, start_s, beside=True, crop=crop), prefetch,
+                               prepare)
     else:
-        yield from _iter_video(info, decode, start_s)
+        yield from _iter_video(info, decode, start_s, crop=crop)
 
 
 def decoder_threads(stream, decode: str, fps: float) -> int:
@@ -76,7 +80,8 @@ def decoder_threads(stream, decode: str, fps: float) -> int:
     return max(1, cores - 1)
 
 
-def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0, beside: bool = False) -> Iterator[Frame]:
+def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0, beside: bool = False,
+                crop: tuple[int, int, int, int] | None = None) -> Iterator[Frame]:
     """The frames of :func:`iter_video`. beside : decoded ahead of an analysis (:func:`decoder_threads`)."""
     report = AudioReport()
     n = 0
@@ -104,7 +109,7 @@ def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0, bes
             if t <= last_t:  # broken timestamps: keep frames ordered
                 t = last_t + 1.0 / max(info.video.fps, 1e-9)
             last_t = t
-            yield Frame(frame, n, t, norm_rotation(getattr(frame, "rotation", info.video.rotation)))
+            yield Frame(frame, n, t, norm_rotation(getattr(frame, "rotation", info.video.rotation)), crop)
             n += 1
     if n == 0:
         reason = f" ({report.first_error})" if report.first_error else ""

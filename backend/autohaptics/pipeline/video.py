@@ -14,7 +14,9 @@ weight where no object ever was). Results per tick (:class:`VideoAnalysis`):
 
 Skipping (``video.skip``): saliency where the audio intensity is zero (unless the mode needs every
 tick), flow on static pairs and across cuts, depth where the motion is below the airflow floor.
-Proxies are made only when a stage runs. A tick without a frame of its own (below 10 fps, or a later
+Proxies are made only when a stage runs, from the active picture (``video.active_area``: the
+rectangle inside black bars, found before the pass; ``stats["active_area"]``), so no stage reads
+the bars. A tick without a frame of its own (below 10 fps, or a later
 tick of a ``video.stride`` group) holds the values of the analysed tick before it.
 """
 
@@ -115,7 +117,7 @@ def video_pass(info: media.MediaInfo, n: int, *, params: GenerateParams, need_sa
     try:
         vp = _Pass(info, n, params, need_saliency, need_flow, need_colour, cancel=cancel)
         stream = media.iter_video(info.path, info=info, prefetch=params.video.prefetch, decode=params.video.decode,
-                                  prepare=vp.prepare)
+                                  prepare=vp.prepare, crop=vp.area)
         duration = max(info.duration_s, 1e-9)
         for frame, centre_tick in centre_frames(vp.timed(stream), n, int(params.video.stride)):
             vp.frame(frame, centre_tick)
@@ -134,9 +136,14 @@ class _Pass:
 
     def __init__(self, info: media.MediaInfo, n: int, params: GenerateParams, need_saliency: np.ndarray | LaterMask,
                  need_flow: bool, need_colour: bool, *, cancel: CancelToken | None = None):
+        t0 = time.perf_counter()
+        self.area = active_area(info, params)  # (x, y, w, h) px read of each frame; None: all of it
+        self.area_s = time.perf_counter() - t0
+        self.frame_size = tuple(int(v) for v in info.video.display_size) if info.video is not None else (0, 0)
         flow_params = params.flow
         if info.video is not None:  # the gray proxy's width follows the picture's (FlowParams.width_for)
-            flow_params = replace(flow_params, proxy_width=flow_params.width_for(info.video.display_size[0]))
+            width = self.area[2] if self.area is not None else info.video.display_size[0]
+            flow_params = replace(flow_params, proxy_width=flow_params.width_for(width))
         self.n, self.params, self.flow_params = n, params, flow_params
         self.need_flow, self.need_colour = need_flow, need_colour
         self.stages = {name: _Stage() for name in STAGES}
@@ -214,8 +221,7 @@ class _Pass:
         """The waiting flow pair's motion, now that its successor frame is here; or, when that frame
         repeats the pair's first one (a frame-rate conversion, pulldown), wait for the next frame
         (``flow.repeat_wait_s``; an analysed frame starts a pair of its own, so it never waits)."""
-        pk, pgray, prgb, psig, pt = self.pending
-        st = self.stages
+        (pk, pgray, prgb, psig, pt), st = self.pending, self.stages
         if not analysed and frame.time_s - pt < self.flow_params.repeat_wait_s and \
                 st["static"].run(is_static, pgray, gray, params=self.params.airflow):
             self.repeats += 1
@@ -312,6 +318,9 @@ class _Pass:
         out.stats["cuts"]["cuts"] = int(out.cut.sum())
         out.stats["frames"] = {"ticks_with_frame": int(out.frame_mask.sum()), "ticks": n,
                                "last_time_s": round(self.last_time, 6)}
+        rect = self.area if self.area is not None else (0, 0, *self.frame_size)
+        out.stats["active_area"] = {"rect": [int(v) for v in rect], "frame": list(self.frame_size),
+                                    "mode": self.params.video.active_area, "seconds": round(self.area_s, 4)}
         return out
 
 
@@ -336,7 +345,7 @@ def frame_weights(info: media.MediaInfo, n: int, ticks: np.ndarray, *, params: G
     for run in np.split(targets, breaks) if targets.size else []:
         first, last = int(run[0]), int(run[-1])
         stream = media.iter_video(info.path, info=info, decode=params.video.decode,
-                                  start_s=max(0.0, (first - vp.stride - 1) * TICK_S))
+                                  start_s=max(0.0, (first - vp.stride - 1) * TICK_S), crop=vp.area)
         try:
             for frame, k in centre_frames(stream, n, vp.stride):
                 if frame.time_s > (last + vp.stride + 2) * TICK_S:
@@ -348,6 +357,15 @@ def frame_weights(info: media.MediaInfo, n: int, ticks: np.ndarray, *, params: G
         finally:
             stream.close()
     return out
+
+
+def active_area(info: media.MediaInfo, params: GenerateParams) -> tuple[int, int, int, int] | None:
+    """The rectangle (x, y, w, h) px, display orientation, that the pass reads of each frame: the
+    active picture inside black bars (``video.active_area="auto"``; the whole frame where there are
+    none); None for the whole frame as decoded ("full", or no video)."""
+    if info.video is None or params.video.active_area == "full":
+        return None
+    return media.find_active_area(info)
 
 
 def centre_frames(frames, n: int, stride: int = 1):

@@ -5,7 +5,8 @@
 from autohaptics.testing.encode import CONTAINERS, STANDARD_LAYOUTS, sample_clip, write_scene
 from autohaptics.testing.render import iter_frames, render_audio, render_frame
 from autohaptics.testing.scenes import (Noise, Scene, Segment, Shape, Texture, Tone, left_boom_right_hum_scene,
-                                        sample_scene)
+                                        sample_scene, three_motions_scene)
 
 __all__ = ["CONTAINERS", "STANDARD_LAYOUTS", "Noise", "Scene", "Segment", "Shape", "Texture", "Tone", "iter_frames",
-           "left_boom_right_hum_scene", "render_audio", "render_frame", "sample_clip", "sample_scene", "write_scene"]
+           "left_boom_right_hum_scene", "render_audio", "render_frame", "sample_clip", "sample_scene",
+           "three_motions_scene", "write_scene"]

@@ -39,7 +39,8 @@ def write_scene(path: str | os.PathLike, scene: Scene, *, width: int = 320, heig
                 fps: float | Fraction = 24, video_codec: str | None = None,
                 audio_codec: str | None = None, sample_rate: int = 48000, channels: int = 2,
                 channel_layout: str | None = "auto", video: bool = True, audio: bool = True,
-                long: bool = False, quality: str = "high") -> Path:
+                long: bool = False, quality: str = "high",
+                picture: tuple[int, int, int, int] | None = None) -> Path:
     """Encode ``scene`` to ``path`` and return the path.
 
     The container comes from the suffix (.mp4 .mov .mkv .webm .avi; audio-only .wav .m4a).
@@ -51,6 +52,8 @@ def write_scene(path: str | os.PathLike, scene: Scene, *, width: int = 320, heig
     long : fastest encoder settings, for multi-hour files (memory is constant either way).
     quality : "high" (near-lossless, for analysis tests) or "low" (small files, quicker to write:
         x264 at crf 28, AAC with FFmpeg's fast coder at 32 kbit/s per channel).
+    picture : (x, y, w, h) px: the scene is rendered w x h and placed there in the width x height
+        frame, the rest black (RGB 0: letterbox, pillarbox or windowbox bars); default the whole frame.
 
     Raises ParameterError for impossible combinations (odd sizes with 4:2:0 codecs, Opus at a rate
     other than 8/12/16/24/48 kHz, AAC without a channel layout, no stream at all).
@@ -68,6 +71,10 @@ def write_scene(path: str | os.PathLike, scene: Scene, *, width: int = 320, heig
     if quality not in ("high", "low"):
         raise ParameterError(f"quality must be 'high' or 'low', got {quality!r}")
     rate = fps_fraction(fps)
+    if picture is not None:
+        px, py, pw, ph = (int(v) for v in picture)
+        if min(px, py) < 0 or min(pw, ph) < 1 or px + pw > width or py + ph > height:
+            raise ParameterError(f"{path}: picture {picture} does not fit in the {width}x{height} frame")
     if vcodec is not None:
         check_size(width, height)
         if width % 2 or height % 2:
@@ -85,7 +92,7 @@ def write_scene(path: str | os.PathLike, scene: Scene, *, width: int = 320, heig
             # about a third of that (0.44 instead of 1.22 s per minute of stereo)
             as_.codec_context.options = {"aac_coder": "fast"}
             as_.bit_rate = 32_000 * channels
-        _encode(out, scene, vs, as_, width, height, rate, sample_rate, channels, layout)
+        _encode(out, scene, vs, as_, width, height, rate, sample_rate, channels, layout, picture)
     return path
 
 
@@ -132,8 +139,9 @@ def _add_video_stream(out, codec: str, width: int, height: int, rate: Fraction, 
 
 
 def _encode(out, scene: Scene, vs, as_, width, height, rate: Fraction, sample_rate: int, channels: int,
-            layout: str | None) -> None:
-    """Interleave video frames and audio chunks in time order (the muxer's buffers stay small)."""
+            layout: str | None, picture: tuple[int, int, int, int] | None = None) -> None:
+    """Interleave video frames and audio chunks in time order (the muxer's buffers stay small);
+    ``picture`` as :func:`write_scene`."""
     arend = AudioRenderer(scene, sample_rate, channels) if as_ is not None else None
     total_a = int(round(scene.duration_s * sample_rate))
     chunk_a = max(1, int(_AUDIO_CHUNK_S * sample_rate))
@@ -153,9 +161,14 @@ def _encode(out, scene: Scene, vs, as_, width, height, rate: Fraction, sample_ra
                 out.mux(p)
 
     if vs is not None:
-        for i, (t, rgb) in enumerate(iter_frames(scene, width=width, height=height, fps=rate)):
+        px, py, pw, ph = picture if picture is not None else (0, 0, width, height)
+        canvas = np.zeros((height, width, 3), np.uint8)
+        for i, (t, rgb) in enumerate(iter_frames(scene, width=pw, height=ph, fps=rate)):
             if arend is not None:
                 audio_until(t + 1.0)
+            if picture is not None:
+                canvas[py:py + ph, px:px + pw] = rgb
+                rgb = canvas
             frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
             frame.pts = i
             frame.time_base = 1 / rate

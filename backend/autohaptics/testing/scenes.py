@@ -236,6 +236,29 @@ def left_boom_right_hum_scene() -> Scene:
     )
 
 
+def three_motions_scene() -> Scene:
+    """Three shots, each with its own motion (6 s; the invariance tests: re-encodes, black bars):
+
+    - 0-2 s a warm textured shot; 0.4-1.8 s a bright disc crossing the lower left;
+    - 2-4 s a cool one; 2.4-3.8 s an orange disc on the right rushing at the camera (growing);
+    - 4-6 s a grey one panning at 0.25 frame widths/s;
+    - a quiet 220 Hz tone (-30 dBFS) with three loud noise bursts at 1, 3 and 5 s.
+    """
+    def tex(seed: int) -> Texture:
+        return Texture("noise", 0.08, 0.35, seed=seed)
+
+    return Scene(6.0, name="three_motions",
+                 background=(Segment(0, 2.0, (150, 90, 60), texture=tex(1)),
+                             Segment(2.0, 4.0, (70, 110, 170), texture=tex(2)),
+                             Segment(4.0, 6.0, (120, 120, 120), texture=tex(3), pan=(0.25, 0.0))),
+                 shapes=(Shape("circle", (240, 230, 200), t_on=0.4, t_off=1.8, xy0=(0.1, 0.7), xy1=(0.5, 0.6),
+                               size0=(0.18, 0.3), texture=Texture("noise", 0.3, 0.5, seed=5)),
+                         Shape("circle", (235, 140, 40), t_on=2.4, t_off=3.8, xy0=(0.75, 0.45),
+                               size0=(0.08, 0.14), size1=(0.4, 0.7), texture=Texture("noise", 0.25, 0.5, seed=6))),
+                 audio=(Tone(0, 6, 220.0, level_dbfs=-30.0), Noise(1.0, 1.15, level_dbfs=-6.0, seed=1),
+                        Noise(3.0, 3.15, level_dbfs=-6.0, seed=2), Noise(5.0, 5.15, level_dbfs=-6.0, seed=3)))
+
+
 def check_interval(t0: float, t1: float, what: str) -> None:
     """ParameterError unless 0 <= t0 < t1, both finite (seconds of a ``what``)."""
     if not (math.isfinite(t0) and t0 >= 0 and t1 > t0):
