@@ -16,11 +16,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import av
 import cv2
 import numpy as np
 
 from autohaptics.media.frames import Frame
-from autohaptics.media.probe import AudioReport, MediaInfo, decode_tolerant, norm_rotation, open_container, stream_by_index
+from autohaptics.media.probe import MediaInfo, norm_rotation, open_container, stream_by_index
 
 Rect = tuple[int, int, int, int]  # (x, y, width, height) px in display orientation
 
@@ -76,8 +77,9 @@ def sample_lumas(info: MediaInfo, samples: int = SAMPLES) -> list[np.ndarray]:
     """The full-range luma (uint8 [shape=(height, width)], display orientation) of up to
     ``samples`` keyframes spread evenly over the film: at each of the times (i + 0.5) / samples
     of the duration, the keyframe at or before it, or the first keyframe after it not sampled yet
-    (before the next time). Only keyframes are decoded (a seek and one picture each), so a film
-    with fewer keyframes than ``samples`` (a clip of a few seconds) gives fewer samples."""
+    (before the next time). Only those keyframes are decoded (a seek, reading packets, one
+    picture each), so a film with fewer keyframes than ``samples`` (a clip of a few seconds)
+    gives fewer samples; a keyframe that fails to decode is passed over."""
     if info.video is None:
         return []
     n = max(1, int(samples))
@@ -86,20 +88,39 @@ def sample_lumas(info: MediaInfo, samples: int = SAMPLES) -> list[np.ndarray]:
     seen: set = set()
     with open_container(info.path) as c:
         stream = stream_by_index(c, info.video.index)
-        stream.codec_context.skip_frame = "NONKEY"
+        stream.thread_type = "SLICE"  # no frame threads: a keyframe's picture comes out of its own packet
+        base = stream.time_base or 0
         for i in range(n):
-            if stream.time_base:
-                c.seek(int((times[i] + info.start_s) / stream.time_base), backward=True, any_frame=False,
-                       stream=stream)
-            for frame in decode_tolerant(c, stream, AudioReport(), info.path):
-                if frame.time is not None and frame.time - info.start_s >= times[i + 1]:
-                    break  # the next time's own keyframe
-                if frame.pts not in seen:
-                    seen.add(frame.pts)
-                    rotation = norm_rotation(getattr(frame, "rotation", info.video.rotation))
-                    out.append(Frame(frame, i, times[i], rotation).full(fmt="gray"))
-                    break
+            if base:
+                c.seek(int((times[i] + info.start_s) / base), backward=True, any_frame=False, stream=stream)
+            frame = _next_keyframe(c, stream, seen, (times[i + 1] + info.start_s) / base if base else math.inf)
+            if frame is not None:
+                rotation = norm_rotation(getattr(frame, "rotation", info.video.rotation))
+                out.append(Frame(frame, i, times[i], rotation).luma())
     return out
+
+
+def _next_keyframe(c, stream, seen: set, before_pts: float):
+    """The picture of the first keyframe packet read from ``c`` (after a seek) whose timestamp is
+    not in ``seen`` (then added) and is below ``before_pts``; None when there is none."""
+    try:
+        for pkt in c.demux(stream):
+            if pkt.pts is None:
+                if pkt.size == 0:
+                    return None  # the end
+                continue
+            if pkt.pts >= before_pts:
+                return None
+            if not pkt.is_keyframe or pkt.pts in seen:
+                continue
+            seen.add(pkt.pts)
+            frames = list(stream.codec_context.decode(pkt)) + list(stream.codec_context.decode(None))
+            stream.codec_context.flush_buffers()
+            if frames:
+                return frames[0]
+    except av.error.FFmpegError:
+        stream.codec_context.flush_buffers()
+    return None
 
 
 def find_active_area(info: MediaInfo, samples: int = SAMPLES) -> Rect:
