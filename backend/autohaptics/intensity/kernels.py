@@ -51,6 +51,14 @@ def _flush(v):
 
 
 @numba.njit(**_JIT)
+def _flush_sections(zi):
+    # _flush on every state of a cascade, zi [shape=(n_sections, 2)] (in place)
+    for s in range(zi.shape[0]):
+        zi[s, 0] = _flush(zi[s, 0])
+        zi[s, 1] = _flush(zi[s, 1])
+
+
+@numba.njit(**_JIT)
 def bank_square_smooth(x, sos, gain, smooth_a, zi_sos, zi_smooth, first_out, step, out):
     """Band-pass, square and smooth ``x`` for every band of one filter-bank group.
 
@@ -131,9 +139,7 @@ def sos_decimate(x, sos, zi, first_out, step, out):
             zi[s, 1] = sos[s, 2] * v - sos[s, 5] * w
             v = w
         if i == nxt:
-            for s in range(n_sec):
-                zi[s, 0] = _flush(zi[s, 0])
-                zi[s, 1] = _flush(zi[s, 1])
+            _flush_sections(zi)
             out[k] = v
             k += 1
             nxt += step
@@ -380,9 +386,7 @@ def bank_mean_square(x, sos, gain, skip, out):
                 zi[s, 1] = sos[b, s, 2] * v - sos[b, s, 5] * w
                 v = w
             if i % 24 == 0:
-                for s in range(n_sec):
-                    zi[s, 0] = _flush(zi[s, 0])
-                    zi[s, 1] = _flush(zi[s, 1])
+                _flush_sections(zi)
             if i >= skip:
                 v = gain[b] * v
                 acc += v * v
