@@ -7,6 +7,10 @@ before t (25 -> 30 fps repeats every fifth frame); ``"pulldown"`` is 2:3 telecin
 fps with interlaced fields, as NTSC video carries film: of every four film frames A B C D come
 five frames A B (B top + C bottom) (C top + D bottom) D, the two mixed frames combed where
 something moves.
+
+:func:`screener` makes the small, low-quality encode a screener or a streaming service's lowest rung
+carries (VP9 crf 32 realtime at 240p, or H.264 crf 32 at 360p; 30 fps; stereo): its block noise is
+what the fans must not follow.
 """
 
 from __future__ import annotations
@@ -23,14 +27,25 @@ from autohaptics.media import probe
 from autohaptics.testing.encode import CONTAINERS, media_output
 from autohaptics.testing.scenes import check_size, fps_fraction
 
-CONVERSIONS = ("repeat", "pulldown")
+CONVERSIONS = ("repeat", "pulldown", "vfr")
+FITS = ("stretch", "pad", "fill")
+PIXEL_FORMATS = ("yuv420p", "yuv420p10le")
+_VFR_STEPS = (1, 1, 2, 1, 1, 1, 2, 1, 3, 1, 1, 2)  # source frames from one kept frame to the next
+_VFR_TIME_BASE = Fraction(1, 1000)
 _PULLDOWN = ((0, 0), (1, 1), (1, 2), (2, 3), (3, 3))  # (top field's film frame, bottom field's) per output frame
+# codec -> (container suffix, video codec, audio codec, default height px, encoder options besides crf)
+SCREENERS: dict[str, tuple[str, str, str, int, dict[str, str]]] = {
+    "vp9": (".webm", "libvpx-vp9", "libopus", 240, {"deadline": "realtime", "cpu-used": "8", "b": "0"}),
+    "h264": (".mp4", "libx264", "aac", 360, {"preset": "veryfast"}),
+}
 
 
 def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | None = None, height: int | None = None,
              fps: float | Fraction | None = None, conversion: str = "repeat", video_codec: str | None = None,
              audio_codec: str | None = None, video_bit_rate: int | None = None,
-             audio_bit_rate: int | None = None, video_options: dict[str, str] | None = None) -> Path:
+             audio_bit_rate: int | None = None, video_options: dict[str, str] | None = None,
+             audio_layout: str | None = None, fit: str = "stretch", pix_fmt: str = "yuv420p",
+             start_s: float = 0.0, duration_s: float | None = None) -> Path:
     """Re-encode ``src`` into ``dst`` (container from the suffix, codecs default per container as in
     :func:`~autohaptics.testing.encode.write_scene`) and return ``dst``.
 
@@ -38,6 +53,12 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     (default the source's); conversion : "repeat" or "pulldown" (module docstring; "pulldown" needs
     a 24 fps source and 30 fps out). video_bit_rate, audio_bit_rate : bit/s (default: the encoder's).
     video_options : the video encoder's own options (e.g. ``{"bf": "0"}``: no B-frames).
+    audio_layout : the output's channel layout (e.g. "stereo": FFmpeg's downmix; default the source's).
+    video_codec "copy" : the video packets as they are (only the sound changes; no other video option).
+    fit : how the picture meets ``width`` x ``height``: "stretch" (scaled to it), "pad" (scaled to fit
+    inside, centred on black: letterbox, pillarbox or windowbox) or "fill" (scaled to cover, the
+    overhang cropped evenly). pix_fmt : "yuv420p" or "yuv420p10le" (10-bit).
+    start_s, duration_s : the stretch of ``src`` kept, s (a reel cut mid-film; default all of it).
     The audio is decoded and encoded again (resampled to 48 kHz for Opus).
     """
     info = probe(src)
@@ -50,6 +71,11 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
                              f"{sorted(k for k, v in CONTAINERS.items() if v[1])}")
     if conversion not in CONVERSIONS:
         raise ParameterError(f"conversion must be one of {CONVERSIONS}, got {conversion!r}")
+    if fit not in FITS or pix_fmt not in PIXEL_FORMATS:
+        raise ParameterError(f"fit must be one of {FITS} and pix_fmt one of {PIXEL_FORMATS}, got {fit!r}, {pix_fmt!r}")
+    end_s = None if duration_s is None else float(start_s) + float(duration_s)
+    if not (float(start_s) >= 0 and (end_s is None or end_s > start_s)):
+        raise ParameterError(f"the kept stretch needs start_s >= 0 and duration_s > 0, got {start_s!r}, {duration_s!r}")
     fmt, v_default, a_default = CONTAINERS[suffix]
     w = int(width or info.video.display_size[0])
     h = int(height or info.video.display_size[1])
@@ -60,37 +86,130 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     rate = fps_fraction(fps) if fps is not None else src_rate
     if conversion == "pulldown" and (round(float(src_rate), 2) != 24 or round(float(rate), 2) != 30):
         raise ParameterError(f"3:2 pulldown turns 24 fps into 30 fps, got {float(src_rate):g} -> {float(rate):g}")
+    if video_codec == "copy":
+        return _copy_video(src, dst, fmt, audio_codec or a_default, audio_bit_rate, audio_layout, info)
     with media_output(dst, f"to re-encode {src}") as tmp:
         with av.open(str(src)) as inp, av.open(str(tmp), mode="w", format=fmt) as out:
             vs = out.add_stream(video_codec or v_default, rate=rate)
-            vs.width, vs.height, vs.pix_fmt = w, h, "yuv420p"
+            vs.width, vs.height, vs.pix_fmt = w, h, pix_fmt
+            if conversion == "vfr":
+                vs.codec_context.time_base = _VFR_TIME_BASE
             if video_bit_rate:
                 vs.bit_rate = int(video_bit_rate)
             if video_options:
                 vs.options = dict(video_options)
-            audio = _audio_stream(inp, out, audio_codec or a_default, audio_bit_rate) if info.audio else None
-            frames = _source_frames(inp.streams.video[0], w, h)
-            for i, rgb in enumerate(_pulldown(frames) if conversion == "pulldown" else _repeat(frames, rate)):
+            audio = _audio_stream(inp, out, audio_codec or a_default, audio_bit_rate, audio_layout) if info.audio else None
+            frames = _source_frames(inp.streams.video[0], w, h, fit=fit, start_s=float(start_s), end_s=end_s)
+            if conversion == "vfr":
+                timed = (((int(round(t / _VFR_TIME_BASE)), _VFR_TIME_BASE), rgb) for t, rgb in _vfr(frames))
+            else:
+                shown = _pulldown(frames) if conversion == "pulldown" else _repeat(frames, rate)
+                timed = (((i, 1 / rate), rgb) for i, rgb in enumerate(shown))
+            for (pts, time_base), rgb in timed:
                 frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
-                frame.pts, frame.time_base = i, 1 / rate
+                if pix_fmt != "yuv420p":
+                    frame = frame.reformat(format=pix_fmt)
+                frame.pts, frame.time_base = pts, time_base
                 for p in vs.encode(frame):
                     out.mux(p)
             for p in vs.encode(None):
                 out.mux(p)
             if audio is not None:
                 with av.open(str(src)) as again:
+                    _copy_audio(again.streams.audio[0], out, *audio, start_s=float(start_s), end_s=end_s)
+    return dst
+
+
+def _copy_video(src, dst: Path, fmt: str, audio_codec: str, audio_bit_rate: int | None, audio_layout: str | None,
+                info) -> Path:
+    """``src``'s video packets copied into ``dst``, its sound decoded and encoded again."""
+    with media_output(dst, f"to re-encode the sound of {src}") as tmp:
+        with av.open(str(src)) as inp, av.open(str(tmp), mode="w", format=fmt) as out:
+            v_in = inp.streams.video[0]
+            v_out = out.add_stream_from_template(v_in)
+            audio = _audio_stream(inp, out, audio_codec, audio_bit_rate, audio_layout) if info.audio else None
+            for packet in inp.demux(v_in):
+                if packet.dts is None:
+                    continue
+                packet.stream = v_out
+                out.mux(packet)
+            if audio is not None:
+                with av.open(str(src)) as again:
                     _copy_audio(again.streams.audio[0], out, *audio)
     return dst
 
 
-def _source_frames(stream, width: int, height: int):
-    """(time_s, rgb uint8 [shape=(height, width, 3)]) of every decoded source frame, in order."""
+def screener(src: str | os.PathLike, dst: str | os.PathLike, *, codec: str = "vp9", height: int | None = None,
+             crf: int = 32, fps: float = 30) -> Path:
+    """Re-encode ``src`` into ``dst`` as a screener: small, 30 fps by repeated frames, stereo, and
+    coded at constant quality ``crf`` (32 and up: visible block noise). Returns ``dst``.
+
+    codec : "vp9" (``dst`` .webm: libvpx-vp9, deadline realtime, cpu-used 8, no bit-rate cap;
+    Opus) or "h264" (``dst`` .mp4: libx264 veryfast; AAC). height : px, default 240 (vp9) or 360
+    (h264); the width keeps the source's aspect, rounded down to even (854x480 -> 426x240, 640x360).
+    """
+    if codec not in SCREENERS:
+        raise ParameterError(f"screener codec must be one of {sorted(SCREENERS)}, got {codec!r}")
+    suffix, vcodec, acodec, default_h, options = SCREENERS[codec]
+    if Path(dst).suffix.lower() != suffix:
+        raise ParameterError(f"{dst}: a {codec} screener is written as {suffix}")
+    if not (0 <= int(crf) <= 63):
+        raise ParameterError(f"crf must lie in 0..63, got {crf!r}")
+    info = probe(src)
+    if info.video is None:
+        raise ParameterError(f"{src}: no video stream to re-encode")
+    h = int(height or default_h)
+    sw, sh = info.video.display_size
+    w = int(h * sw / sh) // 2 * 2
+    return reencode(src, dst, width=w, height=h, fps=fps, video_codec=vcodec, audio_codec=acodec,
+                    video_options={**options, "crf": str(int(crf))}, audio_layout="stereo")
+
+
+def _source_frames(stream, width: int, height: int, *, fit: str = "stretch", start_s: float = 0.0,
+                   end_s: float | None = None):
+    """(time_s from ``start_s``, rgb uint8 [shape=(height, width, 3)]) of every decoded source frame
+    shown from ``start_s`` to ``end_s``, in order, fitted as :func:`reencode`'s ``fit`` says."""
     stream.thread_type = "AUTO"
     container = stream.container
-    start = float(stream.start_time * stream.time_base) if stream.start_time is not None else 0.0
+    origin = float(stream.start_time * stream.time_base) if stream.start_time is not None else 0.0
+    held = None  # the last frame before start_s: on screen at the cut
     for frame in container.decode(stream):
-        t = float(frame.time) - start if frame.time is not None else 0.0
-        yield t, frame.to_ndarray(width=width, height=height, format="rgb24", interpolation="AREA")
+        t = (float(frame.time) - origin if frame.time is not None else 0.0) - start_s
+        if end_s is not None and t >= end_s - start_s - 1e-6:
+            break
+        if t < -1e-6:
+            held = frame
+            continue
+        if held is not None and t > 1e-6:
+            yield 0.0, _fitted(held, width, height, fit)
+        held = None
+        yield t, _fitted(frame, width, height, fit)
+
+
+def _fitted(frame: av.VideoFrame, width: int, height: int, fit: str) -> np.ndarray:
+    """``frame`` as rgb uint8 [shape=(height, width, 3)]: stretched, padded on black, or cropped to fill."""
+    if fit == "stretch":
+        return frame.to_ndarray(width=width, height=height, format="rgb24", interpolation="AREA")
+    scale = (min if fit == "pad" else max)(width / frame.width, height / frame.height)
+    w = max(2, int(round(frame.width * scale / 2)) * 2)
+    h = max(2, int(round(frame.height * scale / 2)) * 2)
+    rgb = frame.to_ndarray(width=w, height=h, format="rgb24", interpolation="AREA")
+    out = np.zeros((height, width, 3), np.uint8)
+    top, left = (height - h) // 2, (width - w) // 2
+    src = rgb[max(0, -top):max(0, -top) + min(h, height), max(0, -left):max(0, -left) + min(w, width)]
+    out[max(0, top):max(0, top) + src.shape[0], max(0, left):max(0, left) + src.shape[1]] = src
+    return out
+
+
+def _vfr(frames):
+    """A variable frame rate: source frames kept at their own times, 1, 2 or 3 source frames apart
+    in a fixed irregular pattern (a phone's or a screen recording's stream)."""
+    nxt, k = 0, 0
+    for i, (t, rgb) in enumerate(frames):
+        if i == nxt:
+            yield t, rgb
+            nxt += _VFR_STEPS[k % len(_VFR_STEPS)]
+            k += 1
 
 
 def _repeat(frames, rate: Fraction):
@@ -120,20 +239,33 @@ def _pulldown(frames):
     yield from group  # a short last group as it is
 
 
-def _audio_stream(inp, out, codec: str, bit_rate: int | None):
-    """The output audio stream for ``inp``'s first audio stream, and the resampler that feeds it."""
+def _audio_stream(inp, out, codec: str, bit_rate: int | None, layout: str | None):
+    """The output audio stream for ``inp``'s first audio stream (in ``layout``, default its own),
+    and the resampler that feeds it."""
     a_in = inp.streams.audio[0]
     rate = 48000 if codec == "libopus" else a_in.codec_context.sample_rate
-    layout = a_in.codec_context.layout.name
+    layout = layout or a_in.codec_context.layout.name
     a_out = out.add_stream(codec, rate=rate, layout=layout)
     if bit_rate:
         a_out.bit_rate = int(bit_rate)
     return a_out, av.AudioResampler(format=a_out.codec_context.format.name, layout=layout, rate=rate)
 
 
-def _copy_audio(a_in, out, a_out, resampler) -> None:
-    """Decode the audio stream ``a_in`` and encode it into ``a_out`` of ``out``."""
+def _copy_audio(a_in, out, a_out, resampler, *, start_s: float = 0.0, end_s: float | None = None) -> None:
+    """Decode the audio stream ``a_in`` and encode its samples from ``start_s`` to ``end_s`` into
+    ``a_out`` of ``out``."""
+    origin = float(a_in.start_time * a_in.time_base) if a_in.start_time is not None else 0.0
     for frame in a_in.container.decode(a_in):
+        t0 = (float(frame.time) - origin) if frame.time is not None else 0.0
+        rate = frame.sample_rate
+        first = max(0, int(round((start_s - t0) * rate)))
+        last = frame.samples if end_s is None else min(frame.samples, int(round((end_s - t0) * rate)))
+        if last <= first:
+            if end_s is not None and t0 >= end_s:
+                break
+            continue
+        if first > 0 or last < frame.samples:
+            frame = _trimmed(frame, first, last)
         frame.pts = None
         for r in resampler.resample(frame):
             for p in a_out.encode(r):
@@ -143,3 +275,12 @@ def _copy_audio(a_in, out, a_out, resampler) -> None:
             out.mux(p)
     for p in a_out.encode(None):
         out.mux(p)
+
+
+def _trimmed(frame: av.AudioFrame, first: int, last: int) -> av.AudioFrame:
+    """Samples ``first:last`` of ``frame`` as a new frame of the same format, layout and rate."""
+    x = frame.to_ndarray()
+    x = x[:, first:last] if frame.format.is_planar else x[:, first * len(frame.layout.channels):last * len(frame.layout.channels)]
+    out = av.AudioFrame.from_ndarray(np.ascontiguousarray(x), format=frame.format.name, layout=frame.layout.name)
+    out.sample_rate = frame.sample_rate
+    return out

@@ -259,6 +259,45 @@ def three_motions_scene() -> Scene:
                         Noise(3.0, 3.15, level_dbfs=-6.0, seed=2), Noise(5.0, 5.15, level_dbfs=-6.0, seed=3)))
 
 
+def material_scene(duration_s: float = 24.0) -> Scene:
+    """A film-like scene for the material matrix (``bench matrix``; 24 s, 6 s shots cycling):
+
+    - a sustained score throughout (a C major chord, about -20 dBFS), so a file cut anywhere starts
+      mid-score, and a loud impact every 3 s from 2.3 s (:data:`MATERIAL_IMPACTS_S`): the only events;
+    - shots in turn: a disc crossing the lower left (warm), a disc rushing at the camera on the right
+      (cool), a panning textured background (grey), a dark shot with a bright disc on the left:
+      motion for the fans, colour for the temperature, a bright spot for the saliency.
+    """
+    from autohaptics.testing import sounds
+
+    d = float(duration_s)
+    looks = (((150, 90, 60), (0.0, 0.0)), ((70, 110, 170), (0.0, 0.0)), ((120, 120, 120), (0.25, 0.0)),
+             ((40, 40, 50), (0.0, 0.0)))
+    audio: list[Tone | Noise] = [Tone(0.0, d, f, level_dbfs=-26.0, ramp_s=0.05) for f in (130.81, 261.63, 329.63, 392.0)]
+    audio += [e for k, t in enumerate(MATERIAL_IMPACTS_S) if t + sounds.IMPACT_LENGTH_S < d
+              for e in sounds.impact(t, level_dbfs=-8.0 - 2.0 * (k % 3), seed=k + 1)]
+    background, shapes = [], []
+    t, k = 0.0, 0
+    while t < d - 1e-9:
+        end = min(t + 6.0, d)
+        rgb, pan = looks[k % 4]
+        background.append(Segment(t, end, rgb, texture=Texture("noise", 0.08, 0.35, seed=k + 1), pan=pan))
+        on, off = t + 0.4, min(t + 5.2, end)
+        if k % 4 == 0 and off > on:
+            shapes.append(Shape("circle", (240, 230, 200), t_on=on, t_off=off, xy0=(0.1, 0.7), xy1=(0.55, 0.6),
+                                size0=(0.18, 0.3), texture=Texture("noise", 0.3, 0.5, seed=40 + k)))
+        elif k % 4 == 1 and off > on:
+            shapes.append(Shape("circle", (235, 140, 40), t_on=on, t_off=off, xy0=(0.75, 0.45), size0=(0.06, 0.1),
+                                size1=(0.4, 0.7), texture=Texture("noise", 0.25, 0.5, seed=40 + k)))
+        elif k % 4 == 3 and off > on:
+            shapes.append(Shape("circle", (255, 250, 235), t_on=on, t_off=off, xy0=(0.25, 0.5), size0=(0.15, 0.27)))
+        t, k = end, k + 1
+    return Scene(duration_s=d, background=tuple(background), shapes=tuple(shapes), audio=tuple(audio), name="material")
+
+
+MATERIAL_IMPACTS_S = tuple(2.3 + 3.0 * k for k in range(40))
+
+
 def check_interval(t0: float, t1: float, what: str) -> None:
     """ParameterError unless 0 <= t0 < t1, both finite (seconds of a ``what``)."""
     if not (math.isfinite(t0) and t0 >= 0 and t1 > t0):

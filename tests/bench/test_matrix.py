@@ -1,0 +1,76 @@
+"""The material matrix (``bench matrix``): every row of :data:`VARIANTS` on a film-like scene the
+tests write (``testing.scenes.material_scene``) meets the issue-31 targets against the clean
+variant, the digital-silence pair agrees with its noise-floor twin, and the matrix's own rules
+(the cut's reference, what counts as a jolt) say what they should."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from autohaptics import pipeline
+from autohaptics import testing as synth
+from autohaptics.bench.matrix import (JOLT_MAX, TARGETS, VARIANTS, cut_analysis, misses, row_figures, silence_pair,
+                                      variant_file)
+from autohaptics.testing.scenes import material_scene
+
+
+def test_misses_names_each_target_missed_and_a_jolt_only_where_the_film_is_still():
+    good = {"onset_f1": 0.95, "fan_ticks_f1": 1.0, "fan_iou_tolerant": 0.9, "temperature_mae_c": 0.1}
+    assert misses(good) == []
+    for key, (op, bound) in TARGETS.items():
+        bad = {**good, key: bound - 0.01 if op == ">=" else bound + 0.01}
+        assert len(misses(bad)) == 1 and key in misses(bad)[0]
+    assert misses({**good, "jolt": JOLT_MAX + 0.1, "film_there": 0.0})  # a jolt where the film is still
+    assert not misses({**good, "jolt": 0.9, "film_there": 0.8})  # the film itself hits there
+    assert not misses({**good, "jolt": JOLT_MAX, "film_there": 0.0})
+
+
+@pytest.fixture(scope="module")
+def scene_file(tmp_path_factory):
+    return synth.write_scene(tmp_path_factory.mktemp("matrix") / "material.mp4", material_scene(),
+                             width=640, height=360, fps=25)
+
+
+@pytest.fixture(scope="module")
+def clean(scene_file):
+    return pipeline.analyse(scene_file)
+
+
+def test_a_cut_of_the_analysis_is_the_film_from_there(clean):
+    cut = cut_analysis(clean, 7.3, 60)
+    assert cut.n_ticks == 60 and cut.info["duration_s"] == pytest.approx(6.0)
+    np.testing.assert_array_equal(cut.audio["loudness"], clean.audio["loudness"][73 * 5:133 * 5])
+    np.testing.assert_array_equal(cut.video.cell_motion, clean.video.cell_motion[73:133])
+    assert cut_analysis(clean, 22.0, 1000).n_ticks == clean.n_ticks - 220  # no further than the film
+    tl = pipeline.derive(cut)
+    assert tl.n_ticks == 60
+
+
+def test_the_scene_has_what_each_row_is_judged_on(clean):
+    """Fans, temperature and vibration all move, so no row passes by having nothing to compare."""
+    tl = pipeline.derive(clean)
+    assert (tl.fans > 0).any(axis=(1, 2)).sum() >= 40
+    assert np.ptp(tl.temperature_c) >= 2.0
+    chair = tl.vibration.max(axis=1)
+    assert 0.05 <= (chair > 0).mean() <= 0.5
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("variant", VARIANTS, ids=[v.slug for v in VARIANTS])
+def test_every_row_of_the_matrix_meets_the_targets(variant, scene_file, clean, tmp_path_factory):
+    whole = pipeline.derive(clean)
+    path = variant_file(scene_file, variant, tmp_path_factory.getbasetemp() / "variants")
+    test = pipeline.generate(path)
+    ref = pipeline.derive(cut_analysis(clean, variant.start_s, test.n_ticks)) if variant.start_s else whole
+    fig = row_figures(ref, test, variant, film=whole)
+    assert misses(fig) == [], fig
+
+
+@pytest.mark.slow
+def test_digital_silence_gives_what_its_noise_floor_twin_gives(tmp_path):
+    silent, floor = silence_pair(tmp_path, duration_s=40.0)
+    a, b = pipeline.generate(floor), pipeline.generate(silent)
+    assert (a.vibration > 0).any()
+    fig = row_figures(a, b, VARIANTS[0])
+    assert fig["onset_f1"] >= 0.9 and fig["vibration_mae"] <= 0.01, fig

@@ -1,0 +1,95 @@
+"""Re-encodes as the material matrix needs them: bars (pad), crop (fill), 10 bits, a variable frame
+rate, a stretch cut out of a film, and the sound alone mixed again with the picture's packets kept."""
+
+from __future__ import annotations
+
+import av
+import numpy as np
+import pytest
+
+from autohaptics import testing as synth
+from autohaptics.errors import ParameterError
+from autohaptics.media import probe
+from autohaptics.media.audio import read_audio
+from autohaptics.testing import Scene, Segment, Shape, Tone
+from autohaptics.testing.reencode import reencode
+
+# a bright frame-filling picture with a marker disc, and a tone that starts at 1 s
+SCENE = Scene(3.0, background=(Segment(0, 3.0, (200, 180, 160)),),
+              shapes=(Shape("circle", (20, 20, 200), t_on=0, t_off=3.0, xy0=(0.5, 0.5), size0=(0.2, 0.35)),),
+              audio=(Tone(1.0, 3.0, 440.0, level_dbfs=-12.0),))
+
+
+@pytest.fixture(scope="module")
+def src(tmp_path_factory):
+    return synth.write_scene(tmp_path_factory.mktemp("re") / "src.mp4", SCENE, width=320, height=180, fps=25)
+
+
+def _frame(path, index: int = 10) -> np.ndarray:
+    with av.open(str(path)) as c:
+        for i, f in enumerate(c.decode(c.streams.video[0])):
+            if i == index:
+                return f.to_ndarray(format="rgb24").astype(int)
+    raise AssertionError("too few frames")
+
+
+@pytest.mark.parametrize("size, bars", [((320, 240), "rows"), ((426, 180), "cols")])
+def test_pad_centres_the_whole_picture_on_black_bars(src, tmp_path, size, bars):
+    out = reencode(src, tmp_path / "pad.mp4", width=size[0], height=size[1], fit="pad")
+    img = _frame(out)
+    assert img.shape[:2] == (size[1], size[0])
+    rows_black = img.max(axis=(1, 2)) < 24
+    cols_black = img.max(axis=(0, 2)) < 24
+    lines, across = (rows_black, cols_black) if bars == "rows" else (cols_black, rows_black)
+    assert lines[:26].all() and lines[-26:].all() and not lines[lines.size // 2] and not across.any()
+    # the marker disc stays round and centred: as wide as it is tall, in pixels
+    blue = (img[..., 2] > 150) & (img[..., 0] < 90)
+    ys, xs = np.nonzero(blue)
+    assert abs((xs.max() - xs.min()) - (ys.max() - ys.min())) <= 4
+    assert abs(xs.mean() - size[0] / 2) <= 3 and abs(ys.mean() - size[1] / 2) <= 3
+
+
+def test_fill_crops_the_overhang_and_leaves_no_bar(src, tmp_path):
+    img = _frame(reencode(src, tmp_path / "fill.mp4", width=240, height=180, fit="fill"))
+    assert img.shape[:2] == (180, 240) and img.max(axis=(1, 2)).min() > 100 and img.max(axis=(0, 2)).min() > 100
+
+
+def test_ten_bits(src, tmp_path):
+    out = reencode(src, tmp_path / "ten.mp4", pix_fmt="yuv420p10le")
+    with av.open(str(out)) as c:
+        assert c.streams.video[0].codec_context.pix_fmt == "yuv420p10le"
+    assert np.abs(_frame(out) - _frame(src)).mean() < 3
+
+
+def test_variable_frame_rate_keeps_each_frame_at_its_own_time(src, tmp_path):
+    out = reencode(src, tmp_path / "vfr.mp4", conversion="vfr")
+    with av.open(str(out)) as c:
+        times = np.array([float(f.time) for f in c.decode(c.streams.video[0])])
+    steps = np.round(np.diff(times) * 25).astype(int)
+    assert set(steps) == {1, 2, 3}  # 1, 2 and 3 source frames apart, never evenly
+    assert times[-1] == pytest.approx(3.0 - 0.04, abs=0.13)
+
+
+def test_a_cut_keeps_the_stretch_asked_for(src, tmp_path):
+    out = reencode(src, tmp_path / "cut.mp4", start_s=0.6, duration_s=1.8)
+    info = probe(out)
+    assert info.duration_s == pytest.approx(1.8, abs=0.1)
+    got = read_audio(out)
+    onset = int(np.argmax(np.abs(got) > 0.05)) / 48000
+    assert onset == pytest.approx(1.0 - 0.6, abs=0.03)  # the tone at 1 s of the film, 0.4 s into the cut
+
+
+def test_copy_keeps_the_picture_packets_and_mixes_the_sound_again(src, tmp_path):
+    out = reencode(src, tmp_path / "six.mkv", video_codec="copy", audio_layout="5.1", audio_bit_rate=384_000)
+    assert probe(out).audio.channels == 6
+    with av.open(str(src)) as a, av.open(str(out)) as b:
+        pa = [bytes(p) for p in a.demux(a.streams.video[0]) if p.size]
+        pb = [bytes(p) for p in b.demux(b.streams.video[0]) if p.size]
+    assert pa == pb
+
+
+def test_bad_options_are_refused(src, tmp_path):
+    with pytest.raises(ParameterError, match="fit"):
+        reencode(src, tmp_path / "x.mp4", fit="zoom")
+    with pytest.raises(ParameterError, match="start_s"):
+        reencode(src, tmp_path / "x.mp4", start_s=1.0, duration_s=0.0)
