@@ -178,3 +178,24 @@ def test_rgb_proxy_is_close_to_ffmpegs_scaled_conversion():
     w, h = ours.shape[1], ours.shape[0]
     ffmpeg = frame._frame.to_ndarray(width=w, height=h, format="rgb24", interpolation="AREA").astype(np.int16)
     assert float(np.abs(ours - ffmpeg).mean()) < 2.5  # 1.5 measured (area averaging before the conversion, not after)
+
+
+@pytest.mark.parametrize("colorspace, color_range", [(1, 1), (0, 1), (1, 2), (0, 2)])  # BT.709/601, limited/full
+def test_rgb_conversion_is_the_float32_formula_rounded_half_up(colorspace, color_range):
+    from autohaptics.media.frames import _yuv_to_rgb
+
+    frame = type("Tags", (), {"colorspace": colorspace, "color_range": color_range,
+                              "format": type("F", (), {"name": "yuv420p"})})()
+    y, u, v = (a.reshape(-1, 256) for a in np.meshgrid(np.arange(0, 256, 3, dtype=np.uint8),
+                                                         np.arange(256, dtype=np.uint8), np.arange(256, dtype=np.uint8),
+                                                         indexing="ij"))
+    kr, kb = (0.2126, 0.0722) if colorspace == 1 else (0.299, 0.114)
+    kg = 1.0 - kr - kb
+    f32 = np.float32
+    yy, cb, cr = y.astype(f32), u.astype(f32) - f32(128), v.astype(f32) - f32(128)
+    if color_range != 2:
+        yy, cb, cr = (yy - f32(16)) * f32(255 / 219), cb * f32(255 / 224), cr * f32(255 / 224)
+    want = np.stack([yy + f32(2 * (1 - kr)) * cr, yy - f32(2 * kb * (1 - kb) / kg) * cb - f32(2 * kr * (1 - kr) / kg) * cr,
+                     yy + f32(2 * (1 - kb)) * cb], axis=-1)
+    want = np.clip(want + f32(0.5), 0, 255).astype(np.uint8)
+    np.testing.assert_array_equal(_yuv_to_rgb(y, u, v, frame), want)

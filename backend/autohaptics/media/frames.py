@@ -198,7 +198,6 @@ class Frame:
             return None
         k = self.rotation // 90
         dw, dh = (height, width) if k % 2 else (width, height)  # target (w, h) before rotation
-        fw, fh = (self._crop[2], self._crop[3]) if self._crop is not None else (f.width, f.height)
         out = []
         for i in range(3 if colour else 1):
             if i == 0 and not luma:
@@ -216,18 +215,13 @@ class Frame:
                 # 4x or more: average 2 x 2 blocks first (cv2.pyrDown-like), then area-scale: half
                 # the memory traffic of one big area pass, the same proxy within a grey level
                 arr = cv2.resize(arr, (pw // 2, ph // 2), interpolation=cv2.INTER_AREA)
-            if i == 0:
-                small = _shrink(arr, (dw, dh))
-                if grid is not None and grid_out is not None:
-                    gw_, gh_ = (int(grid[1]), int(grid[0])) if k % 2 else (int(grid[0]), int(grid[1]))
-                    g = area_resize(arr, (gw_, gh_))
-                    grid_out.append(np.ascontiguousarray(np.rot90(g, k=k)) if k else g)
-            else:  # chroma: average at its own (sub-sampled) scale, then up to the luma size
-                cw = max(1, round(dw * pw / fw))
-                ch = max(1, round(dh * ph / fh))
-                small = _shrink(arr, (cw, ch))
-                if (cw, ch) != (dw, dh):
-                    small = cv2.resize(small, (dw, dh), interpolation=cv2.INTER_LINEAR)
+            # chroma too straight to the proxy's size at its own scale, as FFmpeg's scaler does (4:2:0
+            # 1080p to 240 px: two exact halvings)
+            small = _shrink(arr, (dw, dh))
+            if i == 0 and grid is not None and grid_out is not None:
+                gw_, gh_ = (int(grid[1]), int(grid[0])) if k % 2 else (int(grid[0]), int(grid[1]))
+                g = area_resize(arr, (gw_, gh_))
+                grid_out.append(np.ascontiguousarray(np.rot90(g, k=k)) if k else g)
             out.append(np.ascontiguousarray(np.rot90(small, k=k)) if k else small)
         return out if colour else (out[0], None, None)
 
@@ -282,18 +276,25 @@ def _luma_full_range(y: np.ndarray, frame: av.VideoFrame) -> np.ndarray:
 
 
 def _yuv_to_rgb(y: np.ndarray, u: np.ndarray, v: np.ndarray, frame: av.VideoFrame) -> np.ndarray:
+    """uint8 Y, U, V planes of one size -> uint8 RGB [shape=(h, w, 3)], float32 arithmetic rounded
+    half up (BT.709 or BT.601 by the frame's tag, limited or full range), each channel computed in
+    place in a plane of its own and interleaved by OpenCV (fewer passes than channel slices)."""
     kr, kb = (0.2126, 0.0722) if getattr(frame, "colorspace", 0) == 1 else (0.299, 0.114)
     kg = 1.0 - kr - kb
-    if _full_range(frame):
-        yy = y.astype(np.float32)
-        cb = u.astype(np.float32) - 128.0
-        cr = v.astype(np.float32) - 128.0
-    else:
-        yy = (y.astype(np.float32) - 16.0) * (255.0 / 219.0)
-        cb = (u.astype(np.float32) - 128.0) * (255.0 / 224.0)
-        cr = (v.astype(np.float32) - 128.0) * (255.0 / 224.0)
-    rgb = np.empty(y.shape + (3,), np.float32)
-    rgb[..., 0] = yy + (2.0 * (1.0 - kr)) * cr
-    rgb[..., 1] = yy - (2.0 * kb * (1.0 - kb) / kg) * cb - (2.0 * kr * (1.0 - kr) / kg) * cr
-    rgb[..., 2] = yy + (2.0 * (1.0 - kb)) * cb
-    return np.clip(rgb + 0.5, 0.0, 255.0).astype(np.uint8)
+    yy, cb, cr = y.astype(np.float32), u.astype(np.float32), v.astype(np.float32)
+    cb -= np.float32(128.0)
+    cr -= np.float32(128.0)
+    if not _full_range(frame):
+        yy -= np.float32(16.0)
+        yy *= np.float32(255.0 / 219.0)
+        cb *= np.float32(255.0 / 224.0)
+        cr *= np.float32(255.0 / 224.0)
+    rgb = np.empty((3,) + y.shape, np.float32)
+    tmp = np.empty(y.shape, np.float32)
+    np.add(yy, np.multiply(cr, np.float32(2.0 * (1.0 - kr)), out=rgb[0]), out=rgb[0])
+    np.subtract(yy, np.multiply(cb, np.float32(2.0 * kb * (1.0 - kb) / kg), out=tmp), out=rgb[1])
+    np.subtract(rgb[1], np.multiply(cr, np.float32(2.0 * kr * (1.0 - kr) / kg), out=tmp), out=rgb[1])
+    np.add(yy, np.multiply(cb, np.float32(2.0 * (1.0 - kb)), out=rgb[2]), out=rgb[2])
+    rgb += np.float32(0.5)
+    np.clip(rgb, 0.0, 255.0, out=rgb)
+    return cv2.merge([c.astype(np.uint8) for c in rgb])
