@@ -134,6 +134,7 @@ THESIS_RULES: dict[str, Any] = {
     "intensity.rule": "thesis",  # the default follows events: each feature against its recent baseline
     "intensity.loudness_gate": 0.05,  # the default gate, 0.2, is 23 phon below the film's loudest moment
     "flow.repeat_wait_s": 0.0,  # the default waits for the next distinct frame (repeats give no motion)
+    "airflow.motion_sigma_ticks": 0.0,  # the default judges a tick on its shot's motion around it
     "airflow.near_sigma_ticks": 0.0,  # the default smooths nearness over neighbouring ticks of the shot
     "airflow.near_share": 0.0,  # the default counts the nearest quarter of each tick's cells as near too
     "thermal.mapping": "thesis",  # the default maps a warm-cool measure around 33 C into the device range

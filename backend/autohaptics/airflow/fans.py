@@ -1,7 +1,9 @@
 """The fan rule: which ticks and which of the 9 x 17 cells blow (ALGORITHM.md section 5, steps 2-5).
 
 A tick blows when its sustained motion exceeds the threshold: manual, or adaptive from the clip's
-own motion (``strong_rel`` x the 95th percentile of the ticks that move). In a blowing tick a cell
+own motion (``strong_rel`` x the 95th percentile of the ticks that move); the motion judged is
+averaged over the neighbouring ticks of the shot first, so a low-quality encode's uneven motion
+samples neither drop a run nor raise the threshold. In a blowing tick a cell
 blows where its motion, smoothed over the shot's neighbouring ticks and cells, reaches
 ``cell_rel`` of the strongest cell AND it is near; a near cell enclosed by blowing cells blows
 too (an object coming at the camera has a still centre). docs/BENCHMARKS.md ("Fans") has the
@@ -11,7 +13,7 @@ measurements behind each rule.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import ClassVar
 
 import cv2
@@ -36,10 +38,8 @@ class AirflowParams:
         0 = ``near_min`` alone, the thesis; :func:`near_cells`).
     static_level, static_fraction : a frame pair is static when fewer than ``static_fraction`` of the proxy's
         pixels changed by more than ``static_level`` grey levels (noise tolerant, yet a small moving object is seen).
-    fill_enclosed : a near cell enclosed by "on" cells blows too (the still centre of an object
-        expanding toward the camera; see the module docstring).
-    flat_std : a frame whose luma standard deviation is below this (grey levels) is flat; a pair
-        of flat frames has no motion (:func:`is_fade`).
+    fill_enclosed : a near cell enclosed by "on" cells blows too (an approaching object's still centre).
+    flat_std : a frame whose luma std is below this (grey levels) is flat; two flat frames: no motion (:func:`is_fade`).
     fade_min_step : a pair whose mean brightness moved by at least this (grey levels) and that differs in
         nothing else than a global brightness/contrast change is a fade: no motion (:func:`is_fade`).
     cell_sigma_ticks : a blowing tick's cells are judged on their motion averaged over the
@@ -49,6 +49,8 @@ class AirflowParams:
     near_sigma_ticks : a blowing tick's nearness is the Gaussian-weighted mean (this standard
         deviation, ticks) over the neighbouring ticks of its shot where depth ran (default 2; 0 = the
         tick's own, the thesis; :func:`smoothed_nearness`).
+    motion_sigma_ticks : which ticks blow, and the adaptive threshold, judge each tick's motion smoothed as
+        the cells' is, with this std (ticks; default 3; 0 = the tick's own, the thesis; :func:`smoothed_motion`).
     """
 
     STAGE: ClassVar[str] = DERIVE
@@ -67,6 +69,7 @@ class AirflowParams:
     cell_sigma_ticks: float = 2.0
     cell_sigma_cells: float = 0.5
     near_sigma_ticks: float = 2.0
+    motion_sigma_ticks: float = 3.0
 
     def __post_init__(self):
         if self.threshold is not None and not (math.isfinite(self.threshold) and self.threshold >= 0):
@@ -78,7 +81,7 @@ class AirflowParams:
             if not (math.isfinite(v) and 0.0 <= v <= 255.0):
                 raise ParameterError(f"airflow.{name} must lie in 0..255 grey levels, got {getattr(self, name)!r}")
         for name, top in (("cell_sigma_ticks", 50.0), ("cell_sigma_cells", float(FAN_COLS)),
-                          ("near_sigma_ticks", 50.0)):
+                          ("near_sigma_ticks", 50.0), ("motion_sigma_ticks", 50.0)):
             v = float(getattr(self, name))
             if not (math.isfinite(v) and 0.0 <= v <= top):
                 raise ParameterError(f"airflow.{name} must lie in 0..{top:g}, got {getattr(self, name)!r}")
@@ -180,6 +183,26 @@ def smoothed_nearness(nearness: np.ndarray, shot: np.ndarray, depth_mask: np.nda
         total += np.where(ok, g, 0.0)[:, None, None] * np.nan_to_num(near[src].astype(np.float64))
         weight += np.where(ok, g, 0.0)
     return np.clip(total / np.maximum(weight, 1e-12)[:, None, None], 0.0, 1.0).astype(np.float32)
+
+
+def smoothed_motion(motion: np.ndarray, shot: np.ndarray, *, params: AirflowParams = AirflowParams()) -> np.ndarray:
+    """The motion the tick rule judges, frame widths/s: float32 [shape=(n,)].
+
+    motion : [shape=(n,)] frame widths/s; shot : int [shape=(n,)] as in :func:`smoothed_cell_motion`
+    (negative: a cut tick, which reads 0). Each tick's motion is the Gaussian-weighted mean
+    (``motion_sigma_ticks``) of the ticks around it, a tick of another shot, a cut or beyond the
+    clip counting as still, as the cells' smoothing does (:func:`smoothed_cell_motion`, with the
+    tick's motion for its one cell). Why: one flow pair per tick samples a low-quality encode's
+    motion unevenly (slow motion moves in jumps), which drops weak runs and widens the distribution
+    the threshold is taken from (docs/BENCHMARKS.md, "Screener encodes").
+    """
+    m = np.asarray(motion, dtype=np.float64)
+    shot = np.asarray(shot)
+    if m.ndim != 1 or shot.shape != m.shape:
+        raise ParameterError(f"smoothed_motion needs (n,) motion and shots, got {m.shape} and {shot.shape}")
+    one_cell = replace(params, cell_sigma_ticks=params.motion_sigma_ticks, cell_sigma_cells=0.0)
+    own = np.where(shot >= 0, np.nan_to_num(m), 0.0)[:, None, None]
+    return smoothed_cell_motion(own, shot, np.arange(m.size), params=one_cell)[:, 0, 0]
 
 
 def _gaussian(sigma: float) -> tuple[np.ndarray, np.ndarray]:
@@ -295,12 +318,14 @@ def fan_track(motion: np.ndarray, cell_motion_: np.ndarray, nearness: np.ndarray
     """
     n = motion.size
     valid = ~cut
-    sustained = sustained_motion(np.where(valid, motion, 0.0))
+    shot = np.where(valid, np.cumsum(cut), -1)
+    judged = smoothed_motion(motion, shot, params=params) if params.motion_sigma_ticks > 0 \
+        else np.where(valid, motion, 0.0)
+    sustained = sustained_motion(judged)
     threshold = motion_threshold(sustained[valid], params=params)
     on = valid & (sustained > threshold) & depth_mask
     fans = np.zeros((n,) + cell_motion_.shape[1:], np.float32) if out is None else out
     ticks = np.flatnonzero(on)
-    shot = np.where(valid, np.cumsum(cut), -1)
     for start in range(0, ticks.size, _FAN_CHUNK):
         part = ticks[start:start + _FAN_CHUNK]
         cells = smoothed_cell_motion(cell_motion_, shot, part, params=params)
@@ -309,5 +334,5 @@ def fan_track(motion: np.ndarray, cell_motion_: np.ndarray, nearness: np.ndarray
         for k, c, nk in zip(part, cells, near):
             fans[k] = fan_levels(c, nk, params=params)
     stats = {"threshold_fw_per_s": float(threshold), "ticks_on": int(on.sum()), "ticks_at_cuts": int(cut.sum()),
-             "spikes_ignored": int(((motion > threshold) & valid & ~(sustained > threshold)).sum())}
+             "spikes_ignored": int(((judged > threshold) & valid & ~(sustained > threshold)).sum())}
     return fans, stats
