@@ -10,8 +10,9 @@ import pytest
 
 from autohaptics import pipeline
 from autohaptics import testing as synth
-from autohaptics.bench.matrix import (JOLT_MAX, TARGETS, VARIANTS, cut_analysis, misses, row_figures, silence_pair,
-                                      variant_file)
+from autohaptics.bench.matrix import (JOLT_MAX, TARGETS, VARIANTS, cut_analysis, misses, not_applicable, row_figures,
+                                      silence_pair, variant_file)
+from autohaptics.media import probe
 from autohaptics.testing.scenes import material_scene
 
 
@@ -35,6 +36,16 @@ def scene_file(tmp_path_factory):
 @pytest.fixture(scope="module")
 def clean(scene_file):
     return pipeline.analyse(scene_file)
+
+
+def test_rows_a_source_cannot_have_are_left_out(scene_file, tmp_path):
+    info = probe(scene_file)
+    assert [v.name for v in VARIANTS if not_applicable(v, info)] == []
+    short = synth.write_scene(tmp_path / "short.mp4", material_scene(9.0), width=160, height=90, fps=25)
+    cuts = [v for v in VARIANTS if v.start_s]
+    assert [bool(not_applicable(v, probe(short))) for v in cuts] == [v.start_s > 6.5 for v in cuts]
+    mute = synth.write_scene(tmp_path / "mute.mp4", material_scene(4.0), width=160, height=90, audio=False)
+    assert {v.group for v in VARIANTS if not_applicable(v, probe(mute))} == {"sound"} | {"start"}
 
 
 def test_a_cut_of_the_analysis_is_the_film_from_there(clean):

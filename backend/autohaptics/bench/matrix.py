@@ -39,6 +39,7 @@ TARGETS = {"onset_f1": (">=", 0.9), "fan_ticks_f1": (">=", 0.9), "fan_iou_tolera
 JOLT_S = 0.5  # a cut's opening judged for a jolt
 JOLT_MAX = 0.2  # the largest vibration allowed there, 0..1
 SHARED_SOURCES = ("bbb_opening_30s_1280x720_vp8_vorbis.webm", "sintel_trailer_640x272_vp8_vorbis.webm")
+CUT_MIN_S = 2.5  # the shortest cut worth comparing, s
 SILENCE_S = 180.0  # the digital-silence pair's length, s (the issue's 3-minute clip)
 
 
@@ -97,6 +98,18 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("cut mid-score at 13.7 s", "start", options={"start_s": 13.7}, start_s=13.7),
     Variant("cut mid-score at 21.1 s", "start", options={"start_s": 21.1}, start_s=21.1),
 )
+
+
+def not_applicable(variant: Variant, info) -> str | None:
+    """Why ``variant`` does not apply to a source (``media.MediaInfo``), or None: a sound row needs
+    sound, a picture row a picture, a cut at least ``CUT_MIN_S`` of film after it."""
+    if variant.group == "sound" and info.audio is None:
+        return "no sound"
+    if info.video is None:
+        return "no picture"
+    if variant.start_s and variant.start_s > info.duration_s - CUT_MIN_S:
+        return f"the film is {info.duration_s:.1f} s long"
+    return None
 
 
 def variant_file(src: Path, variant: Variant, out_dir: Path) -> Path:
@@ -208,6 +221,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from autohaptics.bench.clips import shared_media
+    from autohaptics.media import probe
 
     out = Path(args.out)
     sources = [Path(v) for v in args.video] or [shared_media() / name for name in SHARED_SOURCES]
@@ -222,6 +236,10 @@ def run(args) -> int:
         rows.append(_table_row(src.name, "clean", clean, None))
         analysis = None
         for v in variants:
+            why = not_applicable(v, probe(src))
+            if why:
+                print(f"{src.name}: {v.name}: left out ({why})", file=sys.stderr)
+                continue
             print(f"{src.name}: {v.name} ...", file=sys.stderr)
             path = variant_file(src, v, out / "variants")
             got = _measured(path, out, args.speed)
