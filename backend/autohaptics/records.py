@@ -84,6 +84,22 @@ def stage_of(record: Any, name: str) -> str:
     return f.metadata.get("stage", getattr(record, "STAGE", DERIVE))
 
 
+def stage_of_key(params: Any, key: str) -> str:
+    """ANALYSIS or DERIVE for a dotted name (``"intensity.thresholds.loudness"``: a key inside a
+    dict field has the dict field's stage); an unknown name or a group is a ParameterError."""
+    obj, path = params, key.split(".")
+    for i, name in enumerate(path):
+        if not dataclasses.is_dataclass(obj) or name not in {f.name for f in dataclasses.fields(obj)}:
+            raise ParameterError(f"unknown parameter {key!r}")
+        value = getattr(obj, name)
+        if not dataclasses.is_dataclass(value):
+            return stage_of(obj, name)
+        if i == len(path) - 1:
+            raise ParameterError(f"{key!r} is a group of parameters: name one of its fields")
+        obj = value
+    return DERIVE
+
+
 def apply_overrides(params: Any, overrides: dict[str, Any]) -> Any:
     """Return a copy of a (nested, frozen) params dataclass with dotted ``overrides`` applied.
 

@@ -49,7 +49,7 @@ def check_address(scheduler: str) -> None:
                              f"({exc.strerror or 'timed out'})") from None
 
 
-def run_dask(run: Run, params: Any, preset: str, scheduler: str) -> None:
+def run_dask(run: Run, params: Any, preset: str, scheduler: str, style: Any = None) -> None:
     """One task per film on the Dask cluster at ``scheduler``; progress comes back as worker events.
 
     A worker that dies is handled by Dask (the task is retried elsewhere, then KilledWorker); a
@@ -59,10 +59,10 @@ def run_dask(run: Run, params: Any, preset: str, scheduler: str) -> None:
     except ImportError as exc:  # pragma: no cover - dask[distributed] is a dependency
         raise AutohapticsError(f"--scheduler needs dask[distributed]: {exc}") from None
     with _dask_logs_off():
-        _run_on(Client, run, params, preset, scheduler)
+        _run_on(Client, run, params, preset, scheduler, style)
 
 
-def _run_on(Client, run: Run, params: Any, preset: str, scheduler: str) -> None:
+def _run_on(Client, run: Run, params: Any, preset: str, scheduler: str, style: Any = None) -> None:
     try:
         client = Client(scheduler, timeout=f"{CONNECT_S}s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
@@ -75,7 +75,7 @@ def _run_on(Client, run: Run, params: Any, preset: str, scheduler: str) -> None:
         client.subscribe_topic(topic, lambda event: messages.put(event[1]))
         for film in run.films:
             fut = client.submit(process_film, film.index, str(film.source), params, preset, film.skip_sha, topic=topic,
-                                key=f"autohaptics-film-{film.index}-{topic[-12:]}", pure=False)
+                                style=style, key=f"autohaptics-film-{film.index}-{topic[-12:]}", pure=False)
             futures[fut] = film
         _follow(client, futures, messages, run, scheduler)
     except _SchedulerLost:

@@ -138,9 +138,12 @@ def _safe_stem(src: Path) -> str:
     return stem if not stem.startswith(".") else "_" + stem[1:]
 
 
-def params_digest(params: Any, preset: str) -> str:
-    """SHA-256 of the resolved parameters and the preset name (what makes a timeline up to date)."""
+def params_digest(params: Any, preset: str, style: Any = None) -> str:
+    """SHA-256 of the resolved parameters, the preset name and the style's document, if any (what
+    makes a timeline up to date)."""
     doc = {"params": params_to_dict(params), "preset": preset}
+    if style is not None:
+        doc["style"] = style.to_dict()
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
 
 
@@ -165,7 +168,7 @@ def save_manifest(out_dir: Path, films: dict[str, dict]) -> None:
 
 
 def recorded_sha(output: Path, entry: dict | None, source: Path, digest: str, params: Any,
-                  preset: str) -> str | None:
+                  preset: str, style: Any = None) -> str | None:
     """The source SHA-256 an existing, parameter-matching timeline was made from (None: redo)."""
     if not output.is_file():
         return None
@@ -173,11 +176,12 @@ def recorded_sha(output: Path, entry: dict | None, source: Path, digest: str, pa
         if entry.get("source") == str(source) and entry.get("params_digest") == digest:
             return entry.get("sha256")
         return None
-    return _timeline_sha(output, params, preset)
+    return _timeline_sha(output, params, preset, style)
 
 
-def _timeline_sha(output: Path, params: Any, preset: str) -> str | None:
-    """``source.sha256`` of a timeline file whose ``generator`` matches ``params`` and ``preset``."""
+def _timeline_sha(output: Path, params: Any, preset: str, style: Any = None) -> str | None:
+    """``source.sha256`` of a timeline file whose ``generator`` matches ``params``, ``preset`` and
+    ``style``."""
     try:
         with open(output, encoding="utf-8") as fh:
             doc = json.load(fh)
@@ -186,6 +190,8 @@ def _timeline_sha(output: Path, params: Any, preset: str) -> str | None:
     except (OSError, ValueError, KeyError, TypeError):
         return None
     if gen.get("preset") != preset or not isinstance(stored, dict):
+        return None
+    if gen.get("style") != (None if style is None else style.to_dict()):
         return None
     if any(stored.get(k) != v for k, v in params_to_dict(params).items()):
         return None

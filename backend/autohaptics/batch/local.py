@@ -12,7 +12,7 @@ from autohaptics.runner import WorkerPool
 MAX_CRASHES = 2  # a film analysed in this many dying worker processes is reported as failed
 
 
-def run_local(run: Run, params: Any, preset: str, jobs: int) -> None:
+def run_local(run: Run, params: Any, preset: str, jobs: int, style: Any = None) -> None:
     """Films on ``jobs`` worker processes; a pool whose worker died is replaced and the films it
     was running go again, except one that was being analysed in ``MAX_CRASHES`` dying workers."""
     pool = WorkerPool(min(jobs, len(run.films))).start()
@@ -20,7 +20,7 @@ def run_local(run: Run, params: Any, preset: str, jobs: int) -> None:
     try:
         todo = list(run.films)
         while todo:
-            todo = _round(run, todo, params, preset, pool, cancel)
+            todo = _round(run, todo, params, preset, pool, cancel, style)
     except BaseException:  # Ctrl+C: running films stop at their next cancel check
         cancel.set()
         raise
@@ -28,14 +28,16 @@ def run_local(run: Run, params: Any, preset: str, jobs: int) -> None:
         pool.shutdown()
 
 
-def _round(run: Run, todo: list[Film], params: Any, preset: str, pool: WorkerPool, cancel) -> list[Film]:
+def _round(run: Run, todo: list[Film], params: Any, preset: str, pool: WorkerPool, cancel,
+           style: Any = None) -> list[Film]:
     """Submit ``todo``; return the films to submit again after a worker died (the pool replaced).
 
     A film that had started in a worker when the pool broke is charged with the crash; the others
     were waiting and go again uncharged."""
     futures: dict[Future, Film] = {}
     for film in todo:
-        fut = pool.submit(_film, film.index, str(film.source), params, preset, film.skip_sha, pool.events, cancel)
+        fut = pool.submit(_film, film.index, str(film.source), params, preset, film.skip_sha, pool.events, cancel,
+                          style)
         futures[fut] = film
     started: set[int] = set()
     again: list[Film] = []
@@ -63,9 +65,10 @@ def _round(run: Run, todo: list[Film], params: Any, preset: str, pool: WorkerPoo
     return again
 
 
-def _film(index: int, source: str, params: Any, preset: str, skip_sha: str | None, events, cancel) -> dict:
+def _film(index: int, source: str, params: Any, preset: str, skip_sha: str | None, events, cancel,
+          style: Any = None) -> dict:
     """:func:`process_film` with its queue and cancel event (pool tasks take positional arguments)."""
-    return process_film(index, source, params, preset, skip_sha, events=events, cancel=cancel)
+    return process_film(index, source, params, preset, skip_sha, events=events, cancel=cancel, style=style)
 
 
 def _drain(pool: WorkerPool, run: Run) -> set[int]:

@@ -23,7 +23,7 @@ from autohaptics.progress import ProgressFn, null_progress
 
 def run_batch(inputs: Iterable[str | os.PathLike], out_dir: str | os.PathLike, params: Any = None,
               preset: str | None = None, *, jobs: int = 1, scheduler: str | None = None,
-              progress: ProgressFn | None = None) -> BatchReport:
+              progress: ProgressFn | None = None, style: Any = None) -> BatchReport:
     """Generate a timeline per film of ``inputs`` into ``out_dir`` (created when missing).
 
     inputs : files, folders and glob patterns (:func:`collect_inputs`).
@@ -32,6 +32,8 @@ def run_batch(inputs: Iterable[str | os.PathLike], out_dir: str | os.PathLike, p
     jobs : local worker processes (>= 1); ignored when ``scheduler`` is given.
     scheduler : address of a Dask distributed scheduler (``tcp://HOST:PORT``): one task per film
         on that cluster instead of local processes.
+    style : an :class:`autohaptics.style.Style` every timeline is derived in (part of what makes
+        an existing timeline up to date).
 
     Raises ParameterError for usage errors (no films, bad ``jobs``, ``out_dir`` is a file, bad
     scheduler address); film failures are in the report, never raised. Ctrl+C cancels the
@@ -55,7 +57,7 @@ def run_batch(inputs: Iterable[str | os.PathLike], out_dir: str | os.PathLike, p
     out = prepare_folder(out_dir, label="output folder")
     manifest = load_manifest(out)
     names = output_names(sources, manifest)
-    digest = params_digest(params, preset)
+    digest = params_digest(params, preset, style)
     films = []
     for i, src in enumerate(sources):
         output = out / f"{names[src]}{OUTPUT_SUFFIX}"
@@ -64,13 +66,13 @@ def run_batch(inputs: Iterable[str | os.PathLike], out_dir: str | os.PathLike, p
         except OSError:
             weight = 1.0
         films.append(Film(i, src, output, names[src], weight,
-                           recorded_sha(output, manifest.get(names[src]), src, digest, params, preset)))
+                           recorded_sha(output, manifest.get(names[src]), src, digest, params, preset, style)))
     run = Run(films, out, manifest, digest, preset, progress or null_progress)
     run.report_progress()
     if scheduler is not None:
         from autohaptics.batch.cluster import run_dask  # dask is imported only for a cluster
 
-        run_dask(run, params, preset, scheduler)
+        run_dask(run, params, preset, scheduler, style)
     else:
-        run_local(run, params, preset, jobs)
+        run_local(run, params, preset, jobs, style)
     return BatchReport(out, [run.results[f.index] for f in films])

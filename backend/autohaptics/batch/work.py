@@ -15,11 +15,12 @@ from autohaptics.runner import Reporter, queue_sender
 
 
 def process_film(index: int, source: str, params: Any, preset: str, skip_sha: str | None = None, *,
-                 events=None, cancel=None, topic: str | None = None) -> dict:
+                 events=None, cancel=None, topic: str | None = None, style: Any = None) -> dict:
     """Worker entry point for one film (local pool or Dask task).
 
     Messages ``(index, "start")`` and ``(index, "progress", stage, fraction)`` go to ``events`` (a
     local worker's queue) or, on a Dask worker, to the event ``topic``. ``cancel`` stops the film.
+    ``style`` (an :class:`autohaptics.style.Style`) shapes its timeline.
     Returns {"status": "skipped", "sha256"} when the file's SHA-256 equals ``skip_sha``, else
     {"status": "done", "timeline", "seconds"}. Raises the pipeline's errors for unusable input.
     """
@@ -41,7 +42,7 @@ def process_film(index: int, source: str, params: Any, preset: str, skip_sha: st
         if sha == skip_sha:
             return {"status": "skipped", "sha256": sha}
     tl = generate(source, params, preset=preset, progress=reporter, cancel=cancel,
-                  between_passes=release_between_passes)
+                  between_passes=release_between_passes, style=style)
     return {"status": "done", "timeline": tl, "seconds": time.perf_counter() - t0}
 
 

@@ -15,6 +15,7 @@ HELP = "generate timelines for many films (folders, files or glob patterns)"
 
 
 def register(sub) -> None:
+    from autohaptics.cli.style import add_style_option
     from autohaptics.params import add_generation_options
 
     p = sub.add_parser(COMMAND, help=HELP, description=__doc__)
@@ -23,6 +24,7 @@ def register(sub) -> None:
     p.add_argument("-o", "--output-dir", required=True, metavar="OUTDIR",
                    help="folder for the timelines and batch-manifest.json (created when missing)")
     add_generation_options(p)
+    add_style_option(p)
     p.add_argument("--jobs", type=int, default=None, metavar="N",
                    help="films analysed at once in local worker processes (default 1)")
     p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
@@ -34,15 +36,18 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from autohaptics.batch import run_batch
+    from autohaptics.cli.style import style_from_args
     from autohaptics.params import params_from_args
 
     if args.scheduler is not None and args.jobs is not None:
         raise ParameterError("--jobs is for local runs; with --scheduler the cluster's workers set the parallelism")
     params, preset = params_from_args(args)
+    style = style_from_args(args)
     bar = None if args.quiet else ProgressBar("batch", force=True)
     try:
         report = run_batch(args.inputs, args.output_dir, params, preset,
-                           jobs=1 if args.jobs is None else args.jobs, scheduler=args.scheduler, progress=bar)
+                           jobs=1 if args.jobs is None else args.jobs, scheduler=args.scheduler, progress=bar,
+                           style=style)
     finally:
         if bar:
             bar.close()

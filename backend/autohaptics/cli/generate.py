@@ -13,6 +13,7 @@ HELP = "generate a haptic timeline from a video (or audio) file"
 
 
 def register(sub) -> None:
+    from autohaptics.cli.style import add_style_option
     from autohaptics.params import add_generation_options
 
     p = sub.add_parser(COMMAND, help=HELP,
@@ -20,6 +21,7 @@ def register(sub) -> None:
     p.add_argument("video", help="input media file")
     p.add_argument("-o", "--output", required=True, help="output timeline JSON file")
     add_generation_options(p)
+    add_style_option(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -27,13 +29,16 @@ def register(sub) -> None:
 def run(args) -> int:
     from autohaptics.runner.heap import release_between_passes
     from autohaptics.pipeline import generate
+    from autohaptics.cli.style import style_from_args
     from autohaptics.params import params_from_args
 
     params, preset = params_from_args(args)
+    style = style_from_args(args)  # a bad style file fails before the analysis
     out = check_output(args.output)  # before the analysis, worded as every command's output
     bar = ProgressBar(Path(args.video).name) if not args.quiet else None
     try:
-        tl = generate(args.video, params, preset=preset, progress=bar, between_passes=release_between_passes)
+        tl = generate(args.video, params, preset=preset, progress=bar, between_passes=release_between_passes,
+                      style=style)
     finally:
         if bar:
             bar.close()

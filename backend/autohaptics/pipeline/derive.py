@@ -10,6 +10,7 @@ import json
 import threading
 import time
 import weakref
+from typing import Any
 
 import numpy as np
 
@@ -26,13 +27,18 @@ from autohaptics.timebase import TICK_S
 from autohaptics.timeline import Timeline, default_generator
 
 
-def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: str = DEFAULT_PRESET) -> Timeline:
+def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: str = DEFAULT_PRESET,
+           style: Any = None) -> Timeline:
     """Turn a feature cache into a timeline (no decoding; milliseconds for a feature film).
 
+    style : an :class:`autohaptics.style.Style` or None: its parameters apply before the derive,
+        its tone curves to the tracks after it; recorded as ``generator["style"]``.
     ``stats["needs_analysis"]`` is set when vibrating ticks lack saliency of their own that their
     frames could give (their weights were borrowed or fell back to A5): :func:`refine` computes it.
     """
     params = params or GenerateParams()
+    if style is not None:
+        params = style.apply_params(params)
     t0 = time.perf_counter()
     n = analysis.n_ticks
     tl = Timeline.empty(n, source=source_block(analysis.info, sha256=analysis.sha256))
@@ -58,6 +64,11 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
     gen_params["thresholds"] = dict(params.intensity.thresholds)
     gen_params["temp_low"], gen_params["temp_high"] = temp_low, temp_high
     tl.generator = default_generator(mode=params.mode, preset=preset, params=gen_params)
+    if style is not None:
+        tl.vibration, tl.temperature_c, tl.fans = style.shape(tl.vibration, tl.temperature_c, tl.fans,
+                                                              neutral_c=params.thermal.neutral_c,
+                                                              range_c=(temp_low, temp_high))
+        tl.generator["style"] = style.to_dict()
     stats["derive"] = {"seconds": time.perf_counter() - t0}
     active = int(np.count_nonzero(np.logical_or.reduce(tl.vibration.T > 0)))
     stats["vibration"] = {"active_ticks": active, "ticks": n, "share": active / n if n else 0.0,

@@ -16,11 +16,12 @@ from autohaptics.timeline import Timeline
 
 def generate(path: str | Path, params: GenerateParams | None = None, *, preset: str = DEFAULT_PRESET,
              progress: ProgressFn | None = None, cancel: CancelToken | None = None,
-             between_passes: Callable[[], Any] | None = None) -> Timeline:
-    """Analyse a media file and derive its timeline; ``stats["total_seconds"]`` is the whole run."""
+             between_passes: Callable[[], Any] | None = None, style: Any = None) -> Timeline:
+    """Analyse a media file and derive its timeline (in ``style``, an :class:`autohaptics.style.Style`,
+    when given); ``stats["total_seconds"]`` is the whole run."""
     params = params or GenerateParams()
     t0 = time.perf_counter()
     analysis = analyse(path, params, progress=progress, cancel=cancel, between_passes=between_passes)
-    tl = derive(analysis, params, preset=preset)
+    tl = derive(analysis, params, preset=preset, style=style)
     tl.stats["total_seconds"] = time.perf_counter() - t0
     return tl
