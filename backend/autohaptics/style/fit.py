@@ -9,7 +9,7 @@ parameters the designer started from. Fitted on sampled ticks, without decoding:
    by least absolute deviations (iteratively reweighted), so one-off edits of a scene or two
    (a minority of the ticks at each level) do not move it;
 3. the temperature: ``edited - derived = offset_c + (scale - 1) * (derived - neutral_c)``, the same
-   robust fit.
+   robust fit (scale to 0.001, offset to 0.01 C).
 Unedited films give the identity style exactly (every fitted edit is exactly 0).
 """
 
@@ -29,6 +29,7 @@ from autohaptics.timeline import Timeline
 SCALES: tuple[float, ...] = tuple(round(2.0 ** (e / 6), 4) for e in range(-6, 7))
 STEP_SHARE = 2 / 3  # of the ticks a threshold step changes that must agree with the edits
 MAX_TICKS = 6000  # ticks sampled per film (a 2-hour film has 72,000)
+OFF_LEVEL = 1 / 255  # a fitted level below one step of the chair's 0..255 levels is off
 MAX_FAN_LEVELS = 400_000  # fan levels above 0 fitted at most (sampled evenly)
 _IRLS_STEPS, _IRLS_FLOOR, _RIDGE, _SMOOTH = 10, 0.01, 1e-6, 1e-3
 
@@ -67,16 +68,16 @@ def learn(pairs: Sequence[Pair], params: GenerateParams | None = None, *, name: 
 
 
 def fit_curve(x: np.ndarray, y: np.ndarray, knots: tuple[float, ...] = KNOTS) -> tuple[float, ...]:
-    """The tone curve (levels at ``knots``, 0..1, starting at 0, never decreasing, 4 decimals) that
-    maps the derived levels ``x`` to the edited levels ``y`` (both 0..1, same shape), fitted on the
-    levels where ``x > 0`` by least absolute deviations. No edit gives ``knots`` exactly."""
+    """The tone curve (levels at ``knots``, 0..1, starting at 0, never decreasing, 4 decimals, below
+    :data:`OFF_LEVEL` off) that maps the derived levels ``x`` to the edited levels ``y`` (both 0..1,
+    same shape), fitted where ``x > 0`` by least absolute deviations. No edit gives ``knots`` exactly."""
     keep = x > 0
     x, r = x[keep].astype(np.float64), (y[keep].astype(np.float64) - x[keep])
     if not np.any(r):
         return tuple(knots)
     delta = np.concatenate([[0.0], _robust_fit(_hats(x, knots)[:, 1:], r, _bends(knots))])
     curve = np.maximum.accumulate(np.clip(np.asarray(knots) + delta, 0.0, 1.0))
-    curve[0] = 0.0
+    curve[curve < OFF_LEVEL] = 0.0
     return tuple(round(float(v), 4) for v in curve)
 
 
@@ -135,8 +136,8 @@ def _fit_temperature(bases: list[Timeline], edited: list[Timeline], picks: list[
     if not np.any(r):
         return 1.0, 0.0
     offset, slope = _robust_fit(np.stack([np.ones_like(x), x], axis=1), r)
-    scale = float(np.clip(round(1.0 + float(slope), 4), *TEMP_SCALE_RANGE))
-    return scale, float(np.clip(round(float(offset), 3), *TEMP_OFFSET_RANGE_C))
+    scale = float(np.clip(round(1.0 + float(slope), 3), *TEMP_SCALE_RANGE))
+    return scale, float(np.clip(round(float(offset), 2), *TEMP_OFFSET_RANGE_C))
 
 
 def _robust_fit(a: np.ndarray, r: np.ndarray, bends: np.ndarray | None = None) -> np.ndarray:
