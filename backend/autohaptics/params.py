@@ -63,15 +63,11 @@ class VideoParams(Record):
         so P-frames that referenced one come out approximate; see :func:`media.iter_video`).
         With skipped frames the analysed frame is the decoded one nearest the tick's centre and a
         flow pair spans the next decoded frame, with its true interval.
-    stride : ticks per analysed frame, 1..10 (default 1; the fast preset: 3). With ``stride`` s the
-        ticks are taken in groups of s, the frame nearest the group's centre is analysed (plus its
-        successor for flow) and every tick of the group gets its values: the picture is read at
-        10/s Hz instead of 10 Hz, and each tick's frame is at most s x 50 ms off its own centre.
-        Audio features stay at 10 Hz. Only with ``analysis="tick"``.
-    active_area : "auto" (default): every stage reads only the active picture, the rectangle inside
-        constant black bars found from a few keyframes before the pass
-        (:func:`media.find_active_area`; recorded as ``stats["active_area"]``); a film without
-        bars is read whole. "full": the whole frame, bars included (the thesis's reading).
+    stride : ticks per analysed frame, 1..10 (default 1; the fast preset: 3): in groups of s ticks,
+        the frame nearest the group's centre is analysed (plus its successor for flow) and every tick
+        of the group gets its values (at most s x 50 ms off its own centre). Only with ``analysis="tick"``.
+    active_area : "auto" (default): every stage reads only the picture inside constant black bars
+        (:func:`media.find_active_area`, ``stats["active_area"]``); "full": the whole frame, bars included.
     """
 
     STAGE: ClassVar[str] = ANALYSIS

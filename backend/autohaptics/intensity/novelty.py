@@ -11,12 +11,10 @@ Per 20 ms frame:
 - its envelope is the maximum over the last ``ENVELOPE_S`` (1 s: the loud level of speech or music
   between its syllables and notes, so that they do not count as events one by one);
 - the baseline is the mean envelope over ``baseline_s`` seconds ending ``GAP_S`` (0.1 s) before
-  the frame. Before the file began: a file whose sound is under way within its first ``GAP_S``
-  (cut inside a score or a noise bed; a shorter gap is an encoder's priming or the cut's fade) is
-  taken to have had that sound all along, at its largest level over the ``OPENING_S`` (0.5 s)
-  after the sound begins, short of a hit (:func:`opening_frames`), so its start is no event; a
-  file that opens on silence has only its own frames in the baseline, so a sound after the
-  silence is an onset however early it comes;
+  the frame. A file whose sound is under way within its first ``GAP_S`` (cut mid-score) is taken
+  to have had it before it began, at its level over its opening (:func:`opening_frames`), so its
+  start is no event; after an opening silence, the file's own frames are the baseline, so a
+  sound after the silence is an onset however early it comes;
 - novelty = log2(value / baseline) / ``FULL_OCTAVES``, at least 0: 0 at or below the baseline,
   1 at a rise of 2^0.5 (+5 phon for loudness); :func:`novelty` clips it at 1 for display, the
   rule compares the unclipped value (so that a density can rank ticks that all passed 1).

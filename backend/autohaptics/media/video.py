@@ -33,10 +33,8 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
         skips the in-loop deblocking filter (invisible on small proxies, not decoded exactly);
         "sparse" (the fast preset) also skips the reference B-frames at ``SPARSE_MIN_FPS`` and
         above (H.264 B-pyramids; only I- and P-frames are decoded, about a quarter of the frames at
-        60 fps): a P-frame that used a skipped B-frame as reference comes out approximate (the
-        decoder conceals the missing reference; measured on the shared 1080p60 BBB clip: mean 3,
-        at most 5.6 grey levels off the exact frame).
-        The frames that come out keep their true timestamps.
+        60 fps): a P-frame that used a skipped B-frame as reference comes out approximate (mean 3,
+        at most 5.6 grey levels off on the shared 1080p60 clip). Frames keep their true timestamps.
     prefetch : when > 0, decode in a background thread up to this many frames ahead, so the
         decoder keeps working while the caller analyses a frame (PyAV releases the GIL while
         decoding); FFmpeg then gets its threads by :func:`decoder_threads`.

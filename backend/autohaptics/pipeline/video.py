@@ -37,6 +37,7 @@ from autohaptics.imaging import resized
 from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.saliency_queue import LaterMask, SaliencyQueue
+from autohaptics.pipeline.ticks import TickSums, hold_missing
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel
 from autohaptics.temperature import mean_colour
 from autohaptics.timebase import TICK_S, tick_of_time
@@ -162,7 +163,7 @@ class _Pass:
         self.rgb_width = max(sal_width, params.depth.proxy_width if need_flow else 0)
         self.every = params.video.analysis == "every"
         self.out = VideoAnalysis.empty(n)
-        self.acc = _Accumulator(self.out)
+        self.acc = TickSums(self.out)
         self.prev_sig = None  # signature of the previous analysed frame (cut detection)
         self.prev_sal_gray = None  # luma of the previous saliency proxy (the saliency motion cue)
         self.pending = None  # (tick, gray, rgb, sig, time) waiting for its successor frame (flow pair)
@@ -305,7 +306,7 @@ class _Pass:
                 for name in ("motion", "cell_motion", "nearness", "depth_mask", "static"):
                     getattr(out, name)[k] = getattr(out, name)[before[-1]]
         computed = {"saliency": out.saliency_mask.copy(), "flow": out.flow_mask.copy(), "depth": out.depth_mask.copy()}
-        sources = _hold_missing(out)
+        sources = hold_missing(out)
         out.stats = {name: {"seconds": round(st.seconds, 4), "computed": st.computed} for name, st in self.stages.items()}
         for name, mask in computed.items():
             # held: ticks without a frame of their own that took the values of the analysed tick before
@@ -399,70 +400,3 @@ def centre_frames(frames, n: int, stride: int = 1):
             yield f, None
     if held is not None:
         yield held
-
-
-class _Accumulator:
-    """Per-tick sums written straight into the output arrays (several frames per tick in the
-    'every' analysis), divided by the counts at the end: no second set of (n, 9, 17) arrays."""
-
-    def __init__(self, out: VideoAnalysis):
-        self.out = out
-        n = out.motion.size
-        self.colour_n = np.zeros(n, np.int32)
-        self.beta_n = np.zeros(n, np.int32)
-        self.motion_n = np.zeros(n, np.int32)
-        self.near_n = np.zeros(n, np.int32)
-
-    def add_colour(self, k, rgb_mean):
-        self.out.mean_rgb[k] += rgb_mean
-        self.colour_n[k] += 1
-
-    def add_beta(self, k, beta):
-        self.out.beta[k] += beta
-        self.beta_n[k] += 1
-
-    def add_motion(self, k, score, cells):
-        self.out.motion[k] += score
-        self.out.cell_motion[k] += cells
-        self.motion_n[k] += 1
-
-    def add_near(self, k, near):
-        self.out.nearness[k] += near
-        self.near_n[k] += 1
-
-    def finish(self) -> None:
-        out = self.out
-
-        def mean(arr, count):
-            many = count > 1
-            if many.any():
-                arr[many] /= count[many].reshape((-1,) + (1,) * (arr.ndim - 1)).astype(arr.dtype)
-            return count > 0
-
-        mean(out.mean_rgb, self.colour_n)
-        ok = mean(out.beta, self.beta_n)
-        many = self.beta_n > 1
-        if many.any():  # the mean of several frames' weights: strongest actuator back to 1
-            peak = out.beta[many].max(axis=1, keepdims=True)
-            out.beta[many] = np.where(peak > 0, out.beta[many] / np.maximum(peak, 1e-12), out.beta[many])
-        out.saliency_mask[:] = ok
-        mean(out.motion, self.motion_n)
-        mean(out.cell_motion, self.motion_n)
-        mean(out.nearness, self.near_n)
-
-
-def _hold_missing(out: VideoAnalysis) -> np.ndarray:
-    """Ticks without a frame of their own (``video.stride`` > 1, a frame rate below 10 fps) take the
-    values of the analysed tick before them. Returns the analysed tick each filled tick copied,
-    int [shape=(filled,)]."""
-    missing = ~out.frame_mask
-    if not missing.any() or not out.frame_mask.any():
-        return np.zeros(0, np.int64)
-    idx = np.where(out.frame_mask, np.arange(out.frame_mask.size), -1)
-    src = np.maximum.accumulate(idx)
-    fill = missing & (src >= 0)
-    rows = np.flatnonzero(fill)
-    for name in ("mean_rgb", "motion", "cell_motion", "nearness", "depth_mask", "beta", "saliency_mask", "static"):
-        arr = getattr(out, name)
-        arr[rows] = arr[src[rows]]
-    return src[rows]

@@ -22,6 +22,7 @@ from fractions import Fraction
 from autohaptics.errors import ParameterError
 
 RGB = tuple[int, int, int]
+IMPACT_LENGTH_S = 0.3
 
 
 @dataclass(frozen=True)
@@ -268,14 +269,12 @@ def material_scene(duration_s: float = 24.0) -> Scene:
       (cool), a panning textured background (grey), a dark shot with a bright disc on the left:
       motion for the fans, colour for the temperature, a bright spot for the saliency.
     """
-    from autohaptics.testing import sounds
-
     d = float(duration_s)
     looks = (((150, 90, 60), (0.0, 0.0)), ((70, 110, 170), (0.0, 0.0)), ((120, 120, 120), (0.25, 0.0)),
              ((40, 40, 50), (0.0, 0.0)))
     audio: list[Tone | Noise] = [Tone(0.0, d, f, level_dbfs=-26.0, ramp_s=0.05) for f in (130.81, 261.63, 329.63, 392.0)]
-    audio += [e for k, t in enumerate(MATERIAL_IMPACTS_S) if t + sounds.IMPACT_LENGTH_S < d
-              for e in sounds.impact(t, level_dbfs=-8.0 - 2.0 * (k % 3), seed=k + 1)]
+    audio += [e for k, t in enumerate(MATERIAL_IMPACTS_S) if t + IMPACT_LENGTH_S < d
+              for e in impact(t, level_dbfs=-8.0 - 2.0 * (k % 3), seed=k + 1)]
     background, shapes = [], []
     t, k = 0.0, 0
     while t < d - 1e-9:
@@ -296,6 +295,12 @@ def material_scene(duration_s: float = 24.0) -> Scene:
 
 
 MATERIAL_IMPACTS_S = tuple(2.3 + 3.0 * k for k in range(40))
+
+
+def impact(t: float, *, level_dbfs: float = -8.0, seed: int = 0) -> list[Tone | Noise]:
+    """A loud hit at ``t`` s: a 45 Hz thump and a pink-noise crack, ``IMPACT_LENGTH_S`` long."""
+    return [Tone(t, t + IMPACT_LENGTH_S, 45.0, level_dbfs=level_dbfs, ramp_s=0.01),
+            Noise(t, t + IMPACT_LENGTH_S * 0.6, level_dbfs=level_dbfs - 2.0, colour="pink", seed=seed, ramp_s=0.005)]
 
 
 def check_interval(t0: float, t1: float, what: str) -> None:

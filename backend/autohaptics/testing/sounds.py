@@ -14,13 +14,12 @@ import dataclasses
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.testing.scenes import Noise, Scene, Tone
+from autohaptics.testing.scenes import IMPACT_LENGTH_S, Noise, Scene, Tone, impact
 
 # a I-vi-IV-V progression in C, one chord a second, as (bass, three chord notes) in Hz
 _CHORDS = ((130.81, 261.63, 329.63, 392.00), (110.00, 220.00, 261.63, 329.63),
            (87.31, 174.61, 220.00, 261.63), (98.00, 196.00, 246.94, 293.66))
 IMPACT_TIMES_S = (3.0, 6.5, 9.5)
-IMPACT_LENGTH_S = 0.3
 
 
 def music_bed(t0: float, t1: float, *, level_dbfs: float = -32.0) -> list[Tone]:
@@ -38,12 +37,6 @@ def music_bed(t0: float, t1: float, *, level_dbfs: float = -32.0) -> list[Tone]:
             out.append(Tone(t, end, f, level_dbfs=level_dbfs, ramp_s=0.04))
         t, k = end, k + 1
     return out
-
-
-def impact(t: float, *, level_dbfs: float = -8.0, seed: int = 0) -> list[Tone | Noise]:
-    """A loud hit at ``t`` s: a 45 Hz thump and a pink-noise crack, ``IMPACT_LENGTH_S`` long."""
-    return [Tone(t, t + IMPACT_LENGTH_S, 45.0, level_dbfs=level_dbfs, ramp_s=0.01),
-            Noise(t, t + IMPACT_LENGTH_S * 0.6, level_dbfs=level_dbfs - 2.0, colour="pink", seed=seed, ramp_s=0.005)]
 
 
 def music_with_impacts(duration_s: float = 12.0) -> Scene:

@@ -1,0 +1,74 @@
+"""The video pass's per-tick results (:class:`~autohaptics.pipeline.video.VideoAnalysis`): several
+frames' values summed into one tick and divided at the end (:class:`TickSums`), and the ticks
+without a frame of their own filled from the analysed tick before them (:func:`hold_missing`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class TickSums:
+    """Per-tick sums written straight into the output arrays (several frames per tick in the
+    'every' analysis), divided by the counts at the end: no second set of (n, 9, 17) arrays."""
+
+    def __init__(self, out):
+        self.out = out
+        n = out.motion.size
+        self.colour_n = np.zeros(n, np.int32)
+        self.beta_n = np.zeros(n, np.int32)
+        self.motion_n = np.zeros(n, np.int32)
+        self.near_n = np.zeros(n, np.int32)
+
+    def add_colour(self, k, rgb_mean):
+        self.out.mean_rgb[k] += rgb_mean
+        self.colour_n[k] += 1
+
+    def add_beta(self, k, beta):
+        self.out.beta[k] += beta
+        self.beta_n[k] += 1
+
+    def add_motion(self, k, score, cells):
+        self.out.motion[k] += score
+        self.out.cell_motion[k] += cells
+        self.motion_n[k] += 1
+
+    def add_near(self, k, near):
+        self.out.nearness[k] += near
+        self.near_n[k] += 1
+
+    def finish(self) -> None:
+        out = self.out
+
+        def mean(arr, count):
+            many = count > 1
+            if many.any():
+                arr[many] /= count[many].reshape((-1,) + (1,) * (arr.ndim - 1)).astype(arr.dtype)
+            return count > 0
+
+        mean(out.mean_rgb, self.colour_n)
+        ok = mean(out.beta, self.beta_n)
+        many = self.beta_n > 1
+        if many.any():  # the mean of several frames' weights: strongest actuator back to 1
+            peak = out.beta[many].max(axis=1, keepdims=True)
+            out.beta[many] = np.where(peak > 0, out.beta[many] / np.maximum(peak, 1e-12), out.beta[many])
+        out.saliency_mask[:] = ok
+        mean(out.motion, self.motion_n)
+        mean(out.cell_motion, self.motion_n)
+        mean(out.nearness, self.near_n)
+
+
+def hold_missing(out) -> np.ndarray:
+    """Ticks without a frame of their own (``video.stride`` > 1, a frame rate below 10 fps) take the
+    values of the analysed tick before them. Returns the analysed tick each filled tick copied,
+    int [shape=(filled,)]."""
+    missing = ~out.frame_mask
+    if not missing.any() or not out.frame_mask.any():
+        return np.zeros(0, np.int64)
+    idx = np.where(out.frame_mask, np.arange(out.frame_mask.size), -1)
+    src = np.maximum.accumulate(idx)
+    fill = missing & (src >= 0)
+    rows = np.flatnonzero(fill)
+    for name in ("mean_rgb", "motion", "cell_motion", "nearness", "depth_mask", "beta", "saliency_mask", "static"):
+        arr = getattr(out, name)
+        arr[rows] = arr[src[rows]]
+    return src[rows]
