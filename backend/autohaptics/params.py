@@ -190,7 +190,8 @@ def resolve_params(preset: str = DEFAULT_PRESET, overrides: dict[str, Any] | Non
 
 
 # A project's stored parameters: {preset, mode, thresholds (the four effective values), overrides
-# (the user's dotted overrides)}; the editor and the API change them field by field.
+# (the user's dotted overrides)} and, with a learned style, ``style`` (server/styles.py); the
+# editor and the API change them field by field.
 DEFAULT_PARAMS = {"preset": DEFAULT_PRESET, "mode": None, "thresholds": {}, "overrides": {}}
 
 
@@ -216,6 +217,8 @@ def resolve_doc(current: dict | None, *, preset: str | None = None, mode: str | 
     doc["preset"] = preset_name
     doc["mode"] = params.mode
     doc["thresholds"] = dict(params.intensity.thresholds)
+    if cur.get("style"):  # a learned style the service named (server/styles.py) stays until changed
+        doc["style"] = cur["style"]
     return doc, params
 
 

@@ -17,10 +17,11 @@ from autohaptics.server import folder_lock
 from autohaptics.server.chair import ChairService
 from autohaptics.server.frontend import FrontendFiles
 from autohaptics.server.jobs import JobRunner
-from autohaptics.server.routes import chair, jobs, projects, service, timeline
+from autohaptics.server.routes import chair, jobs, projects, service, styles, timeline
 from autohaptics.server.security import TrustBoundary, folder_token, host_names
 from autohaptics.server.settings import Settings
 from autohaptics.server.store import Conflict, NotFound, Store
+from autohaptics.server.styles import Styles
 from autohaptics.server.composer import Composer
 from autohaptics.server.uploads import MediaRejected, UploadTooLarge
 
@@ -54,7 +55,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_middleware(TrustBoundary, names=host_names(settings.bind_host, settings.allowed_hosts),
                        token_of=lambda: app.state.token)
     _add_error_handlers(app)
-    for module in (service, projects, jobs, timeline, chair):
+    for module in (service, projects, jobs, timeline, styles, chair):
         app.include_router(module.router)
     front = settings.frontend_dir
     if front is not None and front.is_dir():
@@ -80,12 +81,14 @@ async def _services(app: FastAPI, settings: Settings):
     chair_service.start()
     app.state.store, app.state.composer, app.state.runner = store, composer, runner
     app.state.chair = chair_service
+    app.state.styles = Styles(settings.data_dir)
     try:
         yield
     finally:
         await anyio.to_thread.run_sync(chair_service.close)  # STOP before anything else goes
         await anyio.to_thread.run_sync(runner.stop)
         await anyio.to_thread.run_sync(composer.writer.close)  # the last re-derive reaches the disk
+        app.state.styles.close()
         store.close()
 
 

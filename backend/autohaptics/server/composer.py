@@ -31,6 +31,7 @@ from autohaptics.timeline import edits as edit_ops
 from autohaptics.timeline.npz import load_npz
 from autohaptics.server.bins import BinaryCache, same_values
 from autohaptics.server.store import Conflict, NotFound, Store, new_id
+from autohaptics.server.styles import style_of
 from autohaptics.server.waveform import cached_peaks
 from autohaptics.server.writer import LayerWriter
 from autohaptics.timebase import TICK_S
@@ -39,9 +40,10 @@ from autohaptics.timeline import Timeline
 log = logging.getLogger("autohaptics.server.composer")
 
 def derive_timeline(analysis: pipeline.Analysis, doc: dict, *, name: str) -> Timeline:
-    """The generated timeline for stored parameters ``doc`` from a feature cache (no decoding)."""
+    """The generated timeline for stored parameters ``doc`` from a feature cache (no decoding), in
+    the style they name (``doc["style"]``, :mod:`.styles`)."""
     params, preset = params_from_doc(doc)
-    tl = pipeline.derive(analysis, params, preset=preset)
+    tl = pipeline.derive(analysis, params, preset=preset, style=style_of(doc))
     tl.source["name"] = name
     return tl
 

@@ -10,6 +10,7 @@ from autohaptics.server.chair import ChairService
 from autohaptics.server.jobs import JobRunner
 from autohaptics.server.settings import Settings
 from autohaptics.server.store import Store
+from autohaptics.server.styles import Styles
 from autohaptics.server.composer import Composer
 
 
@@ -33,8 +34,13 @@ def get_chair(request: Request) -> ChairService:
     return request.app.state.chair
 
 
+def get_styles(request: Request) -> Styles:
+    return request.app.state.styles
+
+
 SettingsDep = Annotated[Settings, Depends(get_settings)]
 StoreDep = Annotated[Store, Depends(get_store)]
 RunnerDep = Annotated[JobRunner, Depends(get_runner)]
 ComposerDep = Annotated[Composer, Depends(get_composer)]
 ChairDep = Annotated[ChairService, Depends(get_chair)]
+StylesDep = Annotated[Styles, Depends(get_styles)]

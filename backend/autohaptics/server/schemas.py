@@ -19,6 +19,7 @@ MAX_SECONDS = 1e7  # a position or range end, s (115 days: beyond any film)
 Revision = Annotated[int, Field(ge=0, le=2**53)]
 Name = Annotated[str, Field(max_length=200)]
 ProjectId = Annotated[str, Field(min_length=1, max_length=200)]
+StyleId = Annotated[str, Field(min_length=1, max_length=200)]
 
 
 # ---------------------------------------------------------------------- service
@@ -72,6 +73,10 @@ class JobAccepted(BaseModel):
 
 # --------------------------------------------------------------------- projects
 class ParamsDoc(BaseModel):
+    """Stored parameters; ``style`` ({id, name, document}, the learned style they derive in) only
+    when there is one, so a document without a style reads as it is stored."""
+    model_config = ConfigDict(extra="allow")
+
     preset: str
     mode: str
     thresholds: dict[str, float]
@@ -106,6 +111,7 @@ class ParamsIn(_In):
     mode: Name | None = None
     thresholds: dict[str, float] | None = None
     overrides: dict[str, Any] | None = None
+    style: StyleId | None = None  # a stored style's id; null drops the style, left out keeps it
 
 
 class ParamsOut(BaseModel):
@@ -276,3 +282,30 @@ class ChairStatusOut(BaseModel):
     playback: ChairPlaybackOut
     push: ChairPushOut | None
     settings: ChairSettingsOut
+
+
+# ----------------------------------------------------------------------- styles
+class StyleLearnIn(_In):
+    name: Annotated[str, Field(min_length=1, max_length=200)]
+    project_ids: Annotated[list[ProjectId], Field(min_length=1, max_length=20)]
+    dry_run: bool = False  # learn and report, store nothing (the editor's preview)
+
+
+class StyleFilm(BaseModel):
+    project_id: str
+    name: str
+    plain: dict[str, float | None]
+    styled: dict[str, float | None]
+    explained: float | None
+
+
+class StyleOut(BaseModel):
+    id: str | None  # null for a dry run
+    name: str
+    created_at: str | None
+    films: list[dict[str, str]]
+    report: list[StyleFilm]
+
+
+class StyleDetailOut(StyleOut):
+    document: dict[str, Any]

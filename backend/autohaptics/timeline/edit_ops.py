@@ -125,14 +125,18 @@ def normalise(op: Any) -> tuple[dict, Any]:
 
 
 def _params_doc(value: Any, field: str) -> dict:
-    """A stored parameter document ``{preset, mode, thresholds, overrides}`` (its values are checked
-    where it is applied, by :func:`autohaptics.params.resolve_doc`)."""
-    if not isinstance(value, dict) or sorted(value) != sorted(PARAMS_FIELDS):
+    """A stored parameter document ``{preset, mode, thresholds, overrides}`` and optionally ``style``
+    (a learned style: ``{id, name, document}``); its values are checked where it is applied, by
+    :func:`autohaptics.params.resolve_doc` and the style's own check."""
+    if not isinstance(value, dict) or sorted(set(value) - {"style"}) != sorted(PARAMS_FIELDS):
         raise ParameterError(f"op 'params': field '{field}' must be an object with exactly the fields "
-                             f"{', '.join(PARAMS_FIELDS)}")
+                             f"{', '.join(PARAMS_FIELDS)} (and optionally style)")
     if not isinstance(value["thresholds"], dict) or not isinstance(value["overrides"], dict):
         raise ParameterError(f"op 'params': field '{field}': 'thresholds' and 'overrides' must be objects")
-    return {k: value[k] for k in PARAMS_FIELDS}
+    style = value.get("style")
+    if "style" in value and (not isinstance(style, dict) or sorted(style) != ["document", "id", "name"]):
+        raise ParameterError(f"op 'params': field '{field}.style' must be an object with id, name and document")
+    return {k: value[k] for k in (*PARAMS_FIELDS, *(("style",) if "style" in value else ()))}
 
 
 def _stored_import(op: dict) -> dict:

@@ -6,25 +6,33 @@ from fastapi import APIRouter, Body, Response
 from fastapi.responses import StreamingResponse
 
 from autohaptics.server.sse import event_stream
-from autohaptics.server.deps import RunnerDep, StoreDep, ComposerDep
+from autohaptics.server.deps import ComposerDep, RunnerDep, StoreDep, StylesDep
 from autohaptics.server.jobs import TERMINAL
 from autohaptics.server.schemas import JobAccepted, JobOut, ParamsIn, ParamsOut
+from autohaptics.server.styles import style_ref
 from autohaptics.params import params_from_doc, resolve_doc, same_analysis
 
 router = APIRouter(tags=["jobs"])
 
 
-def _resolve(project: dict, body: ParamsIn | None) -> dict:
+def _resolve(project: dict, body: ParamsIn | None, styles) -> dict:
     given = body.model_dump(exclude_unset=True) if body is not None else {}
+    choose = "style" in given
+    style_id = given.pop("style", None)
     doc, _ = resolve_doc(project["params"], **given)
+    if choose:  # null drops the style, an id chooses that stored style (404 when unknown)
+        doc.pop("style", None)
+        if style_id is not None:
+            doc["style"] = style_ref(styles.get(style_id))
     return doc
 
 
 @router.post("/api/projects/{project_id}/generate", status_code=202, response_model=JobAccepted,
              responses={409: {"description": "a job of this project is running"}})
-def generate(project_id: str, store: StoreDep, runner: RunnerDep, body: ParamsIn | None = Body(default=None)) -> dict:
+def generate(project_id: str, store: StoreDep, runner: RunnerDep, styles: StylesDep,
+             body: ParamsIn | None = Body(default=None)) -> dict:
     project = store.get_project(project_id)
-    doc = _resolve(project, body)
+    doc = _resolve(project, body, styles)
     job = runner.submit(project, doc, record=True)
     store.set_params(project_id, doc)
     return {"job": job}
@@ -33,14 +41,14 @@ def generate(project_id: str, store: StoreDep, runner: RunnerDep, body: ParamsIn
 @router.put("/api/projects/{project_id}/params", response_model=ParamsOut,
             responses={202: {"model": ParamsOut, "description": "a new analysis was started"}})
 def put_params(project_id: str, body: ParamsIn, response: Response, store: StoreDep, runner: RunnerDep,
-               composer: ComposerDep) -> dict:
+               composer: ComposerDep, styles: StylesDep) -> dict:
     with runner.params_lock(project_id):
-        return _put_params(project_id, body, response, store, runner, composer)
+        return _put_params(project_id, body, response, store, runner, composer, styles)
 
 
-def _put_params(project_id: str, body: ParamsIn, response: Response, store, runner, composer) -> dict:
+def _put_params(project_id: str, body: ParamsIn, response: Response, store, runner, composer, styles) -> dict:
     project = store.get_project(project_id)
-    doc = _resolve(project, body)
+    doc = _resolve(project, body, styles)
     out = apply_params(project_id, doc, store, runner, composer)
     if not out["derived"]:
         response.status_code = 202

@@ -9,9 +9,10 @@ from fastapi import APIRouter, Query, Request, Response
 from fastapi.responses import FileResponse
 
 from autohaptics.errors import ParameterError
-from autohaptics.server.deps import RunnerDep, SettingsDep, StoreDep, ComposerDep
+from autohaptics.server.deps import ComposerDep, RunnerDep, SettingsDep, StoreDep, StylesDep
 from autohaptics.server.schemas import ProjectOut, ProjectPatch, WaveformOut
 from autohaptics.server.store import new_id
+from autohaptics.server.styles import style_ref
 from autohaptics.params import resolve_doc
 from autohaptics.server.uploads import display_name, inspect_media, multipart_body, receive_upload
 from autohaptics.timebase import n_ticks
@@ -24,6 +25,7 @@ _UPLOAD_BODY = multipart_body(
     name={"type": "string", "description": "display name (default: the file's name)"},
     preset={"type": "string", "description": "quality preset (default balanced)"},
     mode={"type": "string", "description": "vibration mode (default from the preset)"},
+    style={"type": "string", "description": "id of a stored style to derive in (default none)"},
     generate={"type": "boolean", "default": True, "description": "start a generation job"})
 _TRUE, _FALSE = ("1", "true", "yes", "on"), ("0", "false", "no", "off")
 
@@ -47,7 +49,8 @@ def list_projects(store: StoreDep) -> list[dict]:
 @router.post("/api/projects", status_code=201, response_model=ProjectOut, openapi_extra=_UPLOAD_BODY,
              responses={413: {"description": "upload too large"}, 415: {"description": "not media"},
                         422: {"description": "truncated or damaged media"}})
-async def create_project(request: Request, store: StoreDep, settings: SettingsDep, runner: RunnerDep) -> dict:
+async def create_project(request: Request, store: StoreDep, settings: SettingsDep, runner: RunnerDep,
+                         styles: StylesDep) -> dict:
     dest = store.new_upload_path()
     upload = await receive_upload(request.headers, request.stream(), dest, max_bytes=settings.max_upload_bytes)
     try:
@@ -57,6 +60,8 @@ async def create_project(request: Request, store: StoreDep, settings: SettingsDe
                 if fields.get("name", "").strip() else "") or display_name(upload.filename)
         params, _ = await to_thread.run_sync(
             lambda: resolve_doc(None, preset=fields.get("preset") or None, mode=fields.get("mode") or None))
+        if fields.get("style", "").strip():
+            params["style"] = style_ref(styles.get(fields["style"].strip()))
         accepted = await to_thread.run_sync(lambda: inspect_media(dest, name=name))
         info = accepted.info
         project = await to_thread.run_sync(lambda: store.create_project(
