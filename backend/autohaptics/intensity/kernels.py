@@ -11,9 +11,7 @@ are recorded in :mod:`autohaptics.bench.audio`.
 Every kernel is a plain loop over numpy arrays: with ``NUMBA_DISABLE_JIT=1`` the same source runs
 as pure Python (the slow reference path). Streaming kernels never allocate their state: the
 caller passes copies of the state arrays, the kernel updates them in place and the caller
-returns them.
-
-Layouts: band-major ``[shape=(n_bands, n_samples)]`` so that each band's recursion walks
+returns them. Layouts are band-major ``[shape=(n_bands, n_samples)]``: each band's recursion walks
 contiguous memory.
 
 Digital silence: over exact zeros a recursive state rings down geometrically, through the subnormal
