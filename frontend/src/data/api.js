@@ -11,7 +11,7 @@ import { watchChair, watchJob } from "./streams.js";
  * @typedef {{id: string, project_id: string, status: "queued"|"running"|"done"|"failed"|"cancelled",
  *   progress: number, stage?: string|null, error?: string|null}} Job
  * @typedef {{preset?: string, mode?: string, thresholds?: Record<string, number>,
- *   overrides?: Record<string, any>}} Params
+ *   overrides?: Record<string, any>, style?: any}} Params
  * @typedef {{id: string, name: string, created_at?: string, updated_at?: string,
  *   status: "new"|"running"|"ready"|"failed"|"cancelled", duration_s?: number|null, n_ticks?: number|null,
  *   source?: any, job?: Job|null, params?: Params, revision?: number, cursor?: number, has_timeline?: boolean,
@@ -32,6 +32,10 @@ import { watchChair, watchJob } from "./streams.js";
  *     drift_s: number|null, drift_seeks: number},
  *   push: ChairPush|null, settings: ChairSettings}} ChairStatus
  * @typedef {{project_id: string, state: "play"|"pause"|"seek", position_s: number, heartbeat?: boolean, initial?: boolean}} ChairReport
+ * @typedef {{project_id: string, name: string, plain: Record<string, number|null>, styled: Record<string, number|null>,
+ *   explained: number|null}} StyleFilm
+ * @typedef {{id: string|null, name: string, created_at: string|null, films: Array<{project_id: string, name: string}>,
+ *   report: StyleFilm[]}} StyleInfo
  */
 
 export class Api {
@@ -311,6 +315,35 @@ export class Api {
    */
   _multipart(path, file, fields, onProgress) {
     return postMultipart(this.base + path, path, file, fields, onProgress);
+  }
+
+  /** @returns {Promise<StyleInfo[]>} the stored styles, newest first */
+  listStyles() {
+    return this.request("GET", "/api/styles");
+  }
+
+  /**
+   * Learn a style from projects' edits; `dryRun`: the report only, nothing stored.
+   * @param {string} name @param {string[]} projectIds @param {boolean} dryRun
+   * @returns {Promise<StyleInfo & {document: Record<string, any>}>}
+   */
+  learnStyle(name, projectIds, dryRun) {
+    return this.request("POST", "/api/styles", { name, project_ids: projectIds, dry_run: dryRun });
+  }
+
+  /** @param {string} id */
+  deleteStyle(id) {
+    return this.request("DELETE", `/api/styles/${enc(id)}`);
+  }
+
+  /** @param {string} id the style file's download URL */
+  styleDownloadUrl(id) {
+    return `${this.base}/api/styles/${enc(id)}/download`;
+  }
+
+  /** @param {File} file a style file @returns {{promise: Promise<StyleInfo>, abort: () => void}} */
+  importStyle(file) {
+    return this._multipart("/api/styles/import", file, {}, () => {});
   }
 
   /**

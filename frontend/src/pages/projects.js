@@ -1,6 +1,7 @@
 /**
  * The projects screen: upload (drag-and-drop or file picker) with an upload progress bar, then the
- * generation progress with Cancel; and the list of projects with open, rename, duplicate, delete.
+ * generation progress with Cancel, in a learned style when one is chosen; the list of projects
+ * with open, rename, duplicate, delete and Learn style; the learned styles.
  */
 
 import { isTerminal } from "../data/streams.js";
@@ -9,6 +10,8 @@ import { confirmDialog, progressBar, promptDialog, toast } from "../panels/widge
 import { formatBytes, formatDate, formatTime } from "../data/format.js";
 import { errorText } from "../data/http.js";
 import { JobProgress } from "../panels/job-progress.js";
+import { learnStyleDialog } from "../panels/learn-style.js";
+import { StylesPanel } from "../panels/styles-panel.js";
 
 const STATUS_TEXT = /** @type {Record<string, string>} */ ({
   new: "no timeline",
@@ -58,6 +61,8 @@ export class ProjectsPage {
     this.presetSel = h("select", { class: "input", "data-testid": "upload-preset", "aria-label": "Quality preset" });
     for (const p of this.config.presets || ["balanced"]) this.presetSel.add(new Option(p, p, false, p === (this.config.default_preset || "balanced")));
     this.generateCb = h("input", { type: "checkbox", checked: true, "data-testid": "upload-generate" });
+    this.styleSel = h("select", { class: "input", "data-testid": "upload-style", "aria-label": "Style" });
+    this.styleSel.add(new Option("None", ""));
     const limit = Number(this.config.upload_limit_bytes);
     this.drop = h(
       "div",
@@ -66,6 +71,7 @@ export class ProjectsPage {
       h("p", { class: "dropzone-hint" }, `or `, pick, Number.isFinite(limit) ? ` · up to ${formatBytes(limit)}` : ""),
       h("div", { class: "upload-options" },
         h("label", { class: "field-inline" }, "Preset ", this.presetSel),
+        h("label", { class: "field-inline" }, "Style ", this.styleSel),
         h("label", { class: "field-inline" }, this.generateCb, " Generate after upload")),
       this.fileInput,
     );
@@ -105,12 +111,14 @@ export class ProjectsPage {
     );
 
     this.listEl = h("ul", { class: "project-list", "data-testid": "project-list", "aria-label": "Projects" });
+    this.stylesPanel = new StylesPanel(this.api, () => this.refreshStyles());
     this.emptyEl = h("p", { class: "empty", hidden: true, "data-testid": "no-projects" }, "No projects yet: drop a video above to start.");
     this.host.replaceChildren(
       h("header", { class: "topbar" }, h("span", { class: "brand" }, "autohaptics"), h("h1", { class: "page-title" }, "Projects")),
       h("main", { class: "projects", "data-testid": "projects-page" },
         h("section", { class: "panel upload-panel", "aria-label": "Upload" }, this.drop, this.uploadBox),
-        h("section", { class: "panel" }, h("h2", { class: "panel-title" }, "Your projects"), this.listEl, this.emptyEl)),
+        h("section", { class: "panel" }, h("h2", { class: "panel-title" }, "Your projects"), this.listEl, this.emptyEl),
+        this.stylesPanel.el),
     );
   }
 
@@ -131,6 +139,30 @@ export class ProjectsPage {
     for (const p of projects) this.names.set(p.name, (this.names.get(p.name) || 0) + 1);
     this.listEl.replaceChildren(...projects.map((p) => this._row(p)));
     this.emptyEl.hidden = projects.length > 0;
+    await this.refreshStyles();
+  }
+
+  /** Reload the Style select's options (the learned styles), keeping the choice while it exists. */
+  async refreshStyles() {
+    let styles;
+    try {
+      styles = await this.api.listStyles();
+    } catch (err) {
+      toast(`Could not load the styles: ${errorText(err)}`, "error");
+      return;
+    }
+    if (this.disposed) return;
+    this.stylesPanel.show(styles);
+    const chosen = this.styleSel.value;
+    this.styleSel.replaceChildren(new Option("None", ""), ...styles.map((st) => new Option(st.name, st.id || "", false, st.id === chosen)));
+  }
+
+  /** Learn a style from a project's edits (the dialog shows the report before saving). @param {import("../data/api.js").Project} p */
+  async learnStyle(p) {
+    const style = await learnStyleDialog(this.api, p);
+    if (!style) return;
+    toast(`Saved the style “${style.name}”.`);
+    await this.refreshStyles();
   }
 
   /** @param {import("../data/api.js").Project} p */
@@ -148,6 +180,7 @@ export class ProjectsPage {
         btn("Open", "project-open-btn", () => { location.hash = `#/project/${encodeURIComponent(p.id)}`; }),
         btn("Rename", "project-rename", () => this.rename(p)),
         btn("Duplicate", "project-duplicate", () => this.duplicate(p)),
+        p.has_timeline ? btn("Learn style…", "project-learn-style", () => this.learnStyle(p)) : null,
         btn("Delete", "project-delete", () => this.remove(p))),
     );
     const job = p.job;
@@ -251,7 +284,7 @@ export class ProjectsPage {
     const generate = this.generateCb.checked;
     const task = this.api.upload(
       file,
-      { name: file.name.replace(/\.[^.]+$/, ""), preset: this.presetSel.value, generate: String(generate) },
+      { name: file.name.replace(/\.[^.]+$/, ""), preset: this.presetSel.value, generate: String(generate), ...(this.styleSel.value ? { style: this.styleSel.value } : {}) },
       (f) => this.uploadBar.set(f),
     );
     this.uploading = task;

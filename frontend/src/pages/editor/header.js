@@ -1,10 +1,12 @@
 /**
- * The editor's top bar: the project's name and save state, the chair indicator and STOP, undo /
- * redo, regenerate, import and export.
+ * The editor's top bar: the project's name, the learned style in use and the save state, the chair
+ * indicator and STOP, undo / redo, regenerate, Learn style, import and export.
  */
 
 import { h } from "../../core/dom.js";
 import { exportMenu } from "../../panels/export-menu.js";
+import { learnStyleDialog } from "../../panels/learn-style.js";
+import { toast } from "../../panels/widgets.js";
 
 const CHAIR_TEXT = /** @type {Record<string, string>} */ ({ connected: "Chair on", reconnecting: "Chair reconnecting…" });
 
@@ -18,10 +20,12 @@ export class EditorHeader {
   build() {
     const page = this.page;
     this.nameEl = h("h1", { class: "project-name", "data-testid": "project-name" }, "…");
+    this.styleEl = h("span", { class: "badge style-badge", "data-testid": "style-badge", title: "The learned style the generated layer derives in (Regenerate… changes it)" }, "No style");
     this.saveEl = h("span", { class: "save-state", role: "status", "aria-live": "polite", "data-testid": "save-state" }, "");
     this.undoBtn = h("button", { class: "btn", type: "button", disabled: true, title: "Undo (Ctrl+Z)", "data-testid": "undo", onclick: () => page.edits.undo() }, "Undo");
     this.redoBtn = h("button", { class: "btn", type: "button", disabled: true, title: "Redo (Ctrl+Shift+Z)", "data-testid": "redo", onclick: () => page.edits.redo() }, "Redo");
     this.regenBtn = h("button", { class: "btn", type: "button", "data-testid": "regenerate", onclick: () => page.params.regenerate() }, "Regenerate…");
+    const learnBtn = h("button", { class: "btn", type: "button", "data-testid": "learn-style", title: "Learn a reusable style from this film's edits", onclick: () => this.learnStyle() }, "Learn style…");
     const importInput = h("input", { type: "file", accept: ".json,.csv,application/json,text/csv", class: "visually-hidden", "data-testid": "import-input", "aria-hidden": "true", tabindex: -1 });  // the Import… button is the control
     importInput.addEventListener("change", () => {
       const f = importInput.files && importInput.files[0];
@@ -41,6 +45,7 @@ export class EditorHeader {
       { class: "topbar" },
       h("a", { class: "btn btn-ghost", href: "#/", "data-testid": "back" }, "← Projects"),
       this.nameEl,
+      this.styleEl,
       this.saveEl,
       h("div", { class: "spacer" }),
       this.chairIndicator,
@@ -48,6 +53,7 @@ export class EditorHeader {
       this.undoBtn,
       this.redoBtn,
       this.regenBtn,
+      learnBtn,
       importBtn,
       importInput,
       exportSlot,
@@ -56,6 +62,19 @@ export class EditorHeader {
     page.host.replaceChildren(header, main);
     exportSlot.append(exportMenu(page.api, page.projectId, exportFormats(page.config)));
     return main;
+  }
+
+  /** The style in use ({id, name}) or null. @param {{id: string, name: string}|null} style */
+  showStyle(style) {
+    this.styleEl.textContent = style ? `Style: ${style.name}` : "No style";
+    this.styleEl.dataset.style = style ? style.id : "";
+  }
+
+  /** Learn a style from this project's edits (the dialog shows the report before saving). */
+  async learnStyle() {
+    const page = this.page;
+    const style = await learnStyleDialog(page.api, { id: page.projectId, name: page.project ? page.project.name : "" });
+    if (style) toast(`Saved the style “${style.name}”: choose it in Upload or Regenerate.`);
   }
 
   /** @param {"saved"|"saving"|"error"} state @param {string} message */

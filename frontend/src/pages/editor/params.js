@@ -170,7 +170,15 @@ export class ParamsControl {
     const page = this.page;
     const cfg = page.config;
     const p = (page.project && page.project.params) || {};
+    let styles = [];
+    try {
+      styles = await page.api.listStyles();
+    } catch (err) {
+      toast(`Could not load the styles: ${errorText(err)}`, "error");
+    }
     const params = await regenerateDialog({
+      styles,
+      style: p.style || null,
       presets: cfg.presets || ["balanced"],
       modes: cfg.modes || ["audio"],
       preset: p.preset || cfg.default_preset || "balanced",
@@ -203,10 +211,11 @@ export class ParamsControl {
     if (job) page.jobs.follow(job);
   }
 
-  /** The preset and mode the timeline was made with. */
+  /** The preset and mode the timeline was made with, and its style in the header. */
   updateInfo() {
     const p = this.page.project && this.page.project.params;
     if (!p) return;
     this.info.textContent = `Preset ${p.preset} · mode ${p.mode}`;
+    this.page.header.showStyle(p.style || null);
   }
 }
