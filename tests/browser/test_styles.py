@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 
 from autohaptics.testing import scenes, write_scene
-from browser_support import open_editor, screenshot, state, upload, wait_jobs_settled, wait_revision_above
+from browser_support import (
+    ARTIFACTS, copy_to_docs, open_editor, state, upload, wait_jobs_settled, wait_revision_above,
+)
 
 pytestmark = pytest.mark.browser
 
@@ -21,6 +23,15 @@ def editor_vibration(pg, n_ticks: int) -> np.ndarray:
     """The composed vibration the editor holds, (n_ticks, 9)."""
     rows = pg.evaluate("(n) => Array.from({length: n}, (_, k) => window.autohaptics.valuesAt(k).vibration)", n_ticks)
     return np.asarray(rows, dtype=np.float64)
+
+
+def guide_shot(element, name: str) -> None:
+    """test-artifacts/screenshots/<name>.png of an element, copied to docs/img for docs/GUIDE.md
+    when AUTOHAPTICS_UPDATE_DOCS_IMG=1."""
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    path = ARTIFACTS / f"{name}.png"
+    element.screenshot(path=str(path))
+    copy_to_docs(path, f"{name}.png")
 
 
 def api_vibration(api, pid: str) -> np.ndarray:
@@ -54,7 +65,7 @@ def test_learn_a_style_upload_a_film_in_it_and_undo_the_choice(page, api, tmp_pa
     summary = dialog.locator("[data-testid=style-summary]").inner_text()
     assert 45 <= int(re.search(r"full vibration becomes (\d+) %", summary).group(1)) <= 55, summary
     assert api.get("/api/styles").json() == styles_before  # nothing stored before Save
-    screenshot(page, "learn-style-report")
+    guide_shot(dialog, "guide_learn_style")
     dialog.locator("[data-testid=style-save]").click()
     dialog.wait_for(state="detached")
     stored = [s for s in api.get("/api/styles").json() if s["name"] == "half"]
@@ -95,7 +106,7 @@ def test_learn_a_style_upload_a_film_in_it_and_undo_the_choice(page, api, tmp_pa
     reference = api_vibration(api, plain["id"])
     assert reference.max() > 0.3
     np.testing.assert_allclose(editor_vibration(page, n), reference * 0.5, atol=0.03)
-    screenshot(page, "editor-style-badge")
+    guide_shot(page.locator("header.topbar"), "guide_style_header")
 
     # Drop the style in Regenerate (a settings change), then undo that choice.
     page.click("[data-testid=regenerate]")
