@@ -1,7 +1,7 @@
 """Every JSON route's body, fuzzed (hypothesis, bounded, derandomised so CI sees the same 2,100
 requests): arbitrary JSON (huge integers, NaN, Infinity, deep nesting, wrong types) and bodies
 shaped like the route's schema with arbitrary values (edit ops by their real names and fields,
-parameter overrides by their real dotted names). No response is a 500; every refusal is a 4xx
+parameter overrides by their real dotted names, style files by their real fields). No response is a 500; every refusal is a 4xx
 with one line of ``detail`` that names no server path."""
 
 from __future__ import annotations
@@ -58,7 +58,15 @@ def routes(pid: str) -> list[tuple[str, str, st.SearchStrategy]]:
     params = shaped({"preset": values | st.sampled_from(["fast", "balanced", "x"]),
                      "mode": values | st.sampled_from(["audio", "random", "x"]),
                      "thresholds": st.dictionaries(st.sampled_from(["loudness", "sharpness", "x"]), values) | values,
-                     "overrides": st.dictionaries(st.sampled_from(PARAM_NAMES + GROUPS + ["x.y"]), values) | values})
+                     "overrides": st.dictionaries(st.sampled_from(PARAM_NAMES + GROUPS + ["x.y"]), values) | values,
+                     "style": values})
+    curve = st.lists(st.floats(min_value=-0.5, max_value=1.5) | values, max_size=13) | values
+    style_file = values | shaped({"format": st.just("autohaptics.style") | values, "version": st.just(1) | values,
+                                  "name": values, "threshold_scale": values, "knots": curve,
+                                  "vibration": st.dictionaries(st.sampled_from(["A1", "A9", "x"]), curve) | values,
+                                  "fans": curve, "temperature": shaped({"scale": values, "offset_c": values}) | values,
+                                  "overrides": st.dictionaries(st.sampled_from(PARAM_NAMES + ["x.y"]), values) | values,
+                                  "learned": values})
     return [
         ("PATCH", f"/api/projects/{pid}", shaped({"name": values, "view": values})),
         ("PUT", f"/api/projects/{pid}/params", params),
@@ -73,6 +81,9 @@ def routes(pid: str) -> list[tuple[str, str, st.SearchStrategy]]:
         ("POST", "/api/chair/push", shaped({"project_id": st.just(pid) | values, "start_s": values, "end_s": values})),
         ("PUT", "/api/chair/settings", shaped({"latency_ms": values, "comfort": shaped({
             "scale": values, "mute": shaped({z: values for z in ("back", "seat", "heat", "fans")}) | values})})),
+        ("POST", "/api/styles", shaped({"name": values, "project_ids": st.lists(st.just(pid) | values, max_size=3)
+                                        | values, "dry_run": st.just(True) | values})),
+        ("IMPORT", "/api/styles/import", style_file),
         ("IMPORT", f"/api/projects/{pid}/import", values | shaped({"format": st.just("autohaptics.timeline"),
                                                                    "version": values, "n_ticks": values,
                                                                    "vibration": values})),
