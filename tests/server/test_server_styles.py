@@ -134,6 +134,11 @@ def test_import_a_style_file(client, halved):
     assert out["name"] == "house" and out["id"] != halved["id"] and out["report"] == [] and out["films"] == []
     assert out["document"]["vibration"] == halved["document"]["vibration"]
     assert client.delete(f"/api/styles/{out['id']}").status_code == 204
+    doc["name"] = "line\nbreak\u202e" + "x" * 300
+    r = client.post("/api/styles/import", files={"file": ("a.json", json.dumps(doc).encode(), "application/json")})
+    assert r.status_code == 201 and r.json()["name"] == "linebreak" + "x" * 191, r.text
+    assert r.json()["document"]["name"] == r.json()["name"]
+    assert client.delete(f"/api/styles/{r.json()['id']}").status_code == 204
 
 
 @pytest.mark.parametrize("content,field", [
@@ -291,3 +296,12 @@ def test_a_film_without_edits_learns_the_identity_and_explains_nothing(client, f
     film = r.json()["report"][0]
     assert film["explained"] is None and film["plain"] == film["styled"] and film["plain"]["vibration_mae"] == 0
     client.delete(f"/api/projects/{project['id']}")
+
+
+def test_a_style_whose_file_went_missing_is_404(client, edited, root):
+    r = client.post("/api/styles", json={"name": "lost", "project_ids": [edited["id"]]})
+    sid = r.json()["id"]
+    (root / "data" / "styles" / f"{sid}.json").unlink()
+    r = client.get(f"/api/styles/{sid}")
+    assert r.status_code == 404 and "missing" in r.json()["detail"] and str(root) not in r.json()["detail"]
+    assert client.delete(f"/api/styles/{sid}").status_code == 204

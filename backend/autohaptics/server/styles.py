@@ -22,6 +22,7 @@ from pathlib import Path
 from autohaptics.errors import ParameterError
 from autohaptics.params import params_from_doc
 from autohaptics.server.db import DB_NAME, Conflict, NotFound, check_id, new_id, now_iso
+from autohaptics.server.uploads import display_name
 from autohaptics.style import Style, from_dict, to_dict
 
 MAX_STYLE_BYTES = 1024 * 1024  # a style file (12 knots: about 2 kB)
@@ -40,7 +41,8 @@ def style_ref(style: dict) -> dict:
 
 
 def parse_style_file(data: bytes, *, fallback_name: str) -> Style:
-    """A style from an imported file's bytes; ParameterError with one sentence naming the field."""
+    """A style from an imported file's bytes; ParameterError with one sentence naming the field. Its
+    name is made a display name (no control characters, at most 200), else ``fallback_name``."""
     if len(data) > MAX_STYLE_BYTES:
         raise ParameterError(f"a style file holds at most {MAX_STYLE_BYTES} bytes, got {len(data)}")
     try:
@@ -48,9 +50,8 @@ def parse_style_file(data: bytes, *, fallback_name: str) -> Style:
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ParameterError(f"not a style file (not JSON: {exc})") from None
     style = from_dict(doc)
-    if not style.name.strip():
-        style = dataclasses.replace(style, name=fallback_name)
-    return style
+    name = display_name(style.name, basename=False, fallback="") or fallback_name
+    return style if name == style.name else dataclasses.replace(style, name=name)
 
 
 def learn_from_projects(store, composer, project_ids: list[str], *, name: str) -> tuple[Style, list[dict]]:
@@ -121,7 +122,11 @@ class Styles:
             row = self._db.execute("SELECT * FROM styles WHERE id=?", (sid,)).fetchone()
         if row is None:
             raise NotFound(f"no style with id {sid!r}")
-        return {**_summary(row), "document": json.loads(path.read_text(encoding="utf-8"))}
+        try:
+            document = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            raise NotFound(f"the file of style {sid!r} is missing or damaged in the data folder") from None
+        return {**_summary(row), "document": document}
 
     def delete(self, sid: str) -> None:
         path = self.path(sid)
