@@ -105,3 +105,60 @@ def cut_score(sig_a: np.ndarray, sig_b: np.ndarray, *, params: CutParams = CutPa
 def is_cut(sig_a: np.ndarray, sig_b: np.ndarray, *, params: CutParams = CutParams()) -> bool:
     """True when the two frames' signatures belong to different shots (module docstring)."""
     return cut_score(sig_a, sig_b, params=params) >= 0.5
+
+
+# ------------------------------------------------------------------ signatures kept per tick
+_HIST_N = 3 * _RGB_BINS
+PACKED_SIZE = _HIST_N + _THUMB_N
+_HIST_SCALE = 3 * 255.0  # each channel's 16 bins sum to 1/3: a channel's packed bins sum to 255
+
+
+def pack_signature(sig: np.ndarray) -> np.ndarray | None:
+    """A colour signature as uint8 [shape=(192,)]: the 48 histogram bins scaled so each channel
+    sums to 255, then the 144 thumbnail grey levels, both rounded. None for a gray signature
+    (its histogram cannot be compared with a colour one); a packed row of zeros means "none"."""
+    s = np.asarray(sig, np.float32)
+    if s.size != PACKED_SIZE:
+        return None
+    out = np.empty(PACKED_SIZE, np.float32)
+    out[:_HIST_N] = s[:_HIST_N] * _HIST_SCALE
+    out[_HIST_N:] = s[_HIST_N:]
+    return np.clip(np.rint(out), 0, 255).astype(np.uint8)
+
+
+def unpack_signatures(packed: np.ndarray) -> np.ndarray:
+    """Packed rows uint8 [shape=(m, 192)] back to colour signatures float32 [shape=(m, 192)]."""
+    p = np.asarray(packed, np.float32).reshape(-1, PACKED_SIZE)
+    out = p.copy()
+    out[:, :_HIST_N] /= _HIST_SCALE
+    return out
+
+
+def thumbnails(sigs: np.ndarray) -> np.ndarray:
+    """The 16 x 9 luma thumbnails (grey levels, row-major 9 rows of 16) of colour signatures
+    [shape=(m, 192)], float32 [shape=(m, 144)]."""
+    return np.asarray(sigs, np.float32).reshape(-1, PACKED_SIZE)[:, _HIST_N:]
+
+
+def cut_scores(sigs_a: np.ndarray, sigs_b: np.ndarray, *, params: CutParams = CutParams(),
+               either: bool = False) -> np.ndarray:
+    """:func:`cut_score` of each row pair of two arrays of colour signatures [shape=(m, 192)],
+    float64 [shape=(m,)] in 0..1 (the same rule, over rows; float rounding may differ in the
+    last digits). ``either``: the colours OR the layout changed is enough (for frames on either
+    side of a transition that hid the cut itself, such as a fade through black)."""
+    a = np.asarray(sigs_a, np.float64).reshape(-1, PACKED_SIZE)
+    b = np.asarray(sigs_b, np.float64).reshape(-1, PACKED_SIZE)
+    if a.shape != b.shape:
+        raise ParameterError(f"signature arrays differ in shape: {a.shape} vs {b.shape}")
+    ta, tb = a[:, _HIST_N:], b[:, _HIST_N:]
+    ma, mb = ta.mean(axis=1), tb.mean(axis=1)
+    da, db = ta - ma[:, None], tb - mb[:, None]
+    sa, sb = (da * da).sum(axis=1), (db * db).sum(axis=1)
+    flat = np.sqrt(np.minimum(sa, sb) / _THUMB_N) < params.flat_std
+    hist = 0.5 * np.abs(a[:, :_HIST_N] - b[:, :_HIST_N]).sum(axis=1)
+    colour = np.minimum(1.0, 0.5 * hist / params.hist_threshold)
+    den = np.sqrt(sa * sb)
+    corr = np.where(den > 0, (da * db).sum(axis=1) / np.where(den > 0, den, 1.0), 1.0)
+    layout = np.minimum(1.0, 0.5 * (1.0 - corr) / max(1e-6, 1.0 - params.corr_threshold))
+    jump = np.minimum(1.0, 0.5 * np.abs(ma - mb) / params.flat_jump)
+    return np.where(flat, jump, np.maximum(colour, layout) if either else np.minimum(colour, layout))

@@ -14,6 +14,7 @@ from autohaptics import __version__
 from autohaptics.params import GenerateParams, analysis_key
 from autohaptics.pipeline.video import VideoAnalysis
 from autohaptics.records import params_to_dict
+from autohaptics.shots import Boundaries, detect
 
 
 @dataclass
@@ -22,6 +23,8 @@ class Analysis:
 
     audio : {"loudness" sone, "sharpness" acum, "booming" 1, "low_energy" Pa^2}, each float64
         [shape=(n_frames,)] on the 20 ms grid, n_frames = n_ticks * 5; None without an audio stream.
+    shots : the shot boundaries (:func:`autohaptics.shots.detect`), found from ``video`` when not
+        given (a cache written before they were stored gets them from its own arrays).
     """
 
     info: dict
@@ -31,12 +34,20 @@ class Analysis:
     audio: dict[str, np.ndarray] | None
     video: VideoAnalysis | None = None
     stats: dict = field(default_factory=dict)
+    shots: Boundaries | None = None
+
+    def __post_init__(self):
+        if self.shots is None:
+            v = self.video
+            self.shots = Boundaries.build([]) if v is None else detect(
+                cut=v.cut, signature=v.signature, mean_rgb=v.mean_rgb if v.mean_rgb.any() else None)
 
     def save(self, path: str | Path) -> None:
         """Write the cache as one .npz file (arrays plus a JSON header)."""
         arrays = {f"audio_{k}": v for k, v in (self.audio or {}).items()}
         if self.video is not None:
             arrays.update({f"video_{k}": v for k, v in self.video.arrays().items()})
+        arrays.update({"shots_tick": self.shots.tick, "shots_kind": self.shots.kind, "shots_span": self.shots.span})
         header = {"info": self.info, "sha256": self.sha256, "n_ticks": self.n_ticks, "params": self.params,
                   "stats": self.stats, "has_audio": self.audio is not None, "has_video": self.video is not None,
                   "version": __version__}
@@ -50,10 +61,12 @@ class Analysis:
             header = json.loads(bytes(z["header"]).decode())
             audio = {k[len("audio_"):]: z[k] for k in z.files if k.startswith("audio_")}
             video = {k[len("video_"):]: z[k] for k in z.files if k.startswith("video_")}
+            shots = Boundaries(tick=z["shots_tick"], kind=z["shots_kind"], span=z["shots_span"]) \
+                if "shots_tick" in z.files else None
         return cls(info=header["info"], sha256=header["sha256"], n_ticks=int(header["n_ticks"]),
                    params=header["params"], audio=audio if header["has_audio"] else None,
                    video=VideoAnalysis.from_arrays(video) if header.get("has_video") else None,
-                   stats=header["stats"])
+                   stats=header["stats"], shots=shots)
 
 
 def reusable(analysis: Analysis, params: GenerateParams | dict) -> bool:

@@ -68,7 +68,9 @@ def hold_missing(out) -> np.ndarray:
     src = np.maximum.accumulate(idx)
     fill = missing & (src >= 0)
     rows = np.flatnonzero(fill)
-    for name in ("mean_rgb", "motion", "cell_motion", "nearness", "depth_mask", "beta", "saliency_mask", "static"):
+    for name in ("mean_rgb", "motion", "cell_motion", "nearness", "depth_mask", "beta", "saliency_mask", "static",
+                 "signature"):
         arr = getattr(out, name)
-        arr[rows] = arr[src[rows]]
+        if arr is not None:
+            arr[rows] = arr[src[rows]]
     return src[rows]

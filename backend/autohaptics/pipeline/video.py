@@ -11,6 +11,8 @@ weight where no object ever was). Results per tick (:class:`VideoAnalysis`):
 - ``motion``     mean flow magnitude, frame widths/s, float32 [shape=(n,)]
 - ``cell_motion``, ``nearness``  per fan cell, float16 [shape=(n, 9, 17)] (nearness only where depth ran)
 - ``beta``       actuator weights from saliency fusion, 0..1, only where saliency ran, [shape=(n, 9)]
+- ``signature``  the analysed frame's cut signature, packed (``cuts.pack_signature``), uint8
+  [shape=(n, 192)], zeros where none (shot detection); None in caches written before it existed
 
 Skipping (``video.skip``): saliency where the audio intensity is zero (unless the mode needs every
 tick), flow on static pairs and across cuts, depth where the motion is below the airflow floor.
@@ -65,9 +67,11 @@ class VideoAnalysis:
     saliency_mask: np.ndarray
     frame_mask: np.ndarray
     stats: dict = field(default_factory=dict)
+    signature: np.ndarray | None = None
 
     ARRAYS = ("mean_rgb", "cut", "static", "motion", "cell_motion", "nearness", "depth_mask", "flow_mask",
               "beta", "saliency_mask", "frame_mask")
+    OPTIONAL = ("signature",)  # absent from older caches
 
     @classmethod
     def empty(cls, n: int) -> "VideoAnalysis":
@@ -76,14 +80,18 @@ class VideoAnalysis:
             motion=np.zeros(n, np.float32), cell_motion=np.zeros((n, FAN_ROWS, FAN_COLS), np.float16),
             nearness=np.zeros((n, FAN_ROWS, FAN_COLS), np.float16), depth_mask=np.zeros(n, bool),
             flow_mask=np.zeros(n, bool), beta=np.zeros((n, N_ACTUATORS), np.float32),
-            saliency_mask=np.zeros(n, bool), frame_mask=np.zeros(n, bool))
+            saliency_mask=np.zeros(n, bool), frame_mask=np.zeros(n, bool),
+            signature=np.zeros((n, cuts.PACKED_SIZE), np.uint8))
 
     def arrays(self) -> dict[str, np.ndarray]:
-        return {name: getattr(self, name) for name in self.ARRAYS}
+        out = {name: getattr(self, name) for name in self.ARRAYS}
+        out.update({name: getattr(self, name) for name in self.OPTIONAL if getattr(self, name) is not None})
+        return out
 
     @classmethod
     def from_arrays(cls, arrays: dict[str, np.ndarray], stats: dict | None = None) -> "VideoAnalysis":
-        return cls(**{name: arrays[name] for name in cls.ARRAYS}, stats=stats or {})
+        return cls(**{name: arrays[name] for name in cls.ARRAYS}, stats=stats or {},
+                   **{name: arrays[name] for name in cls.OPTIONAL if name in arrays})
 
 
 class _Stage:
@@ -259,6 +267,10 @@ class _Pass:
                 cuts.is_cut(self.prev_sig, sig, params=params.cuts):
             out.cut[k] = True
         self.prev_sig = sig
+        if centre or not out.signature[k].any():
+            packed = cuts.pack_signature(sig)
+            if packed is not None:
+                out.signature[k] = packed
         if self.need_colour:
             self.acc.add_colour(k, st["colour"].run(mean_colour, rgb))
         if centre and self.sal_backend is not None:

@@ -54,7 +54,8 @@ def iter_frames(scene: Scene, *, width: int, height: int, fps: float | Fraction
         key = _frame_key(scene, t)
         if key is None or key != prev_key:
             seg = _segment_at(scene, t)
-            if seg is not None and seg.rgb_end is None and (seg.texture is None or seg.pan == (0.0, 0.0)):
+            if seg is not None and seg.rgb_end is None and (seg.texture is None or seg.pan == (0.0, 0.0)) \
+                    and _dissolve_at(scene, t) is None:
                 if bg_key is not seg:
                     bg_key, bg = seg, _background(scene, t, width, height)
                 img = bg.copy()
@@ -104,9 +105,27 @@ def _segment_colour(seg: Segment, t: float) -> np.ndarray:
     return c0 + f * (np.asarray(seg.rgb_end, dtype=np.float64) - c0)
 
 
+def _dissolve_at(scene: Scene, t: float) -> tuple[Segment, Segment, float] | None:
+    """(segment before, segment after, share of the after 0..1) while a cross-dissolve runs at ``t``."""
+    for seg in scene.background:
+        half = 0.5 * seg.dissolve_s
+        if half > 0 and seg.t0 - half <= t < seg.t0 + half:
+            before = [s for s in scene.background if s.t1 <= seg.t0 + 1e-9 and s is not seg]
+            if before:
+                return max(before, key=lambda s: s.t1), seg, (t - (seg.t0 - half)) / seg.dissolve_s
+    return None
+
+
 def _background(scene: Scene, t: float, width: int, height: int) -> np.ndarray:
+    blend = _dissolve_at(scene, t)
+    if blend is not None:
+        a, b, share = blend
+        return (1.0 - share) * _segment_picture(a, t, width, height) + share * _segment_picture(b, t, width, height)
+    return _segment_picture(_segment_at(scene, t), t, width, height)
+
+
+def _segment_picture(seg: Segment | None, t: float, width: int, height: int) -> np.ndarray:
     img = np.zeros((height, width, 3), dtype=np.float64)
-    seg = _segment_at(scene, t)
     if seg is None:
         return img
     colour = _segment_colour(seg, t)
@@ -230,6 +249,8 @@ def _frame_key(scene: Scene, t: float):
     """A hashable summary of everything frame t depends on, or None when it must be rendered."""
     seg = _segment_at(scene, t)
     if seg is not None and (seg.rgb_end is not None or (seg.texture is not None and seg.pan != (0.0, 0.0))):
+        return None
+    if _dissolve_at(scene, t) is not None:
         return None
     shapes = []
     for k, sh in enumerate(scene.shapes):

@@ -56,6 +56,8 @@ class Segment:
     rgb : colour 0..255; rgb_end : if given, the colour fades linearly to it over the segment.
     texture : optional :class:`Texture`; pan : texture drift (vx, vy) in frame widths per second
     (a camera pan moves the picture the other way).
+    dissolve_s : if > 0, the segment before this one cross-dissolves into it over this many
+    seconds centred on ``t0`` (both pictures blended linearly; not a hard cut).
     """
 
     t0: float
@@ -64,6 +66,7 @@ class Segment:
     rgb_end: RGB | None = None
     texture: Texture | None = None
     pan: tuple[float, float] = (0.0, 0.0)
+    dissolve_s: float = 0.0
 
     def __post_init__(self):
         check_interval(self.t0, self.t1, "segment")
@@ -171,13 +174,14 @@ class Scene:
             object.__setattr__(self, name, tuple(getattr(self, name)))
 
     def cut_times(self) -> list[float]:
-        """Times (s) of hard cuts: where one background segment ends and a different one starts."""
+        """Times (s) of hard cuts: where one background segment ends and a different one starts
+        (without a dissolve)."""
         segs = sorted(self.background, key=lambda s: s.t0)
         cuts = []
         for a, b in zip(segs, segs[1:]):
             if abs(a.t1 - b.t0) < 1e-9 and 0 < b.t0 < self.duration_s:
                 end_a = a.rgb_end if a.rgb_end is not None else a.rgb
-                if end_a != b.rgb or a.texture != b.texture or a.pan != b.pan:
+                if b.dissolve_s <= 0 and (end_a != b.rgb or a.texture != b.texture or a.pan != b.pan):
                     cuts.append(b.t0)
         return cuts
 

@@ -1,0 +1,262 @@
+"""Shot boundaries from the analysis's per-tick arrays: hard cuts, fades through a flat picture
+(black, white) and cross-dissolves, each one boundary (the first tick of the new shot).
+
+- **Cuts**: a run of ticks the video pass flagged as cuts (``cut``) is one boundary at its last
+  tick, kept only when the frames either side of the run are in different shots by the cut rule
+  (``airflow.cuts``): a flash (a few bright frames inside a shot) flags its frames but leaves the
+  shot as it was.
+- **Fades**: a run of flat ticks (thumbnail standard deviation below ``flat_std``) that the
+  picture ramps into or out of over ``min_ramp`` ticks or more, with different shots at the outer
+  ends of the ramps; the boundary is the middle of the flat run, and cut flags on the ramps are
+  part of the fade.
+- **Dissolves**: a tick c whose thumbnail, in 3 x 4 blocks, is the mean of those w ticks before
+  and after (residual below ``linear_max`` of their difference) where those two are in different
+  shots by the cut rule, for at least two w in ``widths``, with no cut or fade between. The boundary is
+  the tick of least residual in a run of such ticks, placed between ticks by the residual's V.
+
+A slow pan keeps its palette (the cut rule's colour test) and fast action within a shot does not
+blend linearly, so neither makes a boundary. Without signatures (caches written before they were
+kept) fades are found from the mean colour (dark runs) and every flagged run is a cut.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from autohaptics.airflow import cuts
+from autohaptics.errors import ParameterError
+
+KINDS = ("start", "cut", "fade", "dissolve")  # how a shot begins; codes are indices
+CUT, FADE, DISSOLVE = 1, 2, 3
+_LUMA = np.array([0.299, 0.587, 0.114])
+
+
+@dataclass(frozen=True)
+class ShotParams:
+    """flat_std : thumbnail standard deviation (grey levels) below which a tick is flat (5).
+    dark_level : mean luma (grey levels) below which a tick is flat without signatures (16).
+    min_ramp : ticks of gradual change into or out of a flat run that make it a fade (2).
+    max_ramp : longest ramp followed outward from a flat run, ticks (30).
+    widths : half-widths (ticks) of the windows a dissolve is looked for in.
+    linear_max : largest residual of a dissolve's middle against its ends' mean, as a share of
+        the ends' difference (0.2; a hard cut gives 0.5).
+    min_shot : shortest shot, ticks; a boundary closer to the previous one is dropped (2).
+    flash_ticks : longest flash, ticks: cut flags this close that leave the shot as it was are a flash (5).
+    """
+
+    flat_std: float = 5.0
+    dark_level: float = 16.0
+    min_ramp: int = 2
+    max_ramp: int = 30
+    widths: tuple[int, ...] = (2, 3, 4, 6, 8, 12)
+    linear_max: float = 0.2
+    min_shot: int = 2
+    flash_ticks: int = 5
+    cut_params: cuts.CutParams = cuts.CutParams()
+
+
+@dataclass(frozen=True)
+class Boundaries:
+    """tick : first tick of each shot after the first, int32 [shape=(m,)], increasing, in 1..n-1.
+    kind : code of each boundary (index into KINDS: 1 cut, 2 fade, 3 dissolve), uint8 [shape=(m,)].
+    span : the transition's ticks [s0, s1), int32 [shape=(m, 2)] (a cut: [tick, tick + 1)).
+    """
+
+    tick: np.ndarray
+    kind: np.ndarray
+    span: np.ndarray
+
+    @classmethod
+    def build(cls, found: list[tuple[int, int, int, int]]) -> "Boundaries":
+        """From (tick, kind, s0, s1) tuples in any order."""
+        rows = sorted(found)
+        arr = np.asarray(rows, np.int64).reshape(-1, 4)
+        return cls(tick=arr[:, 0].astype(np.int32), kind=arr[:, 1].astype(np.uint8),
+                   span=arr[:, 2:4].astype(np.int32))
+
+
+def detect(*, cut: np.ndarray, signature: np.ndarray | None = None, mean_rgb: np.ndarray | None = None,
+           params: ShotParams = ShotParams()) -> Boundaries:
+    """The shot boundaries of a film from the video pass's per-tick arrays.
+
+    cut : bool [shape=(n,)], the video pass's cut flags.
+    signature : packed cut signatures uint8 [shape=(n, 192)] (rows of zeros: none), or None.
+    mean_rgb : mean colour 0..255 [shape=(n, 3)], used where signatures are missing, or None.
+    """
+    cut = np.asarray(cut, bool)
+    n = cut.size
+    sigs, valid = _signatures(signature, n)
+    level, flat = _flatness(sigs, valid, mean_rgb, n, params)
+    found: list[tuple[int, int, int, int]] = []
+    claimed = np.zeros(n, bool)  # ticks inside a fade's ramps
+    for s0, s1, tick in _fades(level, flat, cut, sigs, valid, mean_rgb, params):
+        found.append((tick, FADE, s0, s1))
+        claimed[s0 + 1:s1] = True  # cut flags between the span's ticks; one at s0 is a cut into it
+    for tick in _cuts(cut & ~claimed, sigs, valid, mean_rgb, params):
+        found.append((tick, CUT, tick, tick + 1))
+    busy = claimed.copy()
+    for tick, *_ in found:
+        busy[tick] = True
+    for s0, s1, tick in _dissolves(sigs, valid, flat | busy, params):
+        found.append((tick, DISSOLVE, s0, s1))
+    return Boundaries.build(_spaced(found, n, params.min_shot))
+
+
+def _signatures(signature: np.ndarray | None, n: int) -> tuple[np.ndarray | None, np.ndarray]:
+    if signature is None:
+        return None, np.zeros(n, bool)
+    packed = np.asarray(signature)
+    if packed.shape != (n, cuts.PACKED_SIZE):
+        raise ParameterError(f"signatures must have shape ({n}, {cuts.PACKED_SIZE}), got {packed.shape}")
+    valid = packed[:, :3 * 16].any(axis=1)
+    return cuts.unpack_signatures(packed), valid
+
+
+def _flatness(sigs, valid, mean_rgb, n, params) -> tuple[np.ndarray, np.ndarray]:
+    """A per-tick level that grows with the picture's content (thumbnail std, else luma) and
+    whether the tick is flat."""
+    luma = np.zeros(n) if mean_rgb is None else np.asarray(mean_rgb, np.float64).reshape(n, 3) @ _LUMA
+    if sigs is None:
+        return luma, (luma <= params.dark_level) if mean_rgb is not None else np.zeros(n, bool)
+    std = cuts.thumbnails(sigs).std(axis=1).astype(np.float64)
+    return np.where(valid, std, np.inf), valid & (std < params.flat_std)
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Inclusive (first, last) of each run of True."""
+    m = np.concatenate([[False], mask, [False]]).astype(np.int8)
+    edges = np.flatnonzero(np.diff(m))
+    return [(int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2])]
+
+
+def _same_shot(i: int, j: int, sigs, valid, mean_rgb, params, *, either: bool = False) -> bool:
+    """Ticks i and j show the same shot: the cut rule finds no cut between their signatures (a
+    little below 0.5 for the rounding of packed rows; ``either`` as in ``cuts.cut_scores``), else
+    their mean colours are within 20 levels."""
+    if sigs is not None and valid[i] and valid[j]:
+        return float(cuts.cut_scores(sigs[i], sigs[j], params=params.cut_params, either=either)[0]) < 0.45
+    if mean_rgb is not None:
+        rgb = np.asarray(mean_rgb, np.float64)
+        return float(np.abs(rgb[i] - rgb[j]).max()) < 20.0
+    return False
+
+
+def _ramp(level: np.ndarray, stop: np.ndarray, start: int, step: int, params: ShotParams) -> int:
+    """From tick ``start`` (just outside a flat run) outward by ``step``: the last tick of the
+    ramp, where the content stops growing or a cut (``stop[k]``: a cut between k - 1 and k) ends it."""
+    j, n = start, level.size
+    while 0 <= j + step < n and abs(j + step - start) < params.max_ramp and \
+            level[j + step] > 1.05 * level[j] + 0.5 and not stop[max(j, j + step)]:
+        j += step
+    return j
+
+
+def _fades(level, flat, cut, sigs, valid, mean_rgb, params):
+    """(s0, s1, tick) of each fade through a flat picture: the span covers both ramps. A ramp
+    ends at a cut flagged between two ticks with content (the flat rule flags fast fades)."""
+    n = level.size
+    stop = cut & ~flat & ~np.roll(flat, 1)
+    for a, b in _runs(flat):
+        if a == 0 or b == n - 1:
+            continue  # the film opens or ends on it: no shot on one side
+        left, right = _ramp(level, stop, a - 1, -1, params), _ramp(level, stop, b + 1, 1, params)
+        if max(a - left, right - b) < params.min_ramp:
+            continue  # cut to a flat shot and back: the cut rule's
+        if _same_shot(left, right, sigs, valid, mean_rgb, params, either=True):
+            continue  # a dip (or a flash) inside one shot
+        yield left, right + 1, (a + b + 2) // 2
+
+
+def _cuts(cut: np.ndarray, sigs, valid, mean_rgb, params):
+    """The boundary tick of each run of cut flags whose two sides are different shots. Runs less
+    than ``flash_ticks`` apart are tried together first: a flash flags its start and its end."""
+    runs = [r for r in _runs(cut) if r[0] > 0]
+    i = 0
+    while i < len(runs):
+        a, b = runs[i]
+        j = i
+        while j + 1 < len(runs) and runs[j + 1][0] - runs[j][1] <= params.flash_ticks:
+            j += 1
+        comparable = sigs is not None and valid[a - 1]
+        flash = next((m for m in range(j, i - 1, -1) if (m > i or b > a or comparable and valid[b])
+                      and _same_shot(a - 1, runs[m][1], sigs, valid, mean_rgb, params)), None)
+        if flash is not None:
+            i = flash + 1  # runs i..flash start and end one flash
+            continue
+        if sigs is None or not valid[a - 1:b + 1].all():
+            if b == a or not _same_shot(a - 1, b, sigs, valid, mean_rgb, params):
+                yield b  # nothing to compare tick by tick: the run is one cut (one flag: the pass's rule)
+        else:  # a run may hold several cuts (shots of a few ticks); a flag of the flow pair alone is none
+            for k in range(a, b + 1):
+                if not _same_shot(k - 1, k, sigs, valid, mean_rgb, params):
+                    yield k
+        i += 1
+
+
+def _coarse(sigs: np.ndarray) -> np.ndarray:
+    """The thumbnails as 3 x 4 block means, float64 [shape=(n, 12)]: a blend of two shots is a
+    blend at any scale, while the shots' own motion moves little at this one."""
+    th = cuts.thumbnails(sigs).astype(np.float64).reshape(-1, 3, 3, 4, 4)
+    return th.mean(axis=(2, 4)).reshape(-1, 12)
+
+
+def _dissolves(sigs, valid, blocked, params):
+    """(s0, s1, tick) of each cross-dissolve (module docstring)."""
+    if sigs is None:
+        return
+    n = valid.size
+    coarse = _coarse(sigs)
+    usable = valid & ~blocked
+    bad = np.concatenate([[0], np.cumsum(~usable)])  # prefix count of unusable ticks: a window in O(1)
+    best_r = np.full(n, np.inf)
+    best_w = np.zeros(n, np.int64)
+    widths = np.zeros(n, np.int64)  # how many widths find tick c linear
+    for w in sorted(params.widths):
+        if 2 * w + 1 > n:
+            break
+        c = np.arange(w, n - w)
+        c = c[bad[c + w + 1] - bad[c - w] == 0]
+        ends = coarse[c + w] - coarse[c - w]
+        mid = coarse[c] - 0.5 * (coarse[c - w] + coarse[c + w])
+        r = np.sqrt((mid * mid).sum(axis=1) / np.maximum((ends * ends).sum(axis=1), 1e-9))
+        c, r = c[r <= params.linear_max], r[r <= params.linear_max]  # the cheap test first
+        apart = cuts.cut_scores(sigs[c - w], sigs[c + w], params=params.cut_params) >= 0.5
+        c, r = c[apart], r[apart]
+        widths[c] += 1
+        better = r < best_r[c]
+        best_r[c[better]], best_w[c[better]] = r[better], w
+    for a, b in _runs(np.isfinite(best_r)):
+        if widths[a:b + 1].max() < 2:
+            continue  # linear at one width only: a slow camera move, not a blend
+        k = a + int(np.argmin(best_r[a:b + 1]))
+        w = int(best_w[a:b + 1].max())
+        yield max(0, a - w), min(n, b + w + 1), _between(best_r, k)
+
+
+def _between(best_r: np.ndarray, k: int) -> int:
+    """The boundary tick near tick ``k``, the tick most half-and-half: the residual is V-shaped
+    around the dissolve's middle, so its vertex between the neighbours places the middle within
+    a tick; a tick's frame sits at its centre (k + 0.5 ticks)."""
+    r0 = best_r[k]
+    rl = best_r[k - 1] if k > 0 else np.inf
+    rr = best_r[k + 1] if k + 1 < best_r.size else np.inf
+    offset = 0.0
+    if np.isfinite(rl) and np.isfinite(rr) and max(rl, rr) - r0 > 1e-9:
+        offset = 0.5 * (rl - rr) / (max(rl, rr) - r0)
+    return int(np.floor(k + 0.5 + offset + 0.5))
+
+
+def _spaced(found, n: int, min_shot: int):
+    """Boundaries in order, inside 1..n-1, each at least ``min_shot`` ticks after the one before
+    (an earlier boundary wins)."""
+    out, last = [], 0
+    for tick, kind, s0, s1 in sorted(found):
+        if tick <= 0 or tick >= n or tick - last < min_shot:
+            continue
+        if n - tick < min_shot:
+            continue
+        out.append((tick, kind, s0, s1))
+        last = tick
+    return out
