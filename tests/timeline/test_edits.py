@@ -256,6 +256,10 @@ def valid_op(draw):
     if name == "temp_points":
         pts = draw(st.lists(st.tuples(_finite, _finite), min_size=1, max_size=5))
         return {"op": name, "t0": t0, "t1": t1, "points": [list(p) for p in pts]}
+    if name == "shot_split":  # boundary ops change the shot list, no track
+        return {"op": name, "t": t0}
+    if name == "shot_merge":
+        return {"op": name, "shots": [t0, t1]}
     mid = draw(st.sampled_from(["m1", "m2", "m3"]))
     if name == "marker_add":
         return {"op": name, "marker": {"id": mid, "t_s": draw(st.floats(0, 1e4)), "label": "x"}}

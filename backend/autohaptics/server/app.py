@@ -17,7 +17,7 @@ from autohaptics.server import folder_lock
 from autohaptics.server.chair import ChairService
 from autohaptics.server.frontend import FrontendFiles
 from autohaptics.server.jobs import JobRunner
-from autohaptics.server.routes import chair, jobs, projects, service, styles, timeline
+from autohaptics.server.routes import chair, jobs, projects, service, shots, styles, timeline
 from autohaptics.server.security import TrustBoundary, folder_token, host_names
 from autohaptics.server.settings import Settings
 from autohaptics.server.store import Conflict, NotFound, Store
@@ -55,7 +55,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_middleware(TrustBoundary, names=host_names(settings.bind_host, settings.allowed_hosts),
                        token_of=lambda: app.state.token)
     _add_error_handlers(app)
-    for module in (service, projects, jobs, timeline, styles, chair):
+    for module in (service, projects, jobs, timeline, shots, styles, chair):
         app.include_router(module.router)
     front = settings.frontend_dir
     if front is not None and front.is_dir():

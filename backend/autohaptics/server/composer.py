@@ -29,6 +29,7 @@ from autohaptics.errors import ParameterError
 from autohaptics.formats.importing import parse_timeline
 from autohaptics.timeline import edits as edit_ops
 from autohaptics.timeline.npz import load_npz
+from autohaptics.server import shots
 from autohaptics.server.bins import BinaryCache, same_values
 from autohaptics.server.store import Conflict, NotFound, Store, new_id
 from autohaptics.server.styles import style_of
@@ -291,6 +292,7 @@ class Composer:
             return normalised
         composed = self.compose(pid)
         edit_ops.apply_ops(composed.timeline, [normalised], strict=True, markers=composed.markers)
+        shots.check_op(self.analysis(pid), composed.ops, normalised, composed.timeline.n_ticks)
         return normalised
 
     def append(self, pid: str, base_revision: int | None, op: Any) -> dict:

@@ -188,6 +188,31 @@ class EditsOut(HistoryOut):
     ops: list[dict[str, Any]]
 
 
+# ------------------------------------------------------------------------ shots
+class ShotOut(BaseModel):
+    """One shot ``[t0, t1)`` (ticks; ``id`` is ``t0``), how it begins, and its summary (null where
+    the film has no such stream)."""
+
+    id: int
+    t0: int
+    t1: int
+    kind: Literal["start", "cut", "fade", "dissolve", "split"]
+    vibration_mean: float
+    vibration_peak: float
+    temperature_mean_c: float
+    fans_share: float
+    loudness_sone: float | None
+    colour: str | None
+    motion: float | None
+
+
+class ShotsOut(BaseModel):
+    revision: int
+    n_ticks: int
+    tick_s: float
+    shots: list[ShotOut]
+
+
 # ------------------------------------------------------------------------ chair
 class PortOut(BaseModel):
     device: str

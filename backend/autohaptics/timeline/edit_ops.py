@@ -33,6 +33,8 @@ REQUIRED: dict[str, tuple[str, ...]] = {
     "marker_delete": ("id",),
     "import": ("timeline",),
     "params": ("from", "to"),
+    "shot_split": ("t",),
+    "shot_merge": ("shots",),
 }
 OPTIONAL: dict[str, tuple[str, ...]] = {name: ("cells",) for name in ("set", "scale", "clear", "fade_in", "fade_out")}
 OPS: tuple[str, ...] = tuple(REQUIRED)
@@ -121,6 +123,15 @@ def normalise(op: Any) -> tuple[dict, Any]:
         out["timeline"] = doc
     elif name == "params":
         out["from"], out["to"] = _params_doc(op["from"], "from"), _params_doc(op["to"], "to")
+    elif name == "shot_split":
+        out["t"] = fields.tick(name, "t", op["t"])
+    elif name == "shot_merge":
+        ids = op["shots"]
+        if not isinstance(ids, list) or len(ids) != 2:
+            raise ParameterError("op 'shot_merge': field 'shots' must be a list of two shot ids")
+        out["shots"] = sorted(fields.tick(name, "shots", s) for s in ids)
+        if out["shots"][0] == out["shots"][1]:
+            raise ParameterError("op 'shot_merge': field 'shots' must name two different shots")
     return out, parsed
 
 
@@ -296,6 +307,10 @@ def _op_params(tl, markers, op, parsed, strict) -> None:
     """A parameter change changes the generated layer (the service re-derives it), no composed track."""
 
 
+def _op_shots(tl, markers, op, parsed, strict) -> None:
+    """A shot boundary operation changes the shot list (``autohaptics.shots.model``), no track."""
+
+
 def _in_cells(apply: Callable) -> Callable:
     """A range op that, given ``cells``, changes only those fans (the others keep their values)."""
     def region(tl, markers, op, parsed, strict) -> None:
@@ -325,4 +340,6 @@ APPLY: dict[str, Callable] = {
     "marker_update": _op_marker_update,
     "marker_delete": _op_marker_delete,
     "params": _op_params,
+    "shot_split": _op_shots,
+    "shot_merge": _op_shots,
 }

@@ -1,0 +1,74 @@
+"""A project's shots for the routes: the analysis's boundaries with the boundary operations of the
+applied edits (:mod:`autohaptics.shots.model`), each shot summarised from the composed timeline
+and the analysis (:mod:`autohaptics.shots.summary`). The boundaries come from the analysis alone,
+so a threshold change or an edit changes the summaries, never the boundaries."""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+
+import numpy as np
+
+from autohaptics.server.store import Conflict
+from autohaptics.shots.model import KIND_NAMES, SHOT_OPS, apply_shot_ops, base_starts, shot_arrays
+from autohaptics.shots.summary import summarise
+
+_lock = threading.Lock()
+_answers: OrderedDict[tuple, dict] = OrderedDict()  # (project, revision) -> answer: every change bumps the revision
+_KEEP = 8
+
+
+def check_op(analysis, applied_ops: list[dict], op: dict, n_ticks: int) -> None:
+    """Refuse (ParameterError, one sentence) a boundary operation that does not fit the shots
+    after ``applied_ops``: a split outside a shot, an unknown shot, a merge of non-neighbours."""
+    if op.get("op") not in SHOT_OPS:
+        return
+    if analysis is None:
+        raise Conflict("the project has no analysis yet; its shots come from the analysis")
+    starts = apply_shot_ops(base_starts(analysis.shots, n_ticks), applied_ops, n_ticks)
+    apply_shot_ops(starts, [op], n_ticks, strict=True)
+
+
+def shot_list(pid: str, analysis, composed) -> dict:
+    """``{revision, n_ticks, tick_s, shots: [...]}`` (docs/API.md, "Shots"); kept per revision."""
+    if analysis is None:
+        raise Conflict("the project has no analysis yet; its shots come from the analysis")
+    key = (pid, composed.revision)
+    with _lock:
+        hit = _answers.get(key)
+        if hit is not None:
+            return hit
+    answer = _build(analysis, composed)
+    with _lock:
+        _answers[key] = answer
+        while len(_answers) > _KEEP:
+            _answers.popitem(last=False)
+    return answer
+
+
+def _build(analysis, composed) -> dict:
+    tl = composed.timeline
+    n = int(tl.n_ticks)
+    starts = apply_shot_ops(base_starts(analysis.shots, n), composed.ops, n)
+    t0, t1, kinds = shot_arrays(starts, n)
+    v = analysis.video if analysis.video is not None and analysis.n_ticks == n else None
+    audio = analysis.audio or {}
+    s = summarise(t0, t1, vibration=tl.vibration, temperature_c=tl.temperature_c, fans=tl.fans,
+                  loudness=audio.get("loudness") if analysis.n_ticks == n else None,
+                  mean_rgb=v.mean_rgb if v is not None and v.mean_rgb.any() else None,
+                  motion=v.motion if v is not None else None)
+
+    def col(name, digits):
+        values = s[name]
+        return [None] * t0.size if values is None else np.round(values, digits).tolist()
+
+    colour = [None] * t0.size if s["colour"] is None else [
+        "#%02x%02x%02x" % tuple(int(c) for c in np.clip(np.rint(rgb), 0, 255)) for rgb in s["colour"]]
+    rows = zip(t0.tolist(), t1.tolist(), kinds.tolist(), col("vibration_mean", 4), col("vibration_peak", 4),
+               col("temperature_mean_c", 3), col("fans_share", 4), col("loudness_sone", 4), colour,
+               col("motion", 5))
+    shots = [{"id": a, "t0": a, "t1": b, "kind": KIND_NAMES[k], "vibration_mean": vm, "vibration_peak": vp,
+              "temperature_mean_c": tm, "fans_share": fs, "loudness_sone": ld, "colour": c, "motion": mo}
+             for a, b, k, vm, vp, tm, fs, ld, c, mo in rows]
+    return {"revision": composed.revision, "n_ticks": n, "tick_s": float(tl.tick_s), "shots": shots}

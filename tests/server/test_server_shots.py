@@ -1,0 +1,167 @@
+"""GET /api/projects/{id}/shots and the boundary edits (shot_split, shot_merge): boundaries from the
+analysis, summaries from the composed timeline; a threshold change or a track edit changes the
+summaries, not the boundaries; boundary edits undo, redo and survive a re-derive; bad operations
+are 4xx with one sentence and change nothing; a project analysed before shots existed gets them
+from its cache."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from autohaptics.server.app import create_app
+from autohaptics.server.settings import Settings
+from autohaptics.testing import Scene, Segment, Texture, Tone, write_scene
+from service_client import LocalClient
+
+TERMINAL = ("done", "failed", "cancelled")
+N_TICKS = 120
+
+
+@pytest.fixture(scope="module")
+def data_dir(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("server-shots") / "data"
+
+
+@pytest.fixture(scope="module")
+def client(data_dir):
+    with LocalClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def base_project(client, tmp_path_factory) -> dict:
+    """Three shots (hard cuts at 4.0 and 8.0 s): blue, red (warm, with a low tone), green."""
+    path = tmp_path_factory.mktemp("film") / "film.mp4"
+    tex = [Texture("noise", 0.15, 0.5, seed=s) for s in (1, 2, 3)]
+    scene = Scene(12.0, background=(Segment(0, 4, (50, 80, 200), texture=tex[0]),
+                                    Segment(4, 8, (220, 60, 40), texture=tex[1]),
+                                    Segment(8, 12, (40, 200, 60), texture=tex[2])),
+                  audio=(Tone(4.5, 7.5, 55.0, level_dbfs=-12.0),), name="shots test")
+    write_scene(path, scene, width=96, height=54, fps=10, quality="low", sample_rate=24000)
+    r = client.post("/api/projects", files={"file": ("film.mp4", path.read_bytes(), "video/mp4")})
+    assert r.status_code == 201, r.text
+    job_id = r.json()["job"]["id"]
+    for _ in range(1800):
+        job = client.get(f"/api/jobs/{job_id}").json()
+        if job["status"] in TERMINAL:
+            break
+        time.sleep(0.1)
+    assert job["status"] == "done", job
+    return client.get(f"/api/projects/{r.json()['id']}").json()
+
+
+@pytest.fixture
+def project(client, base_project):
+    r = client.post(f"/api/projects/{base_project['id']}/duplicate")
+    assert r.status_code == 201, r.text
+    yield r.json()
+    client.delete(f"/api/projects/{r.json()['id']}")
+
+
+def shots(client, pid: str) -> dict:
+    r = client.get(f"/api/projects/{pid}/shots")
+    assert r.status_code == 200, r.text
+    return r.json()
+
+
+def post_edit(client, pid: str, op: dict):
+    rev = client.get(f"/api/projects/{pid}").json()["revision"]
+    return client.post(f"/api/projects/{pid}/edits", json={"base_revision": rev, "op": op})
+
+
+def bounds(doc: dict) -> list[tuple[int, int, str]]:
+    return [(s["t0"], s["t1"], s["kind"]) for s in doc["shots"]]
+
+
+def test_the_shots_of_a_film_with_two_cuts(client, project):
+    doc = shots(client, project["id"])
+    assert doc["n_ticks"] == N_TICKS and doc["tick_s"] == 0.1
+    assert bounds(doc) == [(0, 40, "start"), (40, 80, "cut"), (80, 120, "cut")]
+    blue, red, green = doc["shots"]
+    assert [s["id"] for s in doc["shots"]] == [0, 40, 80]
+    assert blue["colour"].startswith("#") and int(red["colour"][1:3], 16) > 150 > int(red["colour"][5:7], 16)
+    assert red["temperature_mean_c"] > blue["temperature_mean_c"] and red["temperature_mean_c"] > green["temperature_mean_c"]
+    assert red["loudness_sone"] > 10 * max(blue["loudness_sone"], 0.01)  # the tone plays in the red shot
+    for s in doc["shots"]:
+        assert 0 <= s["vibration_mean"] <= s["vibration_peak"] <= 1 and 0 <= s["fans_share"] <= 1
+        assert s["motion"] >= 0
+
+
+def test_a_threshold_change_and_an_edit_change_the_summary_not_the_boundaries(client, project):
+    pid = project["id"]
+    before = shots(client, pid)
+    r = post_edit(client, pid, {"op": "set", "lanes": ["A5"], "t0": 0, "t1": 40, "value": 1.0})
+    assert r.status_code == 200, r.text
+    after = shots(client, pid)
+    assert bounds(after) == bounds(before) and after["revision"] == r.json()["revision"]
+    assert after["shots"][0]["vibration_mean"] == 1.0 and after["shots"][0]["vibration_peak"] == 1.0
+    r = client.put(f"/api/projects/{pid}/params", json={"thresholds": {"loudness": 1.0, "sharpness": 1.0,
+                                                                      "booming": 1.0, "low_energy": 1.0}})
+    assert r.status_code == 200 and r.json()["derived"], r.text
+    quiet = shots(client, pid)
+    assert bounds(quiet) == bounds(before) and quiet["revision"] > after["revision"]
+    assert quiet["shots"][1]["vibration_peak"] == 0.0  # every feature off: only the edited shot vibrates
+    assert quiet["shots"][0]["vibration_mean"] == 1.0
+
+
+def test_split_and_merge_are_undoable_operations_kept_through_a_rederive(client, project):
+    pid = project["id"]
+    r = post_edit(client, pid, {"op": "shot_split", "t": 60})
+    assert r.status_code == 200, r.text
+    assert r.json()["op"] == {"op": "shot_split", "t": 60}
+    assert bounds(shots(client, pid)) == [(0, 40, "start"), (40, 60, "cut"), (60, 80, "split"), (80, 120, "cut")]
+    r = post_edit(client, pid, {"op": "shot_merge", "shots": [80, 60]})
+    assert r.status_code == 200 and r.json()["op"]["shots"] == [60, 80], r.text
+    merged = [(0, 40, "start"), (40, 60, "cut"), (60, 120, "split")]
+    assert bounds(shots(client, pid)) == merged
+    r = client.put(f"/api/projects/{pid}/params", json={"thresholds": {"loudness": 0.3}})
+    assert r.status_code == 200, r.text
+    assert bounds(shots(client, pid)) == merged  # the edits stay through the re-derive
+    undo = client.post(f"/api/projects/{pid}/undo", json={"base_revision": r.json()["revision"]}).json()
+    undo = client.post(f"/api/projects/{pid}/undo", json={"base_revision": undo["revision"]}).json()
+    assert len(bounds(shots(client, pid))) == 4  # the params op, then the merge undone
+    client.post(f"/api/projects/{pid}/undo", json={"base_revision": undo["revision"]})
+    assert bounds(shots(client, pid)) == [(0, 40, "start"), (40, 80, "cut"), (80, 120, "cut")]
+
+
+@pytest.mark.parametrize("op, words", [
+    ({"op": "shot_split", "t": 40}, "already starts a shot"),
+    ({"op": "shot_split", "t": 0}, "outside the film's shots"),
+    ({"op": "shot_split", "t": N_TICKS}, "outside the film's shots"),
+    ({"op": "shot_merge", "shots": [0, 80]}, "not neighbours"),
+    ({"op": "shot_merge", "shots": [0, 41]}, "no shot starts at tick 41"),
+    ({"op": "shot_merge", "shots": [40, 40]}, "two different shots"),
+    ({"op": "shot_merge", "shots": [40]}, "list of two shot ids"),
+    ({"op": "shot_split", "t": -3}, "field 't'"),
+    ({"op": "shot_split", "t": 50, "lanes": ["A1"]}, "unknown field 'lanes'"),
+])
+def test_bad_boundary_operations_are_refused_and_change_nothing(client, project, op, words):
+    pid = project["id"]
+    rev = client.get(f"/api/projects/{pid}").json()["revision"]
+    r = post_edit(client, pid, op)
+    assert r.status_code == 400, r.text
+    detail = r.json()["detail"]
+    assert words in detail and detail.count(". ") == 0 and "/" not in detail.replace("1..", "")
+    assert client.get(f"/api/projects/{pid}").json()["revision"] == rev
+    assert len(shots(client, pid)["shots"]) == 3
+
+
+def test_a_project_analysed_before_shots_gets_them_from_its_cache(client, project, data_dir):
+    pid = project["id"]
+    path = data_dir / "projects" / pid / "analysis.npz"
+    with np.load(path) as z:
+        old = {k: z[k] for k in z.files if not k.startswith("shots_") and k != "video_signature"}
+    np.savez(path.with_name("old.npz"), **old)
+    path.with_name("old.npz").replace(path)
+    r = post_edit(client, pid, {"op": "shot_split", "t": 100})  # a new revision: nothing cached is reused
+    assert r.status_code == 200, r.text
+    assert bounds(shots(client, pid)) == [(0, 40, "start"), (40, 80, "cut"), (80, 100, "cut"), (100, 120, "split")]
+
+
+def test_unknown_project_is_404(client):
+    r = client.get(f"/api/projects/{'0' * 32}/shots")
+    assert r.status_code == 404 and r.json()["detail"]
