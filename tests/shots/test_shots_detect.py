@@ -89,6 +89,23 @@ def test_a_cross_dissolve_is_one_boundary_at_its_middle():
     assert abs(int(got.tick[0]) - 16.5) <= 1  # the 50/50 picture sits between ticks 16 and 17
 
 
+def test_ticks_without_a_frame_of_their_own_hold_and_boundaries_land_between():
+    """Below 10 fps every other tick holds the one before (the video pass's rule): detection runs on
+    the analysed ticks, and a boundary lands between the last old and the first new frame."""
+    a, b = (1, (60, 90, 160)), (2, (170, 120, 60))
+    gains = np.linspace(1, 0, 4)
+    seq = [frame(*a)] * 10 + [frame(*a, g) for g in gains] + [frame(*b, g) for g in gains[::-1]] + \
+          [frame(*b)] * 10 + [frame(1, (40, 160, 60))] * 10
+    held_cut, held_sig = np.repeat(flags(seq), 2), np.repeat(packed(seq), 2, axis=0)
+    held_cut[1::2] = False  # a held tick is never flagged
+    mask = np.arange(held_cut.size) % 2 == 0
+    got = shots.detect(cut=held_cut, signature=held_sig, frame_mask=mask)
+    whole = shots.detect(cut=flags(seq), signature=packed(seq))
+    assert [shots.KINDS[k] for k in got.kind] == [shots.KINDS[k] for k in whole.kind] == ["fade", "cut"]
+    assert np.abs(got.tick - 2 * whole.tick).max() <= 1, (got.tick, whole.tick)
+    assert got.tick[1] in (55, 56)  # between the last old frame (tick 54) and the first new (56)
+
+
 def test_without_signatures_cuts_and_dark_dips_still_make_boundaries():
     n = 60
     cut = np.zeros(n, bool)
@@ -124,6 +141,7 @@ def _video(n: int, cut_at: int) -> VideoAnalysis:
     v = VideoAnalysis.empty(n)
     v.cut[cut_at] = True
     v.mean_rgb[:] = 100
+    v.frame_mask[:] = True
     return v
 
 

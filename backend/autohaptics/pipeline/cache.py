@@ -40,7 +40,8 @@ class Analysis:
         if self.shots is None:
             v = self.video
             self.shots = Boundaries.build([]) if v is None else detect(
-                cut=v.cut, signature=v.signature, mean_rgb=v.mean_rgb if v.mean_rgb.any() else None)
+                cut=v.cut, signature=v.signature, mean_rgb=v.mean_rgb if v.mean_rgb.any() else None,
+                frame_mask=v.frame_mask)
 
     def save(self, path: str | Path) -> None:
         """Write the cache as one .npz file (arrays plus a JSON header)."""

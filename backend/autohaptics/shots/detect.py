@@ -78,30 +78,51 @@ class Boundaries:
 
 
 def detect(*, cut: np.ndarray, signature: np.ndarray | None = None, mean_rgb: np.ndarray | None = None,
-           params: ShotParams = ShotParams()) -> Boundaries:
+           frame_mask: np.ndarray | None = None, params: ShotParams = ShotParams()) -> Boundaries:
     """The shot boundaries of a film from the video pass's per-tick arrays.
 
     cut : bool [shape=(n,)], the video pass's cut flags.
     signature : packed cut signatures uint8 [shape=(n, 192)] (rows of zeros: none), or None.
     mean_rgb : mean colour 0..255 [shape=(n, 3)], used where signatures are missing, or None.
+    frame_mask : bool [shape=(n,)], ticks with a frame of their own (None: all). The others hold
+        their values (below 10 fps, ``video.stride``): detection runs on the analysed ticks and a
+        boundary lands midway between the last analysed tick before it and the first after.
     """
     cut = np.asarray(cut, bool)
+    n = cut.size
+    rows = np.arange(n) if frame_mask is None else np.flatnonzero(np.asarray(frame_mask, bool))
+    if rows.size < n:
+        cut = cut[rows]
+        signature = None if signature is None else np.asarray(signature)[rows]
+        mean_rgb = None if mean_rgb is None else np.asarray(mean_rgb)[rows]
+    found = []
+    for pos, kind, s0, s1 in _detect(cut, signature, mean_rgb, params):
+        # pos: where the boundary lies in row units (row k's frame at k); a row's frame sits at
+        # its tick's centre (tick + 0.5), the boundary tick is the nearest tick edge
+        tick = int(np.floor(np.interp(pos, np.arange(rows.size), rows + 0.5) + 0.5))
+        found.append((tick, kind, min(tick, int(rows[s0])), max(tick + 1, int(rows[s1 - 1]) + 1)))
+    return Boundaries.build(_spaced(found, n, params.min_shot))
+
+
+def _detect(cut: np.ndarray, signature, mean_rgb, params: ShotParams) -> list[tuple[float, int, int, int]]:
+    """(position in rows, kind, first row, end row) of each boundary over rows that each have a frame."""
     n = cut.size
     sigs, valid = _signatures(signature, n)
     level, flat = _flatness(sigs, valid, mean_rgb, n, params)
     found: list[tuple[int, int, int, int]] = []
     claimed = np.zeros(n, bool)  # ticks inside a fade's ramps
-    for s0, s1, tick in _fades(level, flat, cut, sigs, valid, mean_rgb, params):
-        found.append((tick, FADE, s0, s1))
-        claimed[s0 + 1:s1] = True  # cut flags between the span's ticks; one at s0 is a cut into it
-    for tick in _cuts(cut & ~claimed, sigs, valid, mean_rgb, params):
-        found.append((tick, CUT, tick, tick + 1))
+    for s0, s1, pos in _fades(level, flat, cut, sigs, valid, mean_rgb, params):
+        found.append((pos, FADE, s0, s1))
+        claimed[s0 + 1:s1] = True  # cut flags between the span's rows; one at s0 is a cut into it
+    for k in _cuts(cut & ~claimed, sigs, valid, mean_rgb, params):
+        found.append((k - 0.5, CUT, k, k + 1))
     busy = claimed.copy()
-    for tick, *_ in found:
-        busy[tick] = True
-    for s0, s1, tick in _dissolves(sigs, valid, flat | busy, params):
-        found.append((tick, DISSOLVE, s0, s1))
-    return Boundaries.build(_spaced(found, n, params.min_shot))
+    for _, kind, s0, _ in found:
+        if kind == CUT:
+            busy[s0] = True
+    for s0, s1, pos in _dissolves(sigs, valid, flat | busy, params):
+        found.append((pos, DISSOLVE, s0, s1))
+    return found
 
 
 def _signatures(signature: np.ndarray | None, n: int) -> tuple[np.ndarray | None, np.ndarray]:
@@ -166,7 +187,7 @@ def _fades(level, flat, cut, sigs, valid, mean_rgb, params):
             continue  # cut to a flat shot and back: the cut rule's
         if _same_shot(left, right, sigs, valid, mean_rgb, params, either=True):
             continue  # a dip (or a flash) inside one shot
-        yield left, right + 1, (a + b + 2) // 2
+        yield left, right + 1, 0.5 * (a + b)
 
 
 def _cuts(cut: np.ndarray, sigs, valid, mean_rgb, params):
@@ -235,17 +256,17 @@ def _dissolves(sigs, valid, blocked, params):
         yield max(0, a - w), min(n, b + w + 1), _between(best_r, k)
 
 
-def _between(best_r: np.ndarray, k: int) -> int:
-    """The boundary tick near tick ``k``, the tick most half-and-half: the residual is V-shaped
-    around the dissolve's middle, so its vertex between the neighbours places the middle within
-    a tick; a tick's frame sits at its centre (k + 0.5 ticks)."""
+def _between(best_r: np.ndarray, k: int) -> float:
+    """Where the picture is half one shot and half the other, in rows, near row ``k``: the
+    residual is V-shaped around the dissolve's middle, so its vertex between the neighbours
+    places the middle between rows."""
     r0 = best_r[k]
     rl = best_r[k - 1] if k > 0 else np.inf
     rr = best_r[k + 1] if k + 1 < best_r.size else np.inf
     offset = 0.0
     if np.isfinite(rl) and np.isfinite(rr) and max(rl, rr) - r0 > 1e-9:
         offset = 0.5 * (rl - rr) / (max(rl, rr) - r0)
-    return int(np.floor(k + 0.5 + offset + 0.5))
+    return k + offset
 
 
 def _spaced(found, n: int, min_shot: int):
