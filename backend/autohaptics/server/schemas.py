@@ -204,6 +204,7 @@ class ShotOut(BaseModel):
     loudness_sone: float | None
     colour: str | None
     motion: float | None
+    poster_url: str
 
 
 class ShotsOut(BaseModel):

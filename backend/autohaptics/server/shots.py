@@ -10,6 +10,7 @@ from collections import OrderedDict
 
 import numpy as np
 
+from autohaptics.server.posters import poster_tick
 from autohaptics.server.store import Conflict
 from autohaptics.shots.model import KIND_NAMES, SHOT_OPS, apply_shot_ops, base_starts, shot_arrays
 from autohaptics.shots.summary import summarise
@@ -39,7 +40,7 @@ def shot_list(pid: str, analysis, composed) -> dict:
         hit = _answers.get(key)
         if hit is not None:
             return hit
-    answer = _build(analysis, composed)
+    answer = _build(pid, analysis, composed)
     with _lock:
         _answers[key] = answer
         while len(_answers) > _KEEP:
@@ -47,7 +48,7 @@ def shot_list(pid: str, analysis, composed) -> dict:
     return answer
 
 
-def _build(analysis, composed) -> dict:
+def _build(pid: str, analysis, composed) -> dict:
     tl = composed.timeline
     n = int(tl.n_ticks)
     starts = apply_shot_ops(base_starts(analysis.shots, n), composed.ops, n)
@@ -69,6 +70,7 @@ def _build(analysis, composed) -> dict:
                col("temperature_mean_c", 3), col("fans_share", 4), col("loudness_sone", 4), colour,
                col("motion", 5))
     shots = [{"id": a, "t0": a, "t1": b, "kind": KIND_NAMES[k], "vibration_mean": vm, "vibration_peak": vp,
-              "temperature_mean_c": tm, "fans_share": fs, "loudness_sone": ld, "colour": c, "motion": mo}
+              "temperature_mean_c": tm, "fans_share": fs, "loudness_sone": ld, "colour": c, "motion": mo,
+              "poster_url": f"/api/projects/{pid}/posters/{poster_tick(a, b)}.jpg"}
              for a, b, k, vm, vp, tm, fs, ld, c, mo in rows]
     return {"revision": composed.revision, "n_ticks": n, "tick_s": float(tl.tick_s), "shots": shots}

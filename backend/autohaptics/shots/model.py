@@ -71,5 +71,6 @@ def _merge(starts: dict[int, int], ids: list[int]) -> None:
     first, second = sorted(ids)
     order = sorted(starts)
     if order.index(second) != order.index(first) + 1:
-        raise ParameterError(f"op 'shot_merge': shots {first} and {second} are not neighbours; merge two adjacent shots")
+        raise ParameterError(f"op 'shot_merge': shots {first} and {second} are not neighbours; "
+                             "merge two adjacent shots")
     del starts[second]
