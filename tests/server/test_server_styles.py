@@ -143,7 +143,7 @@ def test_import_a_style_file(client, halved):
 
 @pytest.mark.parametrize("content,field", [
     (b"{not json", "not JSON"),
-    (b'{"format": "autohaptics.style", "version": 2}', "version"),
+    (b'{"format": "autohaptics.style", "version": 3}', "version"),
     (b'{"format": "autohaptics.style", "version": 1, "colour": 3}', "'colour'"),
     (b'{"format": "autohaptics.style", "version": 1, "threshold_scale": 9}', "threshold_scale"),
     (b'{"format": "autohaptics.style", "version": 1, "fans": [0, 1]}', "fans"),

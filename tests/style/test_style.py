@@ -114,7 +114,7 @@ def test_the_document_round_trips(tmp_path):
     style = Style(name="x", threshold_scale=0.8, overrides={"airflow.near_share": 0.1},
                   vibration=tuple(tuple(min(1.0, 1.2 * k) for k in KNOTS) for _ in range(9)),
                   fans=tuple(0.5 * k for k in KNOTS), temperature_scale=0.9, temperature_offset_c=-1.0,
-                  learned={"films": 2})
+                  vibration_floor=(0.25,) * 7 + (0.1, 0.1), fans_floor=0.15, learned={"films": 2})
     assert from_dict(json.loads(json.dumps(to_dict(style)))) == style
     assert load(save(style, tmp_path / "x.style.json")) == style
     assert from_dict({"format": "autohaptics.style", "version": 1}).is_identity
@@ -129,7 +129,11 @@ def _doc(**changes) -> dict:
 @pytest.mark.parametrize("doc, words", [
     ([], "JSON object"),
     (_doc(format="autohaptics.timeline"), "not a style document"),
-    (_doc(version=2), "not a style document"),
+    (_doc(version=3), "not a style document"),
+    (_doc(version=True), "not a style document"),
+    (_doc(version=1), "floors needs version 2"),
+    (_doc(floors={"A10": 0.1}), "floors must be an object"),
+    (_doc(floors={"fans": 1.5}), "floors.fans must lie in"),
     (_doc(colour=1), "unknown field 'colour'"),
     (_doc(threshold_scale=9.0), "threshold_scale must lie in"),
     (_doc(threshold_scale=float("nan")), "threshold_scale must be a finite number"),

@@ -25,6 +25,9 @@ from autohaptics.errors import ParameterError
 CLIPS = ("sintel_trailer_480x204_h264_aac.mp4", "bbb_opening_30s_1280x720_vp8_vorbis.webm")
 SCENES = ("material_scene", "sample_scene", "left_boom_right_hum_scene")
 TRACK_ERRORS = ("vibration_mae", "onset_f1", "temperature_mae_c", "fan_mae")
+# the acceptance's distances: MAE as it is, 1 - F1 or IoU (closed = share of the plain derive's removed)
+DISTANCES = ("vibration_mae", "onset_f1", "temperature_mae_c", "fan_mae", "fan_iou_tolerant")
+OFF = 1e-6  # a mean distance above this: the default is off on that metric
 
 
 def register(sub) -> None:
@@ -49,22 +52,30 @@ def run(args: argparse.Namespace) -> int:
     print(f"films: {', '.join(f'{n} ({films[n].n_ticks} ticks)' for n in names)}")
     identity = [learn([(a, _plain(a))]).is_identity for a in films.values()]
     print(f"unedited films learn the identity: {sum(identity)} of {len(identity)}")
-    rows, learn_s = [], {}
+    rows, closed_rows, learn_s = [], [], {}
     for designer in DESIGNERS:
         edited = {n: edit(designer, films[n], seed=args.seed + i) for i, n in enumerate(names)}
         taste = {n: edit(designer, films[n], one_offs=0) for n in names}
-        plain, styled, scales = [], [], []
+        plain, styled, scales, own_plain, own_styled = [], [], [], [], []
         for source in names:
             t0 = time.perf_counter()
             style = learn([(films[source], edited[source])], name=designer.name)
             learn_s.setdefault(source, []).append(time.perf_counter() - t0)
             scales.append(style.threshold_scale)
+            own_plain.append(_errors(_plain(films[source]), taste[source]))
+            own_styled.append(_errors(_styled(films[source], style), taste[source]))
             for target in (n for n in names if n != source):
                 plain.append(_errors(_plain(films[target]), taste[target]))
                 styled.append(_errors(_styled(films[target], style), taste[target]))
         rows.append(_row(designer, plain, styled, scales))
+        other, own = _closed(plain, styled), _closed(own_plain, own_styled)
+        closed_rows.append([designer.name, *(other[k] for k in DISTANCES), _worst(other),
+                            *(own[k] for k in DISTANCES), _worst(own)])
     print(table(rows, ["designer", "taste", "scales", "vib MAE plain", "styled", "onset F1 plain", "styled",
                        "temp MAE C plain", "styled", "fan MAE plain", "styled", "edit reproduced"]))
+    print("share of the default's distance closed per metric (- where the default is not off), "
+          "other films | the learn film:")
+    print(table(closed_rows, ["designer", *DISTANCES, "worst", *DISTANCES, "worst"]))
     print("learn time per film (median over designers, s): "
           + ", ".join(f"{n} {np.median(v):.3f}" for n, v in learn_s.items()))
     return 0
@@ -121,7 +132,26 @@ def _errors(test, ref) -> dict:
 
     r = compare_tracks(ref.vibration, test.vibration, ref.temperature_c, test.temperature_c, ref.fans, test.fans)
     return {"vibration_mae": r["vibration"]["mae"], "onset_f1": r["vibration"]["onsets"]["f1"],
-            "temperature_mae_c": r["temperature"]["mae_c"], "fan_mae": r["fans"]["mae"]}
+            "temperature_mae_c": r["temperature"]["mae_c"], "fan_mae": r["fans"]["mae"],
+            "fan_iou_tolerant": r["fans"]["iou_tolerant"]}
+
+
+def _closed(plain: list[dict], styled: list[dict]) -> dict:
+    """Per metric of :data:`DISTANCES`: 1 - mean styled distance / mean plain distance over the
+    pairs (a distance: MAE, or 1 - F1 / IoU, NaN as 0), or "-" where the default is not off."""
+    out = {}
+    for k in DISTANCES:
+        def dist(e: dict) -> float:
+            v = float(e[k])
+            return 0.0 if not np.isfinite(v) else (1.0 - v if k in ("onset_f1", "fan_iou_tolerant") else v)
+        before, after = np.mean([dist(e) for e in plain]), np.mean([dist(e) for e in styled])
+        out[k] = round(1.0 - after / before, 3) if before > OFF else "-"
+    return out
+
+
+def _worst(closed: dict) -> float | str:
+    values = [v for v in closed.values() if v != "-"]
+    return min(values) if values else "-"
 
 
 def _row(designer, plain: list[dict], styled: list[dict], scales: list[float]) -> list:

@@ -76,6 +76,8 @@ def run_show(args) -> int:
             "tone curves, level at input " + " ".join(f"{k:g}" for k in style.knots)]
     rows += [f"  {name:<5}" + " ".join(f"{v:.3f}" for v in curve)
              for name, curve in zip((*ACTUATOR_IDS, "fans"), (*style.vibration, style.fans))]
+    rows.append("floors (levels below them off) " + " ".join(
+        f"{name} {v:g}" for name, v in zip((*ACTUATOR_IDS, "fans"), (*style.vibration_floor, style.fans_floor))))
     rows += [f"override {k} = {v!r}" for k, v in sorted(style.overrides.items())]
     rows += [f"learned {k}: {v}" for k, v in sorted(style.learned.items())]
     print("\n".join(rows))

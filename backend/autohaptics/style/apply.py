@@ -30,28 +30,31 @@ def scaled_params(params: GenerateParams, *, threshold_scale: float, overrides: 
     return dataclasses.replace(params, intensity=dataclasses.replace(params.intensity, thresholds=th))
 
 
-def shape_levels(levels: np.ndarray, knots: tuple[float, ...], curve: tuple[float, ...]) -> np.ndarray:
-    """A tone curve over levels 0..1 (any shape, float32 or float64): ``x + d(x)`` with ``d`` the
-    curve's distance from the diagonal, interpolated linearly between knots; clipped to 0..1.
-    Returns a new array of ``levels``' dtype; an identity curve returns an exact copy."""
+def shape_levels(levels: np.ndarray, knots: tuple[float, ...], curve: tuple[float, ...],
+                 floor: float = 0.0) -> np.ndarray:
+    """A tone curve over levels 0..1 (any shape, float32 or float64): 0 below ``floor`` (0..1, a
+    taste for clearing weak effects), else ``x + d(x)`` with ``d`` the curve's distance from the
+    diagonal, interpolated linearly between knots; clipped to 0..1. Returns a new array of
+    ``levels``' dtype; an identity curve with floor 0 returns an exact copy."""
     out = np.array(levels, copy=True)
-    if tuple(curve) == tuple(knots):
+    if tuple(curve) == tuple(knots) and floor <= 0.0:
         return out
     xp = np.asarray(knots, np.float64)
     delta = np.asarray(curve, np.float64) - xp
     flat = out.reshape(-1)
     for start in range(0, flat.size, _CHUNK):
         part = flat[start:start + _CHUNK]
-        part[:] = np.clip(part + np.interp(part, xp, delta), 0.0, 1.0)
+        part[:] = np.where(part < floor, 0.0, np.clip(part + np.interp(part, xp, delta), 0.0, 1.0))
     return out
 
 
-def shape_vibration(vibration: np.ndarray, knots: tuple[float, ...],
-                    curves: tuple[tuple[float, ...], ...]) -> np.ndarray:
-    """The vibration track [shape=(n, 9)], 0..1, through each actuator's tone curve (a new array)."""
+def shape_vibration(vibration: np.ndarray, knots: tuple[float, ...], curves: tuple[tuple[float, ...], ...],
+                    floors: tuple[float, ...] | None = None) -> np.ndarray:
+    """The vibration track [shape=(n, 9)], 0..1, through each actuator's floor and tone curve (a new
+    array; ``floors`` None: none)."""
     out = np.array(vibration, copy=True)
     for a, curve in enumerate(curves):
-        out[:, a] = shape_levels(vibration[:, a], knots, curve)
+        out[:, a] = shape_levels(vibration[:, a], knots, curve, 0.0 if floors is None else floors[a])
     return out
 
 

@@ -2,14 +2,20 @@
 film's cached analysis and the designer's edited (composed) timeline of it; ``params`` are the
 parameters the designer started from. Fitted on sampled ticks, without decoding:
 
-1. the threshold scale (0.5..2 in sixth-octaves): stepping away from 1 while most of the ticks a
-   step wakes (or silences) vibrate (or are silent) in the edited timelines (:data:`STEP_SHARE`);
-2. a tone curve per actuator and one for the fans, on the ticks where the derive at that scale is
-   on: the edit ``edited - derived`` as a piecewise-linear function of the derived level, fitted
-   by least absolute deviations (iteratively reweighted), so one-off edits of a scene or two
-   (a minority of the ticks at each level) do not move it;
-3. the temperature: ``edited - derived = offset_c + (scale - 1) * (derived - neutral_c)``, the same
-   robust fit (scale to 0.001, offset to 0.01 C).
+1. the threshold scale (0.25..4 in 1/24 octaves): the intensity rule applied to the analysis's own
+   decision curves (the novelty the thresholds apply to) says which ticks vibrate at each scale;
+   the scale is the one that best separates the ticks vibrating in the edited timelines from the
+   others, moved away from 1 only when :data:`STEP_SHARE` of the ticks it changes agree;
+2. a floor per body zone (back, armrests, seat: their actuators' levels pooled) and one for the
+   fans: the level below which the edited timelines are off (then 1 and 2 once more with the
+   floors known, the ticks a floor clears left out of the scale's fit);
+3. a tone curve per actuator and one for the fans, on the levels the derive at that scale has at
+   or above the floor: the edit ``edited - derived`` as a piecewise-linear function of the derived
+   level, fitted by a robust loss per 2 s block (:data:`BLOCK_TICKS`: a block that does not follow
+   the curve weighs as one vote, however many ticks it has), so one-off edits of a scene or two
+   do not move it;
+4. the temperature: ``edited - derived = offset_c + (scale - 1) * (derived - neutral_c)``, robust
+   (least absolute deviations; scale to 0.001, offset to 0.01 C).
 Unedited films give the identity style exactly (every fitted edit is exactly 0).
 """
 
@@ -20,18 +26,22 @@ from collections.abc import Sequence
 import numpy as np
 
 from autohaptics.errors import ParameterError
+from autohaptics.intensity.rule import audio_intensity, decision_inputs
+from autohaptics.layout import ACTUATORS, ZONES
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.cache import Analysis
 from autohaptics.pipeline.derive import derive
-from autohaptics.style.model import KNOTS, TEMP_OFFSET_RANGE_C, TEMP_SCALE_RANGE, Style
+from autohaptics.style.model import KNOTS, TEMP_OFFSET_RANGE_C, TEMP_SCALE_RANGE, THRESHOLD_SCALE_RANGE, Style
 from autohaptics.timeline import Timeline
 
-SCALES: tuple[float, ...] = tuple(round(2.0 ** (e / 6), 4) for e in range(-6, 7))
-STEP_SHARE = 2 / 3  # of the ticks a threshold step changes that must agree with the edits
+SCALE_GRID = np.unique(np.append(np.geomspace(*THRESHOLD_SCALE_RANGE, 97).round(3), 1.0))  # 1/24 octave
+STEP_SHARE = 2 / 3  # of the ticks a threshold or floor changes that must agree with the edits
 MAX_TICKS = 6000  # ticks sampled per film (a 2-hour film has 72,000)
 OFF_LEVEL = 1 / 255  # a fitted level below one step of the chair's 0..255 levels is off
 MAX_FAN_LEVELS = 400_000  # fan levels above 0 fitted at most (sampled evenly)
-_IRLS_STEPS, _IRLS_FLOOR, _RIDGE, _SMOOTH = 10, 0.01, 1e-6, 1e-3
+BLOCK_TICKS = 20  # 2 s: the unit of the robust curve fit (a one-off edit covers a scene, a taste every scene)
+SHRINK = 10.0  # levels' worth of evidence per knot an actuator's curve needs to depart from its zone's
+_IRLS_STEPS, _IRLS_FLOOR, _RIDGE, _SMOOTH = 12, 0.01, 1e-6, 1e-3
 
 Pair = tuple[Analysis, Timeline]
 
@@ -51,34 +61,73 @@ def learn(pairs: Sequence[Pair], params: GenerateParams | None = None, *, name: 
         _check_pair(analysis, edited)
     rng = np.random.default_rng(seed)
     picks = [np.sort(rng.choice(a.n_ticks, min(a.n_ticks, max_ticks), replace=False)) for a, _ in pairs]
-    scale, f1 = _threshold_scale(pairs, params, picks)
-    probe = Style(threshold_scale=scale)
-    bases = [derive(a, probe.apply_params(params)) for a, _ in pairs]
-    vib_x = np.concatenate([b.vibration[p] for b, p in zip(bases, picks)])
+    blocks = np.concatenate([i * (1 << 32) + p // BLOCK_TICKS for i, p in enumerate(picks)])
     vib_y = np.concatenate([e.vibration[p] for (_, e), p in zip(pairs, picks)])
-    fan_x = np.concatenate([b.fans[p].reshape(-1) for b, p in zip(bases, picks)])
-    fan_y = np.concatenate([e.fans[p].reshape(-1) for (_, e), p in zip(pairs, picks)])
+    floors = np.zeros(vib_y.shape[1])
+    evidence = _scale_evidence(pairs, params, picks)
+    for _ in range(2):
+        scale, f1 = _threshold_scale(evidence, floors)
+        bases = [derive(a, Style(threshold_scale=scale).apply_params(params)) for a, _ in pairs]
+        vib_x = np.concatenate([b.vibration[p] for b, p in zip(bases, picks)])
+        floors = _zone_floors(vib_x, vib_y)
+        if not floors.any():
+            break
+    fan_x = np.concatenate([b.fans[p].reshape(len(p), -1) for b, p in zip(bases, picks)])
+    fan_y = np.concatenate([e.fans[p].reshape(len(p), -1) for (_, e), p in zip(pairs, picks)])
+    fan_x, fan_y, fan_blocks = _thin(fan_x, fan_y, blocks)
+    fan_floor = fit_floor(fan_x, fan_y)
     t_scale, t_offset = _fit_temperature(bases, [e for _, e in pairs], picks, params)
     learned = {"films": len(pairs), "ticks": int(sum(p.size for p in picks)), "vibration_f1": round(f1, 4),
                "mode": params.mode}
-    return Style(name=name, threshold_scale=scale, knots=KNOTS,
-                 vibration=tuple(fit_curve(vib_x[:, a], vib_y[:, a], KNOTS) for a in range(vib_x.shape[1])),
-                 fans=fit_curve(*_thin(fan_x, fan_y), KNOTS), temperature_scale=t_scale,
-                 temperature_offset_c=t_offset, learned=learned)
+    vibration = _zone_curves(vib_x, vib_y, floors, blocks)
+    return Style(name=name, threshold_scale=scale, knots=KNOTS, vibration=vibration,
+                 fans=fit_curve(fan_x, fan_y, KNOTS, floor=fan_floor, blocks=fan_blocks), temperature_scale=t_scale,
+                 temperature_offset_c=t_offset, vibration_floor=tuple(float(f) for f in floors),
+                 fans_floor=fan_floor, learned=learned)
 
 
-def fit_curve(x: np.ndarray, y: np.ndarray, knots: tuple[float, ...] = KNOTS) -> tuple[float, ...]:
+def fit_curve(x: np.ndarray, y: np.ndarray, knots: tuple[float, ...] = KNOTS, *, floor: float = 0.0,
+              blocks: np.ndarray | None = None, prior: tuple[float, ...] | None = None) -> tuple[float, ...]:
     """The tone curve (levels at ``knots``, 0..1, starting at 0, never decreasing, 4 decimals, below
     :data:`OFF_LEVEL` off) that maps the derived levels ``x`` to the edited levels ``y`` (both 0..1,
-    same shape), fitted where ``x > 0`` by least absolute deviations. No edit gives ``knots`` exactly."""
-    keep = x > 0
+    same shape), fitted where ``x > 0`` and ``x >= floor`` by a robust loss: least absolute
+    deviations, or with ``blocks`` (a block id per level) the sum over blocks of their residuals'
+    norms. ``prior``: a curve (at ``knots``) the fit departs from only as far as the levels insist
+    (:data:`SHRINK` levels' worth per knot; no levels: the prior). No edit gives ``knots`` exactly."""
+    keep = (x > 0) & (x >= floor)
     x, r = x[keep].astype(np.float64), (y[keep].astype(np.float64) - x[keep])
-    if not np.any(r):
-        return tuple(knots)
-    delta = np.concatenate([[0.0], _robust_fit(_hats(x, knots)[:, 1:], r, _bends(knots))])
+    base = np.zeros(len(knots)) if prior is None else np.asarray(prior, np.float64) - np.asarray(knots)
+    if not np.any(r) and (prior is None or not x.size):
+        return tuple(knots) if prior is None else tuple(prior)
+    groups = None if blocks is None else np.unique(blocks[keep], return_inverse=True)[1]
+    hats = _hats(x, knots)[:, 1:]
+    shrink = None if prior is None else SHRINK
+    delta = base + np.concatenate([[0.0], _robust_fit(hats, r - hats @ base[1:], _bends(knots), groups, shrink)])
     curve = np.maximum.accumulate(np.clip(np.asarray(knots) + delta, 0.0, 1.0))
     curve[curve < OFF_LEVEL] = 0.0
     return tuple(round(float(v), 4) for v in curve)
+
+
+def fit_floor(x: np.ndarray, y: np.ndarray) -> float:
+    """The level (0..1, 4 decimals) below which the derived levels ``x`` are off (``y`` 0) in the
+    edited ones: the cut between two neighbouring levels where ``x > 0`` that misclassifies the
+    fewest, taken (else 0) when :data:`STEP_SHARE` of the levels below it are off. No edit gives 0."""
+    on = x > 0
+    xs, off = x[on].astype(np.float64), y[on] <= 0
+    if not off.any():
+        return 0.0
+    order = np.argsort(xs, kind="stable")
+    xs, off = xs[order], off[order]
+    below_off = np.concatenate([[0], np.cumsum(off)])  # off among the k lowest, k = 0..n
+    k = np.arange(xs.size + 1)
+    errors = (k - below_off) + (below_off[-1] - below_off)
+    cuts = np.flatnonzero(np.append(xs[1:] > xs[:-1], True)) + 1  # k whose cut falls between two levels
+    ok = cuts[below_off[cuts] >= STEP_SHARE * cuts]
+    if ok.size == 0 or errors[ok].min() >= errors[0]:
+        return 0.0
+    best = int(ok[np.argmin(errors[ok])])
+    upper = xs[best] if best < xs.size else 1.0
+    return round(float(min((xs[best - 1] + upper) / 2, 1.0)), 4)
 
 
 # ----------------------------------------------------------------------- private
@@ -92,36 +141,83 @@ def _check_pair(analysis: Analysis, edited: Timeline) -> None:
         raise ParameterError(f"{name}: the edited timeline is of another film (source.sha256 differs)")
 
 
-def _threshold_scale(pairs: list[Pair], params: GenerateParams, picks: list[np.ndarray]) -> tuple[float, float]:
-    """(scale, its pooled vibrating-tick F1): from 1, each step down the candidates is taken while
-    STEP_SHARE of the ticks it wakes vibrate in the edited timelines, else each step up while
-    STEP_SHARE of the ticks it silences are silent there. A one-off edit (a scene set or cleared) covers a few
-    of the ticks a step changes, a taste for more or fewer events most of them."""
+def _scale_evidence(pairs: list[Pair], params: GenerateParams,
+                    picks: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """On the sampled ticks: which vibrate at each scale of :data:`SCALE_GRID` (bool [shape=(ticks,
+    scales)]: the intensity rule on the film's decision curves, computed once, no derive per scale),
+    the levels at the lowest scale [shape=(ticks, 9)] and which vibrate in the edited timelines;
+    None where the thresholds do not decide which ticks vibrate (a density, the picture modes)."""
     if params.intensity.density is not None or params.mode not in ("multimodal", "audio"):
-        return 1.0, float("nan")  # the thresholds do not decide which ticks vibrate here
-    wanted = np.concatenate([e.vibration[p].max(axis=1) > 0 for (_, e), p in zip(pairs, picks)])
+        return None
+    lowest = Style(threshold_scale=THRESHOLD_SCALE_RANGE[0]).apply_params(params)
+    rules = [Style(threshold_scale=float(s)).apply_params(params).intensity for s in SCALE_GRID]
+    ons, levels, wanted = [], [], []
+    for (analysis, edited), p in zip(pairs, picks):
+        if analysis.audio is None:
+            continue
+        inputs = decision_inputs(analysis.audio, params=params.intensity)
+        ons.append(np.stack([audio_intensity(analysis.audio, analysis.n_ticks, params=rule, inputs=inputs)[0][p]
+                             for rule in rules], axis=1) > 0)
+        levels.append(derive(analysis, lowest).vibration[p])
+        wanted.append(edited.vibration[p].max(axis=1) > 0)
+    return (np.concatenate(ons), np.concatenate(levels), np.concatenate(wanted)) if ons else None
 
-    def active(scale: float) -> np.ndarray:
-        params_k = Style(threshold_scale=scale).apply_params(params)
-        return np.concatenate([derive(a, params_k).vibration[p].max(axis=1) > 0 for (a, _), p in zip(pairs, picks)])
 
-    at_one = active(1.0)
-    scale = 1.0
-    for steps, agree in ((sorted((s for s in SCALES if s < 1.0), reverse=True), wanted),
-                         (sorted(s for s in SCALES if s > 1.0), ~wanted)):
-        previous = at_one
-        for candidate in steps:
-            now = active(candidate)
-            changed = now != previous
-            if changed.any():
-                if np.count_nonzero(agree[changed]) < STEP_SHARE * np.count_nonzero(changed):
-                    break
-                scale, previous = candidate, now
-        if scale != 1.0:
+def _threshold_scale(evidence: tuple | None, floors: np.ndarray) -> tuple[float, float]:
+    """(scale, its pooled vibrating-tick F1) on the ticks that can vibrate (of
+    :func:`_scale_evidence`: on at the lowest scale, at or above ``floors`` on some actuator): from
+    1, each sixth-octave step down is taken while :data:`STEP_SHARE` of the ticks it wakes vibrate
+    in the edited timelines, else each step up while that share of those it silences are silent
+    there (a one-off edit covers few of the ticks a step changes, a taste most of them); then,
+    between the last step taken and the first refused, the scale of :data:`SCALE_GRID` with the
+    fewest ticks on the wrong side (of equals, the nearest the step taken)."""
+    if evidence is None:
+        return 1.0, float("nan")
+    can = ((evidence[1] > 0) & (evidence[1] >= floors)).any(axis=1)
+    on, want = evidence[0][can], evidence[2][can]
+    one = int(np.flatnonzero(SCALE_GRID == 1.0)[0])
+    pick = stop = one
+    for direction in (-1, 1):
+        for k in one + direction * np.arange(4, len(SCALE_GRID) // 2 + 1, 4):  # sixth-octave steps
+            changed = on[:, k] != on[:, pick]
+            if not changed.any():
+                continue
+            if np.count_nonzero(on[changed, k] == want[changed]) < STEP_SHARE * changed.sum():
+                stop = k
+                break
+            pick = stop = k
+        if pick != one:
             break
-    got = active(scale)
-    tp, fp, fn = int(np.sum(got & wanted)), int(np.sum(got & ~wanted)), int(np.sum(~got & wanted))
-    return scale, 1.0 if tp + fp + fn == 0 else 2 * tp / (2 * tp + fp + fn)
+    if pick != one and stop != pick:
+        lo, hi = sorted((pick, stop))
+        errors = np.count_nonzero(on[:, lo:hi + 1] != want[:, None], axis=0)
+        best = lo + np.flatnonzero(errors == errors.min())
+        pick = int(best[np.argmin(np.abs(best - pick))])
+    got = on[:, pick]
+    tp, fp, fn = int(np.sum(got & want)), int(np.sum(got & ~want)), int(np.sum(~got & want))
+    return float(SCALE_GRID[pick]), 1.0 if tp + fp + fn == 0 else 2 * tp / (2 * tp + fp + fn)
+
+
+def _zone_floors(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """A floor per actuator [shape=(9,)]: :func:`fit_floor` of its zone's levels pooled."""
+    floors = np.zeros(x.shape[1])
+    for zone in ZONES:
+        cols = [i for i, a in enumerate(ACTUATORS) if a.zone == zone]
+        floors[cols] = fit_floor(x[:, cols].reshape(-1), y[:, cols].reshape(-1))
+    return floors
+
+
+def _zone_curves(x: np.ndarray, y: np.ndarray, floors: np.ndarray, blocks: np.ndarray) -> tuple[tuple, ...]:
+    """A curve per actuator: its zone's, fitted on the zone's levels pooled (a block across its
+    actuators one group), then the actuator's own levels as far as they insist (``prior``)."""
+    curves: list = [None] * x.shape[1]
+    for zone in ZONES:
+        cols = [i for i, a in enumerate(ACTUATORS) if a.zone == zone]
+        zone_curve = fit_curve(x[:, cols].reshape(-1), y[:, cols].reshape(-1), KNOTS, floor=floors[cols[0]],
+                               blocks=np.repeat(blocks, len(cols)))
+        for i in cols:
+            curves[i] = fit_curve(x[:, i], y[:, i], KNOTS, floor=floors[i], blocks=blocks, prior=zone_curve)
+    return tuple(curves)
 
 
 def _fit_temperature(bases: list[Timeline], edited: list[Timeline], picks: list[np.ndarray],
@@ -140,9 +236,12 @@ def _fit_temperature(bases: list[Timeline], edited: list[Timeline], picks: list[
     return scale, float(np.clip(round(float(offset), 2), *TEMP_OFFSET_RANGE_C))
 
 
-def _robust_fit(a: np.ndarray, r: np.ndarray, bends: np.ndarray | None = None) -> np.ndarray:
-    """Coefficients c minimising sum |a @ c - r| (iteratively reweighted least squares) plus a light
-    penalty on ``bends @ c`` (so knots without data follow their neighbours' line) and a tiny ridge."""
+def _robust_fit(a: np.ndarray, r: np.ndarray, bends: np.ndarray | None = None,
+                groups: np.ndarray | None = None, shrink: float | None = None) -> np.ndarray:
+    """Coefficients c minimising sum |a @ c - r| (with ``groups``, a group index per row: the sum
+    over groups of the norm of their residuals; iteratively reweighted least squares) plus a light
+    penalty on ``bends @ c`` (so knots without data follow their neighbours' line), a tiny ridge and
+    ``shrink`` rows' worth of pull of each coefficient to 0."""
     w = np.ones(r.size)
     penalty = _RIDGE * np.eye(a.shape[1])
     if bends is not None:
@@ -150,8 +249,12 @@ def _robust_fit(a: np.ndarray, r: np.ndarray, bends: np.ndarray | None = None) -
     c = np.zeros(a.shape[1])
     for _ in range(_IRLS_STEPS):
         aw = a * w[:, None]
-        c = np.linalg.solve(aw.T @ a + _SMOOTH * w.sum() * penalty / r.size, aw.T @ r)
-        w = 1.0 / np.maximum(np.abs(r - a @ c), _IRLS_FLOOR)
+        pull = 0.0 if shrink is None else shrink * w.sum() / r.size * np.eye(a.shape[1])
+        c = np.linalg.solve(aw.T @ a + _SMOOTH * w.sum() * penalty / r.size + pull, aw.T @ r)
+        res = np.abs(r - a @ c)
+        if groups is not None:
+            res = np.sqrt(np.bincount(groups, res * res))[groups]
+        w = 1.0 / np.maximum(res, _IRLS_FLOOR)
     return c
 
 
@@ -177,9 +280,12 @@ def _hats(x: np.ndarray, knots: tuple[float, ...]) -> np.ndarray:
     return out
 
 
-def _thin(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """At most MAX_FAN_LEVELS of the levels where x > 0, evenly spaced (the rest add nothing)."""
+def _thin(x: np.ndarray, y: np.ndarray, blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The fan levels (x, y [shape=(ticks, cells)]) flattened with each level's block, at most
+    MAX_FAN_LEVELS of those where x > 0, evenly spaced (the rest add nothing)."""
+    blocks = np.repeat(blocks, x.shape[1])
+    x, y = x.reshape(-1), y.reshape(-1)
     on = np.flatnonzero(x > 0)
     if on.size > MAX_FAN_LEVELS:
         on = on[np.linspace(0, on.size - 1, MAX_FAN_LEVELS).astype(np.int64)]
-    return x[on], y[on]
+    return x[on], y[on], blocks[on]

@@ -1,11 +1,11 @@
-"""The style document (format "autohaptics.style", version 1; docs/STYLE_FORMAT.md): a designer's
+"""The style document (format "autohaptics.style", version 2, reads 1; docs/STYLE_FORMAT.md): a designer's
 taste as a few derive-time numbers, checked field by field at the edge.
 
 A style changes a timeline in two places, both at derive time (no decoding):
 - parameters: every intensity threshold below 1 times ``threshold_scale`` (fewer or more
   vibrating ticks), then the dotted derive-time ``overrides``;
-- tracks: a tone curve per actuator and one for the fans (piecewise linear over ``knots``, 0 stays
-  0, never decreasing) and the temperature's distance from the neutral point times ``scale`` plus
+- tracks: a floor and a tone curve per actuator and for the fans (levels below the floor off, then
+  piecewise linear over ``knots``, 0 stays 0, never decreasing) and the temperature's distance from the neutral point times ``scale`` plus
   ``offset_c``.
 """
 
@@ -24,20 +24,22 @@ from autohaptics.params import GenerateParams
 from autohaptics.records import DERIVE, apply_overrides, stage_of_key
 from autohaptics.style.apply import scaled_params, shape_levels, shape_temperature, shape_vibration
 
-FORMAT, VERSION = "autohaptics.style", 1
+FORMAT, VERSION = "autohaptics.style", 2
+VERSIONS = (1, 2)  # read; version 2 added ``floors``
 KNOTS: tuple[float, ...] = (0.0, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
 THRESHOLD_SCALE_RANGE = (0.25, 4.0)
 TEMP_SCALE_RANGE = (0.0, 4.0)
 TEMP_OFFSET_RANGE_C = (-20.0, 20.0)
 MAX_KNOTS = 101
 _KEYS = ("format", "version", "name", "threshold_scale", "overrides", "knots", "vibration", "fans",
-         "temperature", "learned")
+         "temperature", "floors", "learned")
 
 
 @dataclass(frozen=True)
 class Style:
     """A checked style. Curves are tuples of output levels 0..1 at ``knots`` (input levels 0..1);
-    ``vibration`` holds one per actuator A1..A9. ``learned`` records what it was fitted on."""
+    ``vibration`` holds one per actuator A1..A9, ``vibration_floor`` a floor per actuator (levels
+    below it off, 0..1) and ``fans_floor`` the fans'. ``learned`` records what it was fitted on."""
 
     name: str = ""
     threshold_scale: float = 1.0
@@ -47,6 +49,8 @@ class Style:
     fans: tuple[float, ...] = KNOTS
     temperature_scale: float = 1.0
     temperature_offset_c: float = 0.0
+    vibration_floor: tuple[float, ...] = (0.0,) * len(ACTUATOR_IDS)
+    fans_floor: float = 0.0
     learned: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -60,10 +64,10 @@ class Style:
               range_c: tuple[float, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Derived tracks (vibration (n, 9) and fans (n, 9, 17) 0..1, temperature (n,) C within
         ``range_c``) in this style: new arrays, the inputs untouched."""
-        return (shape_vibration(vibration, self.knots, self.vibration),
+        return (shape_vibration(vibration, self.knots, self.vibration, self.vibration_floor),
                 shape_temperature(temperature_c, scale=self.temperature_scale, offset_c=self.temperature_offset_c,
                                   neutral_c=neutral_c, range_c=range_c),
-                shape_levels(fans, self.knots, self.fans))
+                shape_levels(fans, self.knots, self.fans, self.fans_floor))
 
     def to_dict(self) -> dict:
         """The JSON document (:func:`to_dict`)."""
@@ -74,7 +78,8 @@ class Style:
         """True when applying the style changes nothing."""
         return (self.threshold_scale == 1.0 and not self.overrides and self.fans == self.knots
                 and all(c == self.knots for c in self.vibration)
-                and self.temperature_scale == 1.0 and self.temperature_offset_c == 0.0)
+                and self.temperature_scale == 1.0 and self.temperature_offset_c == 0.0
+                and self.fans_floor == 0.0 and not any(self.vibration_floor))
 
 
 def to_dict(style: Style) -> dict:
@@ -83,6 +88,7 @@ def to_dict(style: Style) -> dict:
             "overrides": dict(style.overrides), "knots": list(style.knots),
             "vibration": {a: list(c) for a, c in zip(ACTUATOR_IDS, style.vibration)}, "fans": list(style.fans),
             "temperature": {"scale": style.temperature_scale, "offset_c": style.temperature_offset_c},
+            "floors": {**dict(zip(ACTUATOR_IDS, style.vibration_floor)), "fans": style.fans_floor},
             "learned": json.loads(json.dumps(style.learned))}
 
 
@@ -93,12 +99,15 @@ def from_dict(doc: Any) -> Style:
     knots = tuple(float(k) for k in doc.get("knots", KNOTS))
     vib = doc.get("vibration") or {}
     temp = doc.get("temperature") or {}
+    floors = doc.get("floors") or {}
     return Style(name=str(doc.get("name", "")), threshold_scale=float(doc.get("threshold_scale", 1.0)),
                  overrides=dict(doc.get("overrides") or {}), knots=knots,
                  vibration=tuple(tuple(float(v) for v in vib.get(a, knots)) for a in ACTUATOR_IDS),
                  fans=tuple(float(v) for v in doc.get("fans", knots)),
                  temperature_scale=float(temp.get("scale", 1.0)),
-                 temperature_offset_c=float(temp.get("offset_c", 0.0)), learned=dict(doc.get("learned") or {}))
+                 temperature_offset_c=float(temp.get("offset_c", 0.0)),
+                 vibration_floor=tuple(float(floors.get(a, 0.0)) for a in ACTUATOR_IDS),
+                 fans_floor=float(floors.get("fans", 0.0)), learned=dict(doc.get("learned") or {}))
 
 
 def load(path: str | Path) -> Style:
@@ -127,8 +136,10 @@ def check(doc: Any) -> None:
     """Raise ParameterError naming the first field of ``doc`` that is not a valid style document."""
     if not isinstance(doc, dict):
         raise ParameterError(f"a style must be a JSON object, got {type(doc).__name__}")
-    if doc.get("format") != FORMAT or doc.get("version") != VERSION:
-        raise ParameterError(f"not a style document: format must be {FORMAT!r} and version {VERSION}, "
+    version = doc.get("version")
+    if doc.get("format") != FORMAT or isinstance(version, bool) or version not in VERSIONS:
+        raise ParameterError(f"not a style document: format must be {FORMAT!r} and version "
+                             f"{' or '.join(map(str, VERSIONS))}, "
                              f"got {doc.get('format')!r}, {doc.get('version')!r}")
     unknown = sorted(set(doc) - set(_KEYS))
     if unknown:
@@ -149,6 +160,13 @@ def check(doc: Any) -> None:
         raise ParameterError("style: temperature must be an object with 'scale' and 'offset_c'")
     _number(temp.get("scale", 1.0), "temperature.scale", *TEMP_SCALE_RANGE)
     _number(temp.get("offset_c", 0.0), "temperature.offset_c", *TEMP_OFFSET_RANGE_C, unit=" C")
+    floors = doc.get("floors", {})
+    if version == 1 and "floors" in doc:
+        raise ParameterError("style: floors needs version 2")
+    if not isinstance(floors, dict) or set(floors) - {*ACTUATOR_IDS, "fans"}:
+        raise ParameterError(f"style: floors must be an object with levels for {', '.join(ACTUATOR_IDS)}, fans")
+    for name, value in floors.items():
+        _number(value, f"floors.{name}", 0.0, 1.0)
     if not isinstance(doc.get("learned", {}), dict):
         raise ParameterError("style: learned must be an object")
 

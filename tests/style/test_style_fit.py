@@ -1,0 +1,82 @@
+"""Known answers for what a style can express and how it is fitted: a floor that clears weak
+levels, the threshold scale read off the analysis's own decision curves, per-zone curves that
+one-off edits on a few actuators do not drag, version 1 documents."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from autohaptics import pipeline
+from autohaptics.layout import ACTUATORS
+from autohaptics.metrics import compare_tracks
+from autohaptics.style import KNOTS, Style, from_dict, learn
+from autohaptics.style.apply import shape_levels
+from autohaptics.style.fit import fit_floor
+from autohaptics.testing import scenes, write_scene
+from autohaptics.testing.designers import Designer, edit
+
+from shared_data import shared_clip
+
+
+@pytest.fixture(scope="module")
+def films(tmp_path_factory) -> dict[str, pipeline.Analysis]:
+    """Analyses of the material scene (24 s) and the Sintel trailer clip (52 s)."""
+    folder = tmp_path_factory.mktemp("style-fit-films")
+    return {"material": pipeline.analyse(write_scene(folder / "material.mp4", scenes.material_scene(),
+                                                     width=160, height=90)),
+            "sintel": pipeline.analyse(shared_clip("sintel_trailer_480x204_h264_aac.mp4"))}
+
+
+def _vibration_mae(analysis, style, wanted) -> float:
+    tl = pipeline.derive(analysis, style=style)
+    return compare_tracks(wanted.vibration, tl.vibration, wanted.temperature_c, tl.temperature_c,
+                          wanted.fans, tl.fans)["vibration"]["mae"]
+
+
+def test_a_floor_clears_levels_below_it_and_nothing_else():
+    levels = np.array([0.0, 0.1, 0.24, 0.25, 0.6], np.float32)
+    np.testing.assert_array_equal(shape_levels(levels, KNOTS, KNOTS, 0.25), np.array([0, 0, 0, 0.25, 0.6], np.float32))
+    np.testing.assert_array_equal(shape_levels(levels, KNOTS, KNOTS, 0.0), levels)
+
+
+def test_a_floor_is_fitted_between_cleared_and_kept_levels_and_scattered_clears_make_none():
+    x = np.linspace(0.01, 1.0, 400)
+    y = np.where(x < 0.3, 0.0, x)
+    y[350:360] = 0.0  # a one-off clear among strong levels
+    assert fit_floor(x, y) == pytest.approx(0.3, abs=0.005)
+    assert fit_floor(x, x) == 0.0
+    assert fit_floor(x, np.where(np.arange(400) % 7 == 3, 0.0, x)) == 0.0
+
+
+def test_a_designer_who_clears_weak_vibration_is_reproduced_on_another_film(films):
+    clears = Designer("clears", "", floor=0.25)
+    style = learn([(films["sintel"], edit(clears, films["sintel"], seed=5))])
+    assert all(f == pytest.approx(0.25, abs=0.03) for f in style.vibration_floor)
+    wanted = edit(clears, films["material"], one_offs=0)
+    plain = _vibration_mae(films["material"], None, wanted)
+    assert plain > 0.002
+    assert _vibration_mae(films["material"], style, wanted) <= 0.3 * plain
+
+
+def test_a_threshold_taste_is_read_off_the_decision_curves(films):
+    for wanted_scale in (0.7, 1.4):
+        designer = Designer("events", "", threshold_scale=wanted_scale)
+        style = learn([(films["sintel"], edit(designer, films["sintel"], seed=2))])
+        assert style.threshold_scale == pytest.approx(wanted_scale, rel=0.15), wanted_scale
+
+
+def test_per_zone_tastes_survive_one_off_edits_on_a_few_actuators(films):
+    gains = tuple({"back": 1.3, "armrests": 1.0, "seat": 0.6}[a.zone] for a in ACTUATORS)
+    designer = Designer("zones", "", actuator_gain=gains)
+    style = learn([(films["sintel"], edit(designer, films["sintel"], seed=7))])
+    for a, gain in enumerate(gains):
+        np.testing.assert_allclose(style.vibration[a][:6], np.minimum(1.0, gain * np.asarray(KNOTS[:6])), atol=0.05,
+                                   err_msg=ACTUATORS[a].id)
+
+
+def test_a_version_1_document_still_loads_and_has_no_floors():
+    style = from_dict({"format": "autohaptics.style", "version": 1, "threshold_scale": 0.8})
+    assert style.threshold_scale == 0.8 and not any(style.vibration_floor) and style.fans_floor == 0.0
+    assert Style(vibration_floor=(0.2,) * 9).to_dict()["version"] == 2
+    assert not Style(fans_floor=0.1).is_identity
