@@ -187,3 +187,20 @@ def test_posters_are_made_on_demand_cached_on_disk_and_removed_with_the_project(
     assert client.get(f"/api/projects/{pid}/posters/-1.jpg").status_code == 404
     assert client.delete(f"/api/projects/{pid}").status_code in (200, 204)
     assert not folder.exists()
+
+
+def test_boundary_edits_are_kept_through_a_regeneration(client, project):
+    """A generate job replaces the generated layer (and the analysis, when its parameters ask for
+    one); the split, an edit op, is replayed over the boundaries the analysis then holds."""
+    pid = project["id"]
+    assert post_edit(client, pid, {"op": "shot_split", "t": 60}).status_code == 200
+    r = client.post(f"/api/projects/{pid}/generate", json={})
+    assert r.status_code == 202, r.text
+    job_id = r.json()["job"]["id"]
+    for _ in range(1800):
+        job = client.get(f"/api/jobs/{job_id}").json()
+        if job["status"] in TERMINAL:
+            break
+        time.sleep(0.1)
+    assert job["status"] == "done", job
+    assert bounds(shots(client, pid)) == [(0, 40, "start"), (40, 60, "cut"), (60, 80, "split"), (80, 120, "cut")]
