@@ -128,7 +128,8 @@ class GenerateParams(Record):
 # every other field keeps its default, earlier decisions included (docs/GUIDE.md, section 5).
 THESIS_RULES: dict[str, Any] = {
     "intensity.rule": "thesis",  # the default follows events: each feature against its recent baseline
-    "intensity.loudness_gate": 0.05,  # the default gate, 0.2, is 23 phon below the film's loudest moment
+    "intensity.loudness_gate": 0.05,  # the default gate, 0.2, is 23 phon below the film's loud level
+    "intensity.normaliser": "max",  # the default divides by the 99.5th percentile: a robust film level
     "flow.repeat_wait_s": 0.0,  # the default waits for the next distinct frame (repeats give no motion)
     "airflow.motion_sigma_ticks": 0.0,  # the default judges a tick on its shot's motion around it
     "airflow.near_sigma_ticks": 0.0,  # the default smooths nearness over neighbouring ticks of the shot

@@ -38,14 +38,23 @@ OPENING_RISE = 2.0  # loudness doubles at +10 phon; the loudness model's attack 
 FULL_OCTAVES = 0.5
 EXPONENTS = {"sharpness": 1.0, "booming": 1.0, "low_energy": 0.3, "loudness": 1.0}
 FLOOR = 1e-2  # of the feature's maximum over the film, added to value and baseline: no 0/0
+SMOOTHED = ("loudness", "sharpness")  # the features whose single-frame peaks a lossy codec moves
 
 
-def feature_novelty(features: dict[str, np.ndarray], *, baseline_s: float = 3.0) -> dict[str, np.ndarray]:
+def feature_novelty(features: dict[str, np.ndarray], *, baseline_s: float = 3.0,
+                    median_n: int = 1) -> dict[str, np.ndarray]:
     """Unclipped novelty (>= 0, finite) of each of the four features, sharpness kept only where the
-    loudness rises too (module docstring). features : {name: [shape=(n,)] per 20 ms frame}."""
+    loudness rises too (module docstring). features : {name: [shape=(n,)] per 20 ms frame}.
+
+    median_n : frames (<= 1: none) of a running median (:func:`trailing_median`) that loudness and
+    sharpness go through first: a lossy codec moves their single-frame peaks (pre-echo, a transient
+    spread over the next block, high bands quantised coarsely), and the 1 s maximum envelope would
+    carry such a peak into the baseline for seconds. Booming and low-frequency energy come from the
+    bands a codec keeps."""
     sound = features.get("loudness")
     opening = opening_frames(np.asarray(sound, dtype=np.float64)) if sound is not None else None
-    out = {f: novelty(x, exponent=EXPONENTS[f], baseline_s=baseline_s, clip=False, opening_n=opening)
+    out = {f: novelty(trailing_median(np.asarray(x, dtype=np.float64), median_n) if f in SMOOTHED else x,
+                      exponent=EXPONENTS[f], baseline_s=baseline_s, clip=False, opening_n=opening)
            for f, x in features.items()}
     if "sharpness" in out and "loudness" in out:
         out["sharpness"] = np.where(out["loudness"] > 0, out["sharpness"], 0.0)
@@ -118,3 +127,13 @@ def trailing_max(v: np.ndarray, n: int) -> np.ndarray:
         return v.copy()
     return sliding_window_view(np.concatenate([np.full(n - 1, v[0], v.dtype), v]), n).max(axis=1)
 
+
+
+def trailing_median(v: np.ndarray, n: int) -> np.ndarray:
+    """Median of v[t - n + 1 .. t] at each t (the window padded with v[0] at the start), float64,
+    same shape; no smoothing for n <= 1. Non-finite values count as 0. A peak shorter than half
+    the window goes; a rise lasting longer passes, (n - 1) // 2 frames later."""
+    x = np.where(np.isfinite(v), v, 0.0).astype(np.float64)
+    if x.size == 0 or n <= 1:
+        return x
+    return np.median(sliding_window_view(np.concatenate([np.full(n - 1, x[0]), x]), n), axis=1)

@@ -6,7 +6,10 @@ is compared with its threshold; where ANY exceeds it, and the normalised loudnes
 the normalised loudness, booming and low-frequency energy (the sound's level against the film),
 else 0. A steady bed stays near its baseline and does not vibrate; impacts, hits and a rising
 rumble do, as hard as they are loud. Sharpness, which describes a sound's colour, not its level,
-can trigger but does not set the intensity.
+can trigger but does not set the intensity. ``smoothing_s`` keeps its decisions where a lossy
+codec re-encodes the sound: loudness and sharpness through a running median of that length, and
+a pause shorter than twice it between two triggered stretches bridged, so a codec's dip does not
+split one event into two onsets.
 
 "thesis": normalise each of the four features to [0, 1] over the clip -> where ANY normalised
 feature exceeds its threshold the frame's intensity is the LARGEST of the four, else 0.
@@ -29,12 +32,13 @@ import numpy as np
 from autohaptics.errors import ParameterError
 from autohaptics.intensity.novelty import feature_novelty
 from autohaptics.records import DERIVE
-from autohaptics.timebase import frames_to_ticks
+from autohaptics.timebase import FRAME_S, frames_to_ticks
 
 FEATURES = ("sharpness", "booming", "low_energy", "loudness")
 DEFAULT_THRESHOLDS = {"sharpness": 0.50, "booming": 0.65, "low_energy": 0.80, "loudness": 0.85}
 NORMALISERS = ("max", "percentile")
 RULES = ("events", "thesis")
+SMOOTHING_MAX_S = 0.5
 LEVEL_FEATURES = ("booming", "low_energy", "loudness")  # what sets the "events" rule's intensity
 
 
@@ -47,13 +51,17 @@ class IntensityParams:
     thresholds : per-feature threshold, 0..1, on the novelty ("events") or on the normalised
         value ("thesis"); defaults sharpness 0.50, booming 0.65, low_energy 0.80, loudness 0.85
         (the thesis's). A threshold of 1 or more disables the feature.
-    normaliser : "max" divides by the clip maximum (the thesis); "percentile" divides by the
-        ``percentile``-th percentile and clips at 1, so one explosion does not flatten a feature film.
+    normaliser : "percentile" (default) divides by the ``percentile``-th percentile and clips at
+        1, so one explosion does not flatten a feature film and the loudness gate's reference is
+        not one frame a codec moves; "max" divides by the clip maximum (the thesis's).
     percentile : percentile used by the "percentile" normaliser, 50..100 (default 99.5).
     loudness_gate : frames whose normalised loudness is below this never vibrate, 0..1 (default
-        0.2, about 23 phon below the film's loudest moment; the thesis variant 0.05, about 43 phon).
+        0.2, about 23 phon below the film's loud level, the normaliser's reference; the thesis
+        variant 0.05, about 43 phon below its loudest frame).
         Not in the thesis: without a gate the hiss of a quiet scene can drive the chair.
     baseline_s : length of the "events" rule's recent baseline, seconds, 0.5..30 (default 3).
+    smoothing_s : the "events" rule's running median of loudness and sharpness, and half the
+        longest pause it bridges, seconds, 0..0.5 (default 0.1; 0: neither).
     density : the share of the film's ticks that should vibrate, 0..1, or None (default: the
         thresholds as they are). When set, the thresholds are scaled by one common factor so
         that about this share vibrates; never more than the share above the loudness gate.
@@ -63,10 +71,11 @@ class IntensityParams:
 
     rule: str = "events"
     thresholds: dict = field(default_factory=lambda: dict(DEFAULT_THRESHOLDS))
-    normaliser: str = "max"
+    normaliser: str = "percentile"
     percentile: float = 99.5
     loudness_gate: float = 0.2
     baseline_s: float = 3.0
+    smoothing_s: float = 0.1
     density: float | None = None
 
     def __post_init__(self):
@@ -86,11 +95,17 @@ class IntensityParams:
             raise ParameterError(f"intensity.rule must be one of {RULES}, got {self.rule!r}")
         if not (0.5 <= float(self.baseline_s) <= 30.0):
             raise ParameterError(f"intensity.baseline_s must lie in 0.5..30 s, got {self.baseline_s!r}")
+        if not (0.0 <= float(self.smoothing_s) <= SMOOTHING_MAX_S):
+            raise ParameterError(f"intensity.smoothing_s must lie in 0..{SMOOTHING_MAX_S} s, got {self.smoothing_s!r}")
         if self.density is not None and not (0.0 <= float(self.density) <= 1.0):
             raise ParameterError(f"intensity.density must lie in 0..1 (a share of the film), got {self.density!r}")
 
     def threshold(self, name: str) -> float:
         return float(self.thresholds.get(name, DEFAULT_THRESHOLDS[name]))
+
+    def smoothing_frames(self) -> int:
+        """``smoothing_s`` in 20 ms frames under the "events" rule, 0 under "thesis"."""
+        return int(round(float(self.smoothing_s) / FRAME_S)) if self.rule == "events" else 0
 
 
 def normalise(x: np.ndarray, *, method: str = "max", percentile: float = 99.5) -> np.ndarray:
@@ -150,13 +165,15 @@ def decision_curves(features: dict[str, np.ndarray], normalised: dict[str, np.nd
     itself ("thesis", 0..1)."""
     if params.rule == "thesis":
         return normalised
-    return feature_novelty({f: features[f] for f in FEATURES}, baseline_s=float(params.baseline_s))
+    return feature_novelty({f: features[f] for f in FEATURES}, baseline_s=float(params.baseline_s),
+                           median_n=params.smoothing_frames())
 
 
 def triggered_values(normalised: dict[str, np.ndarray], curves: dict[str, np.ndarray], *, params: IntensityParams,
                      value_features: tuple[str, ...], scale: float = 1.0) -> np.ndarray:
     """Per frame: the largest normalised ``value_features`` where any enabled feature's curve
-    exceeds its threshold times ``scale`` and the loudness passes the gate, else 0.
+    exceeds its threshold times ``scale`` and the loudness passes the gate, else 0; a pause shorter
+    than 2 x ``params.smoothing_frames()`` frames between two such stretches takes its values too.
     Returns float64 [shape=(n,)] in [0, 1]."""
     stack = np.stack([np.asarray(curves[f], dtype=np.float64) for f in FEATURES])  # (4, n)
     thr = np.array([params.threshold(f) for f in FEATURES])
@@ -164,8 +181,23 @@ def triggered_values(normalised: dict[str, np.ndarray], curves: dict[str, np.nda
     triggered = (stack[enabled] > (thr[enabled] * scale)[:, None]).any(axis=0)
     if params.loudness_gate > 0:
         triggered &= np.asarray(normalised["loudness"], dtype=np.float64) >= params.loudness_gate
+    triggered = bridge_pauses(triggered, 2 * params.smoothing_frames() - 1)
     values = np.stack([np.asarray(normalised[f], dtype=np.float64) for f in value_features]).max(axis=0)
     return np.where(triggered, values, 0.0)
+
+
+def bridge_pauses(on: np.ndarray, longest: int) -> np.ndarray:
+    """``on`` (bool [shape=(n,)]) with every run of False of at most ``longest`` frames that has True
+    on both sides set True; a copy, ``on`` itself for longest < 1."""
+    on = np.asarray(on, dtype=bool)
+    if longest < 1 or not on.any():
+        return on
+    edges = np.diff(np.concatenate([[0], on.astype(np.int8), [0]]))
+    ends, starts = np.flatnonzero(edges == -1)[:-1], np.flatnonzero(edges == 1)[1:]  # pause = [end, start)
+    out = on.copy()
+    for a, b in zip(ends[starts - ends <= longest], starts[starts - ends <= longest]):
+        out[a:b] = True
+    return out
 
 
 def density_scale(normalised: dict[str, np.ndarray], curves: dict[str, np.ndarray], n_ticks: int, *,
