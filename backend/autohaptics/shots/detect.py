@@ -1,10 +1,10 @@
 """Shot boundaries from the analysis's per-tick arrays: hard cuts, fades through a flat picture
 (black, white) and cross-dissolves, each one boundary (the first tick of the new shot).
 
-- **Cuts**: a run of ticks the video pass flagged as cuts (``cut``) is one boundary at its last
-  tick, kept only when the frames either side of the run are in different shots by the cut rule
-  (``airflow.cuts``): a flash (a few bright frames inside a shot) flags its frames but leaves the
-  shot as it was.
+- **Cuts**: in a run of ticks the video pass flagged (``cut``), each tick whose stored signature
+  is in another shot than the tick before's by the cut rule (``airflow.cuts``) starts a shot (a
+  flag of the flow pair alone is none). Flag runs up to ``flash_ticks`` apart whose outer ticks
+  are in the same shot are a flash (a few bright frames inside a shot): no boundary.
 - **Fades**: a run of flat ticks (thumbnail standard deviation below ``flat_std``) that the
   picture ramps into or out of over ``min_ramp`` ticks or more, with different shots at the outer
   ends of the ramps; the boundary is the middle of the flat run, and cut flags on the ramps are
@@ -90,6 +90,8 @@ def detect(*, cut: np.ndarray, signature: np.ndarray | None = None, mean_rgb: np
     """
     cut = np.asarray(cut, bool)
     n = cut.size
+    if signature is not None and np.shape(signature) != (n, cuts.PACKED_SIZE):
+        raise ParameterError(f"signatures must have shape ({n}, {cuts.PACKED_SIZE}), got {np.shape(signature)}")
     rows = np.arange(n) if frame_mask is None else np.flatnonzero(np.asarray(frame_mask, bool))
     if rows.size < n:
         cut = cut[rows]
@@ -109,8 +111,8 @@ def _detect(cut: np.ndarray, signature, mean_rgb, params: ShotParams) -> list[tu
     n = cut.size
     sigs, valid = _signatures(signature, n)
     level, flat = _flatness(sigs, valid, mean_rgb, n, params)
-    found: list[tuple[int, int, int, int]] = []
-    claimed = np.zeros(n, bool)  # ticks inside a fade's ramps
+    found: list[tuple[float, int, int, int]] = []
+    claimed = np.zeros(n, bool)  # rows inside a fade's ramps
     for s0, s1, pos in _fades(level, flat, cut, sigs, valid, mean_rgb, params):
         found.append((pos, FADE, s0, s1))
         claimed[s0 + 1:s1] = True  # cut flags between the span's rows; one at s0 is a cut into it
@@ -129,8 +131,6 @@ def _signatures(signature: np.ndarray | None, n: int) -> tuple[np.ndarray | None
     if signature is None:
         return None, np.zeros(n, bool)
     packed = np.asarray(signature)
-    if packed.shape != (n, cuts.PACKED_SIZE):
-        raise ParameterError(f"signatures must have shape ({n}, {cuts.PACKED_SIZE}), got {packed.shape}")
     valid = packed[:, :3 * 16].any(axis=1)
     return cuts.unpack_signatures(packed), valid
 
