@@ -383,7 +383,8 @@ CASES: list[Case] = [
     Case("nan_inf_samples_mkv", build_with("nan.mkv", lambda p: write_streams(
         p, frames=_frames(24), audio=_nan_audio(), audio_codec="pcm_f32le")), "timeline", duration_s=CLIP_S,
          check=_repaired),
-    Case("full_scale_square", build_with("square.mkv", _square), "timeline", duration_s=CLIP_S, check=_vibrates),
+    # a steady tone under way from the first frame is no event (the start of a file is not one: issue 31)
+    Case("full_scale_square", build_with("square.mkv", _square), "timeline", duration_s=CLIP_S, check=_still),
     # the mono downmix is the mean of the channels: anti-phase stereo cancels (documented decision)
     Case("antiphase_stereo_square", build_with("square_antiphase.mkv", lambda p: _square(p, antiphase=True)),
          "timeline", duration_s=CLIP_S, check=_still),

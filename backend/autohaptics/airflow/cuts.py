@@ -128,8 +128,7 @@ def pack_signature(sig: np.ndarray) -> np.ndarray | None:
 
 def unpack_signatures(packed: np.ndarray) -> np.ndarray:
     """Packed rows uint8 [shape=(m, 192)] back to colour signatures float32 [shape=(m, 192)]."""
-    p = np.asarray(packed, np.float32).reshape(-1, PACKED_SIZE)
-    out = p.copy()
+    out = np.array(packed, np.float32).reshape(-1, PACKED_SIZE)  # one new array, scaled in place
     out[:, :_HIST_N] /= _HIST_SCALE
     return out
 

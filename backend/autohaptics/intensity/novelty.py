@@ -82,6 +82,8 @@ def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, cl
     gap_n = int(round(GAP_S / FRAME_S))
     base_n = max(1, int(round(baseline_s / FRAME_S)))
     opening_n = opening_frames(v) if opening_n is None else min(int(opening_n), n)
+    if opening_n > 0:  # a hit of this feature's own ends its opening, whatever the loudness does
+        opening_n = _before_rise(v[:opening_n], float(v[:gap_n].max()))
     pre_n = env_n + gap_n + base_n if opening_n > 0 else 0  # history for every window before t = 0
     env = trailing_max(np.concatenate([np.full(pre_n, v[:opening_n].max() if pre_n else 0.0), v]), env_n)
     cum = np.concatenate([[0.0], np.cumsum(env)])
@@ -97,7 +99,7 @@ def opening_frames(x: np.ndarray) -> int:
     """The frames of a file's opening whose level its sound had before the file began (module
     docstring): up to ``OPENING_S`` after the sound begins, ending early where it falls silent or
     rises ``OPENING_RISE`` times above its level over its first ``GAP_S`` (a hit, not the loudness
-    model's attack); 0 where the file opens on at least ``GAP_S`` of silence (at most ``FLOOR`` of
+    model's attack; :func:`novelty` ends each feature's opening at its own such rise too); 0 where the file opens on at least ``GAP_S`` of silence (at most ``FLOOR`` of
     the film's top).
 
     x : [shape=(n,)] per 20 ms frame, >= 0 (non-finite values count as 0): the loudness, or any level.
@@ -112,9 +114,16 @@ def opening_frames(x: np.ndarray) -> int:
     if first >= gap_n:
         return 0
     end = min(v.size, first + int(round(OPENING_S / FRAME_S)))
-    early = float(v[first:first + gap_n].max())
-    stop = np.flatnonzero(~sounding[first:end] | (v[first:end] > OPENING_RISE * early))
-    return first + int(stop[0]) if stop.size else end
+    quiet = np.flatnonzero(~sounding[first:end])
+    end = first + int(quiet[0]) if quiet.size else end
+    return first + _before_rise(v[first:end] / top, float(v[first:first + gap_n].max()) / top)
+
+
+def _before_rise(v: np.ndarray, early: float) -> int:
+    """How many leading frames of ``v`` (0..1 of the film's top) stay below ``OPENING_RISE`` times
+    ``early`` (both with ``FLOOR`` added, as the novelty compares them): the frames before a hit."""
+    rise = np.flatnonzero(v + FLOOR > OPENING_RISE * (early + FLOOR))
+    return int(rise[0]) if rise.size else int(v.size)
 
 
 def trailing_max(v: np.ndarray, n: int) -> np.ndarray:

@@ -23,8 +23,9 @@ class Analysis:
 
     audio : {"loudness" sone, "sharpness" acum, "booming" 1, "low_energy" Pa^2}, each float64
         [shape=(n_frames,)] on the 20 ms grid, n_frames = n_ticks * 5; None without an audio stream.
-    shots : the shot boundaries (:func:`autohaptics.shots.detect`), found from ``video`` when not
-        given (a cache written before they were stored gets them from its own arrays).
+    shots : the shot boundaries (:func:`autohaptics.shots.detect`), found from ``video`` on first
+        use when not given (a cache written before they were stored gets them from its own arrays;
+        a plain ``generate`` never needs them, so it never pays for them).
     """
 
     info: dict
@@ -34,14 +35,16 @@ class Analysis:
     audio: dict[str, np.ndarray] | None
     video: VideoAnalysis | None = None
     stats: dict = field(default_factory=dict)
-    shots: Boundaries | None = None
+    found_shots: Boundaries | None = None
 
-    def __post_init__(self):
-        if self.shots is None:
+    @property
+    def shots(self) -> Boundaries:
+        if self.found_shots is None:
             v = self.video
-            self.shots = Boundaries.build([]) if v is None else detect(
+            self.found_shots = Boundaries.build([]) if v is None else detect(
                 cut=v.cut, signature=v.signature, mean_rgb=v.mean_rgb if v.mean_rgb.any() else None,
                 frame_mask=v.frame_mask)
+        return self.found_shots
 
     def save(self, path: str | Path) -> None:
         """Write the cache as one .npz file (arrays plus a JSON header)."""
@@ -67,7 +70,7 @@ class Analysis:
         return cls(info=header["info"], sha256=header["sha256"], n_ticks=int(header["n_ticks"]),
                    params=header["params"], audio=audio if header["has_audio"] else None,
                    video=VideoAnalysis.from_arrays(video) if header.get("has_video") else None,
-                   stats=header["stats"], shots=shots)
+                   stats=header["stats"], found_shots=shots)
 
 
 def reusable(analysis: Analysis, params: GenerateParams | dict) -> bool:

@@ -219,8 +219,11 @@ def _cuts(cut: np.ndarray, sigs, valid, mean_rgb, params):
 def _coarse(sigs: np.ndarray) -> np.ndarray:
     """The thumbnails as 3 x 4 block means, float64 [shape=(n, 12)]: a blend of two shots is a
     blend at any scale, while the shots' own motion moves little at this one."""
-    th = cuts.thumbnails(sigs).astype(np.float64).reshape(-1, 3, 3, 4, 4)
-    return th.mean(axis=(2, 4)).reshape(-1, 12)
+    th = cuts.thumbnails(sigs).reshape(-1, 3, 3, 4, 4)
+    return th.mean(axis=(2, 4), dtype=np.float64).reshape(-1, 12)
+
+
+_CHUNK = 4096  # rows of signatures compared at once (float64 copies: 6 MB a side)
 
 
 def _dissolves(sigs, valid, blocked, params):
@@ -243,7 +246,10 @@ def _dissolves(sigs, valid, blocked, params):
         mid = coarse[c] - 0.5 * (coarse[c - w] + coarse[c + w])
         r = np.sqrt((mid * mid).sum(axis=1) / np.maximum((ends * ends).sum(axis=1), 1e-9))
         c, r = c[r <= params.linear_max], r[r <= params.linear_max]  # the cheap test first
-        apart = cuts.cut_scores(sigs[c - w], sigs[c + w], params=params.cut_params) >= 0.5
+        apart = np.zeros(c.size, bool)
+        for i in range(0, c.size, _CHUNK):  # in chunks: a still film passes the cheap test everywhere
+            part = c[i:i + _CHUNK]
+            apart[i:i + _CHUNK] = cuts.cut_scores(sigs[part - w], sigs[part + w], params=params.cut_params) >= 0.5
         c, r = c[apart], r[apart]
         widths[c] += 1
         better = r < best_r[c]
