@@ -3,6 +3,8 @@ answers to, docs/API.md "Security") and the session token from ``GET /api/sessio
 
 from __future__ import annotations
 
+import time
+
 from fastapi.testclient import TestClient
 
 BASE_URL = "http://127.0.0.1:8000"
@@ -19,3 +21,11 @@ class LocalClient(TestClient):
         response = client.get("/api/session")
         assert response.status_code == 200, response.text
         return client
+
+    def finished_job(self, job_id: str, *, timeout_s: float = 180.0) -> dict:
+        """The job ``job_id`` once it has ended (done, failed or cancelled), polled every 0.1 s."""
+        deadline = time.monotonic() + timeout_s
+        while (job := self.get(f"/api/jobs/{job_id}").json())["status"] not in ("done", "failed", "cancelled"):
+            assert time.monotonic() < deadline, f"job {job_id} did not end within {timeout_s:g} s: {job}"
+            time.sleep(0.1)
+        return job

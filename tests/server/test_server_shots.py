@@ -6,7 +6,6 @@ from its cache."""
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +16,6 @@ from autohaptics.server.settings import Settings
 from autohaptics.testing import Scene, Segment, Texture, Tone, write_scene
 from service_client import LocalClient
 
-TERMINAL = ("done", "failed", "cancelled")
 N_TICKS = 120
 
 
@@ -44,12 +42,7 @@ def base_project(client, tmp_path_factory) -> dict:
     write_scene(path, scene, width=96, height=54, fps=10, quality="low", sample_rate=24000)
     r = client.post("/api/projects", files={"file": ("film.mp4", path.read_bytes(), "video/mp4")})
     assert r.status_code == 201, r.text
-    job_id = r.json()["job"]["id"]
-    for _ in range(1800):
-        job = client.get(f"/api/jobs/{job_id}").json()
-        if job["status"] in TERMINAL:
-            break
-        time.sleep(0.1)
+    job = client.finished_job(r.json()["job"]["id"])
     assert job["status"] == "done", job
     return client.get(f"/api/projects/{r.json()['id']}").json()
 
@@ -196,11 +189,6 @@ def test_boundary_edits_are_kept_through_a_regeneration(client, project):
     assert post_edit(client, pid, {"op": "shot_split", "t": 60}).status_code == 200
     r = client.post(f"/api/projects/{pid}/generate", json={})
     assert r.status_code == 202, r.text
-    job_id = r.json()["job"]["id"]
-    for _ in range(1800):
-        job = client.get(f"/api/jobs/{job_id}").json()
-        if job["status"] in TERMINAL:
-            break
-        time.sleep(0.1)
+    job = client.finished_job(r.json()["job"]["id"])
     assert job["status"] == "done", job
     assert bounds(shots(client, pid)) == [(0, 40, "start"), (40, 60, "cut"), (60, 80, "split"), (80, 120, "cut")]

@@ -7,7 +7,6 @@ sentence and stores nothing, unknown ids 404. Two small synthetic films, the rea
 from __future__ import annotations
 
 import json
-import time
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +20,6 @@ from autohaptics.timeline.wire import decode
 
 from service_client import LocalClient
 
-TERMINAL = ("done", "failed", "cancelled")
 VIBRATION = [f"A{i}" for i in range(1, 10)]
 
 
@@ -45,11 +43,7 @@ def films(root) -> dict[str, Path]:
 
 
 def wait(client, job: dict) -> None:
-    deadline = time.monotonic() + 180
-    while client.get(f"/api/jobs/{job['id']}").json()["status"] not in TERMINAL:
-        assert time.monotonic() < deadline, "job did not finish"
-        time.sleep(0.2)
-    assert client.get(f"/api/jobs/{job['id']}").json()["status"] == "done"
+    assert client.finished_job(job["id"])["status"] == "done"
 
 
 def upload(client, film: Path, **fields) -> dict:

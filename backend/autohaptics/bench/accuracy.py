@@ -2,15 +2,14 @@
 
 For each clip, every configuration (``reference``, ``balanced``, ``fast``, ``balanced`` without
 skipping, and any ``--config``) runs ``generate`` in a FRESH process, so its peak memory is its
-own; the bare decode of the same file (:func:`autohaptics.bench.decode.bare_decode`) also runs in its own
-process in the same run. Wall time is the ``generate`` call itself (after imports and a warm-up of
+own; the bare decode (:func:`autohaptics.bench.decode.bare_decode`) runs in its own process in the
+same run. Wall time is the ``generate`` call itself (after imports and a warm-up of
 the compiled audio kernels, which a long film pays once); peak RSS is the whole process's
 (``ru_maxrss`` from ``wait4``). Each timeline is compared with the reference one
 (:mod:`autohaptics.metrics`).
 
-Outputs (in ``--out``): ``accuracy.json`` (every figure), ``accuracy_<clip>.png`` (x = wall time /
-decode time, y = vibration MAE, temperature MAE, 1 - fan IoU; one point per configuration, the
-Pareto front drawn), and the timelines. Printed: the table, the per-stage seconds (where the time
+Outputs (in ``--out``): ``accuracy.json``, ``accuracy_<clip>.png`` (x = wall time / decode time,
+y = vibration MAE, temperature MAE, 1 - fan IoU; the Pareto front drawn), and the timelines. Printed: the table, the per-stage seconds (where the time
 goes) and the skipping audit (share of ticks computed vs skipped per stage, and what skipping
 costs in error: ``balanced`` vs ``balanced`` with ``video.skip=false``, both against the reference
 and against each other).

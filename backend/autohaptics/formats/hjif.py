@@ -12,9 +12,8 @@ Layout of the file (field names as written by the MPEG reference software's HJIF
   reference writer fills in); the temperature's unit, degrees Celsius, is in its description.
 - ``body_part_mask``: bits of the MPEG reference body-part table (``BODY_PART_BITS``).
 - Every channel has one ``Curve`` band (``curve_type`` "Linear") whose ``Basis`` effects carry
-  keyframes (``relative_position`` in ms, ``amplitude_modulation``). Keyframes sit on the 100 ms
-  grid, only where the slope changes: linear interpolation between them gives back every tick
-  exactly (4 decimals).
+  keyframes (``relative_position`` in ms, ``amplitude_modulation``) on the 100 ms grid, only where
+  the slope changes: linear interpolation between them gives back every tick exactly (4 decimals).
 - Vibration and wind: one stretch of effects per run of non-zero ticks, opened and closed by a
   zero keyframe one tick outside the run; no effect at all where the channel is silent.
 - Temperature: effects over the whole timeline, amplitude = (T - temp_low) / (temp_high -
