@@ -35,8 +35,12 @@ REQUIRED: dict[str, tuple[str, ...]] = {
     "params": ("from", "to"),
     "shot_split": ("t",),
     "shot_merge": ("shots",),
+    "group": ("ops",),
 }
 OPTIONAL: dict[str, tuple[str, ...]] = {name: ("cells",) for name in ("set", "scale", "clear", "fade_in", "fade_out")}
+OPTIONAL["paste"] = ("t1",)
+GROUP_OPS = ("set", "scale", "clear", "fade_in", "fade_out", "paste", "pencil", "temp_points")  # what a group holds
+MAX_GROUP = 10_000  # sub-operations in one group
 OPS: tuple[str, ...] = tuple(REQUIRED)
 IMPORT_STORED_FIELDS = ("ref", "name", "n_ticks")  # an import op as stored: its document lives in a file
 MARKER_OPS = ("marker_add", "marker_update", "marker_delete")
@@ -100,6 +104,10 @@ def normalise(op: Any) -> tuple[dict, Any]:
             raise ParameterError(f"op 'scale': field 'factor' must be >= 0, got {out['factor']}")
     elif name == "paste":
         out["values"], parsed = fields.paste_values(op["values"])
+        if "t1" in op:
+            out["t1"] = fields.tick(name, "t1", op["t1"])
+            if out["t1"] <= out["t0"]:
+                raise ParameterError(f"op 'paste': field 't1' ({out['t1']}) must be greater than t0 ({out['t0']})")
     elif name == "pencil":
         arr = fields.array(name, "values", op["values"], ndim=1)
         out["values"] = arr.tolist()
@@ -132,7 +140,26 @@ def normalise(op: Any) -> tuple[dict, Any]:
         out["shots"] = sorted(fields.tick(name, "shots", s) for s in ids)
         if out["shots"][0] == out["shots"][1]:
             raise ParameterError("op 'shot_merge': field 'shots' must name two different shots")
+    elif name == "group":
+        out["ops"], parsed = _group(op["ops"])
     return out, parsed
+
+
+def _group(ops: Any) -> tuple[list[dict], list[tuple[dict, Any]]]:
+    """A group's sub-operations, each normalised; a bad one is named by its index (``ops[i]``)."""
+    if not isinstance(ops, list) or not 1 <= len(ops) <= MAX_GROUP:
+        raise ParameterError(f"op 'group': field 'ops' must be a list of 1..{MAX_GROUP} operations")
+    subs = []
+    for i, sub in enumerate(ops):
+        name = sub.get("op") if isinstance(sub, dict) else None
+        if name not in GROUP_OPS:
+            raise ParameterError(f"op 'group': ops[{i}] must be one of {', '.join(GROUP_OPS)}; got {fields.brief(name)}")
+        try:
+            subs.append(normalise(sub))
+        except ParameterError as exc:
+            why = str(exc).removeprefix(f"op '{name}': ")
+            raise ParameterError(f"op 'group': ops[{i}] ({name}): {why}") from None
+    return [op for op, _ in subs], subs
 
 
 def _params_doc(value: Any, field: str) -> dict:
@@ -258,8 +285,28 @@ def _write(tl: Timeline, lane: str, t0: int, values: np.ndarray, strict: bool) -
         view[...] = clamp(tl, lane, values[: b - a])
 
 
+def fitted(values: np.ndarray, length: int, count: int | None = None) -> np.ndarray:
+    """``values`` (m ticks along axis 0) fitted to ``length`` ticks: target tick k is the mean of
+    the source over ``[k m / length, (k + 1) m / length)``, each source tick held over its own
+    tick (area resampling: the mean level is kept, values stay within the source's range, a peak
+    shorter than the stretch factor is spread). Only the first ``count`` ticks are made."""
+    m = values.shape[0]
+    count = length if count is None else min(count, length)
+    if m == length:
+        return values[:count]
+    src = np.asarray(values, np.float64)
+    total = np.concatenate([np.zeros((1,) + src.shape[1:]), np.cumsum(src, axis=0)])
+    edges = np.arange(count + 1, dtype=np.float64) * (m / length)
+    i = np.minimum(np.floor(edges).astype(np.int64), m - 1)
+    frac = (edges - i).reshape((-1,) + (1,) * (src.ndim - 1))
+    area = total[i] + frac * src[i]  # the integral of the held source up to each edge
+    return (area[1:] - area[:-1]) / (m / length)
+
+
 def _op_paste(tl, markers, op, parsed, strict) -> None:
     for lane, values in parsed.items():
+        if "t1" in op:
+            values = fitted(values, op["t1"] - op["t0"], max(0, tl.n_ticks - op["t0"]))
         _write(tl, lane, op["t0"], values, strict)
 
 
@@ -311,6 +358,15 @@ def _op_shots(tl, markers, op, parsed, strict) -> None:
     """A shot boundary operation changes the shot list (``autohaptics.shots.model``), no track."""
 
 
+def _op_group(tl, markers, op, parsed, strict) -> None:
+    """The sub-operations in order; one that fails is named by its index."""
+    for i, (sub, sub_parsed) in enumerate(parsed):
+        try:
+            APPLY[sub["op"]](tl, markers, sub, sub_parsed, strict)
+        except ParameterError as exc:
+            raise ParameterError(f"ops[{i}] ({sub['op']}): {exc}") from None
+
+
 def _in_cells(apply: Callable) -> Callable:
     """A range op that, given ``cells``, changes only those fans (the others keep their values)."""
     def region(tl, markers, op, parsed, strict) -> None:
@@ -342,4 +398,5 @@ APPLY: dict[str, Callable] = {
     "params": _op_params,
     "shot_split": _op_shots,
     "shot_merge": _op_shots,
+    "group": _op_group,
 }

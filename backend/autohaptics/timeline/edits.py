@@ -127,6 +127,8 @@ def _tracks_written(op: dict) -> set[str]:
     """The tracks an operation writes into in place (an import replaces them by new arrays)."""
     if op["op"] == "import":
         return set()
+    if op["op"] == "group":
+        return set().union(*(_tracks_written(sub) for sub in op["ops"]))
     lanes = list(op.get("lanes", ())) + ([op["lane"]] if "lane" in op else [])
     if op["op"] == "paste":
         lanes += list(op["values"])
@@ -139,6 +141,9 @@ def _restrict(op: dict, parsed: Any, skip: frozenset[str]) -> tuple[dict | None,
     """``op`` without its effects on the tracks in ``skip`` (None when nothing is left)."""
     if not skip or op["op"] in MARKER_OPS:
         return op, parsed
+    if op["op"] == "group":
+        kept = [r for r in (_restrict(sub, p, skip) for sub, p in parsed) if r[0] is not None]
+        return ({**op, "ops": [sub for sub, _ in kept]}, kept) if kept else (None, None)
     if "lanes" in op:
         lanes = [lane for lane in op["lanes"] if track_of_lane(lane) not in skip]
         return ({**op, "lanes": lanes}, parsed) if lanes else (None, None)
