@@ -31,6 +31,7 @@ from autohaptics.layout import ACTUATORS, ZONES
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.cache import Analysis
 from autohaptics.pipeline.derive import derive
+from autohaptics.style.apply import shape_vibration
 from autohaptics.style.model import KNOTS, TEMP_OFFSET_RANGE_C, TEMP_SCALE_RANGE, THRESHOLD_SCALE_RANGE, Style
 from autohaptics.timeline import Timeline
 
@@ -65,8 +66,9 @@ def learn(pairs: Sequence[Pair], params: GenerateParams | None = None, *, name: 
     vib_y = np.concatenate([e.vibration[p] for (_, e), p in zip(pairs, picks)])
     floors = np.zeros(vib_y.shape[1])
     evidence = _scale_evidence(pairs, params, picks)
+    scale = 1.0
     for _ in range(2):
-        scale, f1 = _threshold_scale(evidence, floors)
+        scale, f1 = _threshold_scale(evidence, floors, at=scale)
         bases = [derive(a, Style(threshold_scale=scale).apply_params(params)) for a, _ in pairs]
         vib_x = np.concatenate([b.vibration[p] for b, p in zip(bases, picks)])
         floors = _zone_floors(vib_x, vib_y)
@@ -142,39 +144,61 @@ def _check_pair(analysis: Analysis, edited: Timeline) -> None:
 
 
 def _scale_evidence(pairs: list[Pair], params: GenerateParams,
-                    picks: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+                    picks: list[np.ndarray]) -> tuple[np.ndarray, ...] | None:
     """On the sampled ticks: which vibrate at each scale of :data:`SCALE_GRID` (bool [shape=(ticks,
     scales)]: the intensity rule on the film's decision curves, computed once, no derive per scale),
-    the levels at the lowest scale [shape=(ticks, 9)] and which vibrate in the edited timelines;
+    the levels at the lowest scale and the edited ones [shape=(ticks, 9)], and each tick's 2 s block;
     None where the thresholds do not decide which ticks vibrate (a density, the picture modes)."""
     if params.intensity.density is not None or params.mode not in ("multimodal", "audio"):
         return None
     lowest = Style(threshold_scale=THRESHOLD_SCALE_RANGE[0]).apply_params(params)
     rules = [Style(threshold_scale=float(s)).apply_params(params).intensity for s in SCALE_GRID]
-    ons, levels, wanted = [], [], []
-    for (analysis, edited), p in zip(pairs, picks):
+    ons, levels, edits, blocks = [], [], [], []
+    for i, ((analysis, edited), p) in enumerate(zip(pairs, picks)):
         if analysis.audio is None:
             continue
         inputs = decision_inputs(analysis.audio, params=params.intensity)
         ons.append(np.stack([audio_intensity(analysis.audio, analysis.n_ticks, params=rule, inputs=inputs)[0][p]
                              for rule in rules], axis=1) > 0)
         levels.append(derive(analysis, lowest).vibration[p])
-        wanted.append(edited.vibration[p].max(axis=1) > 0)
-    return (np.concatenate(ons), np.concatenate(levels), np.concatenate(wanted)) if ons else None
+        edits.append(edited.vibration[p])
+        blocks.append(i * (1 << 32) + p // BLOCK_TICKS)
+    return tuple(np.concatenate(v) for v in (ons, levels, edits, blocks)) if ons else None
 
 
-def _threshold_scale(evidence: tuple | None, floors: np.ndarray) -> tuple[float, float]:
-    """(scale, its pooled vibrating-tick F1) on the ticks that can vibrate (of
-    :func:`_scale_evidence`: on at the lowest scale, at or above ``floors`` on some actuator): from
-    1, each sixth-octave step down is taken while :data:`STEP_SHARE` of the ticks it wakes vibrate
-    in the edited timelines, else each step up while that share of those it silences are silent
-    there (a one-off edit covers few of the ticks a step changes, a taste most of them); then,
-    between the last step taken and the first refused, the scale of :data:`SCALE_GRID` with the
-    fewest ticks on the wrong side (of equals, the nearest the step taken)."""
+def _votes(evidence: tuple, floors: np.ndarray, at: float) -> tuple[np.ndarray, np.ndarray]:
+    """(can, vote) per sampled tick of :func:`_scale_evidence`: ``can`` where the style would vibrate
+    the tick if the thresholds woke it (its levels at the lowest scale through the floors and the
+    zone curves fitted on the ticks vibrating at scale ``at``); ``vote`` -1..1, how much better
+    "woken, in the style" explains the edited levels than "off": (d_off - d_on) / (d_off + d_on),
+    d the L1 distances to off and to the styled levels (an edit that is neither, a one-off burst,
+    votes near 0)."""
+    on, levels, edited, blocks = evidence
+    at_k = int(np.argmin(np.abs(SCALE_GRID - at)))
+    fit = on[:, at_k] & (levels.max(axis=1) > 0)
+    curves = _zone_curves(levels[fit], edited[fit], floors, blocks[fit])
+    styled = shape_vibration(levels, KNOTS, curves, tuple(floors))
+    d_on = np.abs(edited - styled).sum(axis=1, dtype=np.float64)
+    d_off = edited.sum(axis=1, dtype=np.float64)
+    can = styled.max(axis=1) > 0
+    vote = np.where(can, (d_off - d_on) / np.maximum(d_off + d_on, 1e-12), 0.0)
+    return can, vote
+
+
+def _threshold_scale(evidence: tuple | None, floors: np.ndarray, at: float = 1.0) -> tuple[float, float]:
+    """(scale, its pooled vibrating-tick F1) on the ticks that can vibrate, each weighed by its vote
+    (:func:`_votes`: ±1 where the edit is clearly on in the style or off): from 1, each sixth-octave
+    step down is taken while the ticks it wakes vote on average at least 2 x :data:`STEP_SHARE` - 1
+    for "on" (a share of 2/3 of clear votes), else each step up while those it silences vote as
+    much for "off" (a one-off edit covers few of the ticks a step changes and a drawn burst votes
+    near 0, a taste moves most of them); then, between the last step taken and the first refused,
+    the scale of :data:`SCALE_GRID` whose ticks disagree least with their votes (of equals, the
+    nearest the step taken)."""
     if evidence is None:
         return 1.0, float("nan")
-    can = ((evidence[1] > 0) & (evidence[1] >= floors)).any(axis=1)
-    on, want = evidence[0][can], evidence[2][can]
+    can, vote = _votes(evidence, floors, at)
+    on, vote, want = evidence[0][can], vote[can], evidence[2][can].max(axis=1) > 0
+    need = 2 * STEP_SHARE - 1
     one = int(np.flatnonzero(SCALE_GRID == 1.0)[0])
     pick = stop = one
     for direction in (-1, 1):
@@ -182,7 +206,7 @@ def _threshold_scale(evidence: tuple | None, floors: np.ndarray) -> tuple[float,
             changed = on[:, k] != on[:, pick]
             if not changed.any():
                 continue
-            if np.count_nonzero(on[changed, k] == want[changed]) < STEP_SHARE * changed.sum():
+            if -direction * vote[changed].mean() < need:
                 stop = k
                 break
             pick = stop = k
@@ -190,8 +214,8 @@ def _threshold_scale(evidence: tuple | None, floors: np.ndarray) -> tuple[float,
             break
     if pick != one and stop != pick:
         lo, hi = sorted((pick, stop))
-        errors = np.count_nonzero(on[:, lo:hi + 1] != want[:, None], axis=0)
-        best = lo + np.flatnonzero(errors == errors.min())
+        errors = np.where(on[:, lo:hi + 1], (1 - vote)[:, None], (1 + vote)[:, None]).sum(axis=0)
+        best = lo + np.flatnonzero(errors <= errors.min() + 1e-9)
         pick = int(best[np.argmin(np.abs(best - pick))])
     got = on[:, pick]
     tp, fp, fn = int(np.sum(got & want)), int(np.sum(got & ~want)), int(np.sum(~got & want))
@@ -199,12 +223,23 @@ def _threshold_scale(evidence: tuple | None, floors: np.ndarray) -> tuple[float,
 
 
 def _zone_floors(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """A floor per actuator [shape=(9,)]: :func:`fit_floor` of its zone's levels pooled."""
+    """A floor per actuator [shape=(9,)]: :func:`fit_floor` of its zone's levels pooled, or of all
+    actuators' levels pooled where that one misclassifies no more of the zone's levels (a zone
+    whose levels all lie below the floor, or none near it, cannot place it)."""
+    pooled = fit_floor(x.reshape(-1), y.reshape(-1))
     floors = np.zeros(x.shape[1])
     for zone in ZONES:
         cols = [i for i, a in enumerate(ACTUATORS) if a.zone == zone]
-        floors[cols] = fit_floor(x[:, cols].reshape(-1), y[:, cols].reshape(-1))
+        zx, zy = x[:, cols].reshape(-1), y[:, cols].reshape(-1)
+        own = fit_floor(zx, zy)
+        floors[cols] = pooled if _floor_errors(zx, zy, pooled) <= _floor_errors(zx, zy, own) else own
     return floors
+
+
+def _floor_errors(x: np.ndarray, y: np.ndarray, floor: float) -> int:
+    """Levels ``x > 0`` a floor misclassifies: below it but on in ``y``, or at or above it but off."""
+    on = x > 0
+    return int(np.count_nonzero(on & (x < floor) & (y > 0)) + np.count_nonzero(on & (x >= floor) & (y <= 0)))
 
 
 def _zone_curves(x: np.ndarray, y: np.ndarray, floors: np.ndarray, blocks: np.ndarray) -> tuple[tuple, ...]:
