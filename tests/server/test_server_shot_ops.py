@@ -123,3 +123,34 @@ def test_a_bad_group_is_refused_and_stores_nothing(client, project, ops, words):
     detail = r.json()["detail"]
     assert words in detail and detail.count(". ") == 0
     assert revision(client, pid) == rev and len(client.get(f"/api/projects/{pid}/edits").json()["ops"]) == n_ops
+
+
+def test_each_shots_nearest_shots_are_its_own_kind(client, base_project):
+    pid = base_project["id"]
+    ids = [20 * i for i in range(N_SHOTS)]
+    for i, shot in enumerate(ids):
+        r = client.get(f"/api/projects/{pid}/shots/{shot}/similar")
+        assert r.status_code == 200, r.text
+        doc = r.json()
+        assert doc["shot"] == shot and doc["revision"] == revision(client, pid)
+        found = [s["id"] for s in doc["similar"]]
+        d = [s["distance"] for s in doc["similar"]]
+        assert sorted(found) == [t for t in ids if t != shot] and d == sorted(d)
+        assert all(0 <= x <= 1 for x in d)
+        same = {t for t in ids if t != shot and (t // 20) % 2 == i % 2}
+        assert set(found[:len(same)]) == same, doc  # the three of its own look come first
+        assert min(d[3:]) > 0.75 and min(d[3:]) - max(d[:3]) > 0.25, d  # and far from the other look
+
+
+def test_similar_follows_the_boundary_edits_and_refuses_unknown_shots(client, project):
+    pid = project["id"]
+    assert post(client, pid, {"op": "shot_split", "t": 30}).status_code == 200
+    doc = client.get(f"/api/projects/{pid}/shots/30/similar").json()
+    assert {s["id"] for s in doc["similar"][:4]} == {20, 60, 100, 140}  # the blue shots, its other half among them
+    for bad in (31, 160, 10**6, -1):
+        r = client.get(f"/api/projects/{pid}/shots/{bad}/similar")
+        assert r.status_code == 404, r.text
+        assert r.json()["detail"] == f"no shot starts at tick {bad} (shot ids are their first ticks)"
+    r = client.get(f"/api/projects/{pid}/shots/ten/similar")
+    assert r.status_code == 400 and r.json()["detail"].startswith("field 'shot_id'"), r.text
+    assert client.get(f"/api/projects/{'0' * 32}/shots/0/similar").status_code == 404

@@ -214,6 +214,19 @@ class ShotsOut(BaseModel):
     shots: list[ShotOut]
 
 
+class SimilarShotOut(BaseModel):
+    id: int
+    distance: float = Field(ge=0.0, le=1.0)
+
+
+class SimilarOut(BaseModel):
+    """Every other shot by ascending distance (0..1) to ``shot``."""
+
+    revision: int
+    shot: int
+    similar: list[SimilarShotOut]
+
+
 # ------------------------------------------------------------------------ chair
 class PortOut(BaseModel):
     device: str

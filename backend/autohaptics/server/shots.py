@@ -11,12 +11,14 @@ from collections import OrderedDict
 import numpy as np
 
 from autohaptics.server.posters import poster_tick
-from autohaptics.server.store import Conflict
+from autohaptics.server.store import Conflict, NotFound
 from autohaptics.shots.model import KIND_NAMES, SHOT_OPS, apply_shot_ops, base_starts, shot_arrays
+from autohaptics.shots.similar import nearest, shot_features
 from autohaptics.shots.summary import summarise
 
 _lock = threading.Lock()
 _answers: OrderedDict[tuple, dict] = OrderedDict()  # (project, revision) -> answer: every change bumps the revision
+_features: OrderedDict[str, tuple] = OrderedDict()  # project -> (analysis, shot starts, features)
 _KEEP = 8
 
 
@@ -46,6 +48,40 @@ def shot_list(pid: str, analysis, composed) -> dict:
         while len(_answers) > _KEEP:
             _answers.popitem(last=False)
     return answer
+
+
+def similar_shots(pid: str, analysis, composed, shot_id: int) -> dict:
+    """``{revision, shot, similar: [{id, distance}]}``: every other shot of the list at the composed
+    revision by ascending distance (:mod:`autohaptics.shots.similar`); features kept while the
+    analysis and the boundaries are the same (a track edit or a threshold change keeps them)."""
+    if analysis is None:
+        raise Conflict("the project has no analysis yet; its shots come from the analysis")
+    n = int(composed.timeline.n_ticks)
+    t0, t1, _ = shot_arrays(apply_shot_ops(base_starts(analysis.shots, n), composed.ops, n), n)
+    i = int(np.searchsorted(t0, shot_id))
+    if i >= t0.size or t0[i] != shot_id:
+        raise NotFound(f"no shot starts at tick {shot_id} (shot ids are their first ticks)")
+    key = t0.tobytes()
+    with _lock:
+        hit = _features.get(pid)
+    if hit is not None and hit[0] is analysis and hit[1] == key:
+        features = hit[2]
+    else:
+        v = analysis.video if analysis.video is not None and analysis.n_ticks == n else None
+        features = shot_features(t0, t1, mean_rgb=v.mean_rgb if v is not None and v.mean_rgb.any() else None,
+                                 motion=v.motion if v is not None else None,
+                                 loudness=(analysis.audio or {}).get("loudness") if analysis.n_ticks == n else None,
+                                 beta=v.beta if v is not None else None,
+                                 saliency_mask=v.saliency_mask if v is not None else None)
+        with _lock:
+            _features[pid] = (analysis, key, features)
+            _features.move_to_end(pid)
+            while len(_features) > _KEEP:
+                _features.popitem(last=False)
+    order, d = nearest(features, i)
+    ids, dist = t0[order].tolist(), np.round(d, 4).tolist()
+    return {"revision": composed.revision, "shot": int(shot_id),
+            "similar": [{"id": a, "distance": b} for a, b in zip(ids, dist)]}
 
 
 def _build(pid: str, analysis, composed) -> dict:

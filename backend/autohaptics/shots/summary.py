@@ -40,10 +40,18 @@ def summarise(t0: np.ndarray, t1: np.ndarray, *, vibration: np.ndarray, temperat
         "fans_share": mean(fans_on),
         "loudness_sone": None, "colour": None, "motion": None,
     }
-    if loudness is not None and np.asarray(loudness).size >= n * FRAMES_PER_TICK:
-        out["loudness_sone"] = mean(np.asarray(loudness)[:n * FRAMES_PER_TICK].reshape(n, FRAMES_PER_TICK).max(axis=1))
+    per_tick = tick_loudness(loudness, n)
+    if per_tick is not None:
+        out["loudness_sone"] = mean(per_tick)
     if mean_rgb is not None:
         out["colour"] = mean(mean_rgb)
     if motion is not None:
         out["motion"] = mean(motion)
     return out
+
+
+def tick_loudness(loudness: np.ndarray | None, n: int) -> np.ndarray | None:
+    """Each tick's loudest 20 ms frame, sone [shape=(n,)]; None without (enough) loudness."""
+    if loudness is None or np.asarray(loudness).size < n * FRAMES_PER_TICK:
+        return None
+    return np.asarray(loudness)[:n * FRAMES_PER_TICK].reshape(n, FRAMES_PER_TICK).max(axis=1)

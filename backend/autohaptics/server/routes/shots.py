@@ -8,7 +8,7 @@ from fastapi import APIRouter, Response
 
 from autohaptics.server import posters, shots
 from autohaptics.server.deps import ComposerDep, StoreDep
-from autohaptics.server.schemas import ShotsOut
+from autohaptics.server.schemas import ShotsOut, SimilarOut
 from autohaptics.server.store import NotFound
 
 router = APIRouter(tags=["shots"])
@@ -20,6 +20,14 @@ def get_shots(project_id: str, composer: ComposerDep) -> dict:
     edits, summaries from the composed tracks and the analysis (docs/API.md, "Shots")."""
     composed = composer.compose(project_id)
     return shots.shot_list(project_id, composer.analysis(project_id), composed)
+
+
+@router.get("/api/projects/{project_id}/shots/{shot_id}/similar", response_model=SimilarOut)
+def get_similar(project_id: str, shot_id: int, composer: ComposerDep) -> dict:
+    """Every other shot by ascending distance to ``shot_id`` in the analysis's own features
+    (docs/API.md, "Shots"); 404 for an id that starts no shot."""
+    composed = composer.compose(project_id)
+    return shots.similar_shots(project_id, composer.analysis(project_id), composed, shot_id)
 
 
 @router.get("/api/projects/{project_id}/posters/{tick}.jpg", response_class=Response,
