@@ -10,6 +10,8 @@ at 9-11 s with a bright square on the RIGHT.
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 
@@ -106,3 +108,35 @@ def test_a_restart_during_a_refinement_keeps_the_project_usable(tmp_path, film):
         doc = client.get(f"/api/projects/{pid}/timeline").json()
         assert doc["generator"]["params"]["thresholds"] == LOW
         assert client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW, "overrides": THESIS}).json()["job"] is None
+
+
+def test_a_finished_job_leaves_the_project_warm(tmp_path, film, monkeypatch):
+    """After a generate and after a regeneration the server loads the project's feature cache (and
+    derives from it) in the background, once each, so the first threshold commit loads nothing."""
+    loads = []
+    real = pipeline.Analysis.load.__func__
+
+    def counted(cls, path):
+        loads.append(str(path))
+        return real(cls, path)
+
+    monkeypatch.setattr(pipeline.Analysis, "load", classmethod(counted))
+    settings = Settings(data_dir=tmp_path / "data", frontend_dir=None)
+    with LocalClient(create_app(settings)) as client:
+        composer = client.app.state.composer
+        pid, job_id = thesis_project(client, film)
+        for round_ in range(2):
+            wait_done(client, job_id)
+            deadline = time.monotonic() + 60
+            while not composer.held(pid):
+                assert time.monotonic() < deadline, "the project was not loaded after its job"
+                time.sleep(0.05)
+            assert len(loads) == round_ + 1, loads  # loaded once, by the job's end
+            r = client.put(f"/api/projects/{pid}/params", json={"thresholds": HIGH if round_ else LOW})
+            assert r.status_code == 200 and r.json()["derived"] and r.json()["job"] is None
+            assert client.get(f"/api/projects/{pid}/timeline.bin").status_code == 200
+            assert len(loads) == round_ + 1, loads  # the commit did not load the analysis again
+            r = client.post(f"/api/projects/{pid}/generate", json={"overrides": THESIS})
+            assert r.status_code == 202, r.text
+            job_id = r.json()["job"]["id"]
+        wait_done(client, job_id)

@@ -170,6 +170,15 @@ class Composer:
 
         threading.Thread(target=load, name=f"warm {pid}", daemon=True).start()
 
+    def held(self, pid: str) -> bool:
+        """Whether ``pid`` is warm: its composition at the current revision and its feature cache
+        (derived from once) are in memory, so a threshold commit loads nothing."""
+        path = self.store.analysis_path(pid)
+        with self._lock:
+            hit, composed = self._files.get(path), self._composed.get(pid)
+            loaded = hit is not None and hit[0] == _file_key(path) and path not in self._warming
+        return loaded and composed is not None and composed[1].revision == self.store.revision(pid)
+
     def require_generated(self, pid: str) -> Timeline:
         tl = self.generated(pid)
         if tl is None:

@@ -365,6 +365,8 @@ class JobRunner:
                 live.status = job["status"] if job else "cancelled"
                 self._live.pop(job_id, None)
         self._publish_final(live, job)
+        if job is not None and job["status"] == "done" and self.composer is not None:
+            self.composer.warm(live.project_id)  # in the background: the first commit finds it loaded
         if more and job is not None and job["status"] == "done" and not self._stopping:
             self._refine_again(live.project_id, params)
 
