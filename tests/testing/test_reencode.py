@@ -3,6 +3,8 @@ rate, a stretch cut out of a film, and the sound alone mixed again with the pict
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import av
 import numpy as np
 import pytest
@@ -68,6 +70,27 @@ def test_variable_frame_rate_keeps_each_frame_at_its_own_time(src, tmp_path):
     steps = np.round(np.diff(times) * 25).astype(int)
     assert set(steps) == {1, 2, 3}  # 1, 2 and 3 source frames apart, never evenly
     assert times[-1] == pytest.approx(3.0 - 0.04, abs=0.13)
+
+
+def test_a_millisecond_time_base_at_its_own_rate_shows_every_frame_once(tmp_path):
+    """Matroska stores 24 fps frame times rounded to the millisecond (0.042 s for 1/24 s): a re-encode
+    at the source's own rate shows each source frame once, with no repeat and no frame dropped."""
+    moving = Scene(2.0, background=(Segment(0, 2.0, (200, 180, 160)),),
+                   shapes=(Shape("circle", (20, 20, 200), t_on=0, t_off=2.0, xy0=(0.1, 0.5), xy1=(0.9, 0.5),
+                                 size0=(0.15, 0.25)),))
+    first = synth.write_scene(tmp_path / "a.mp4", moving, width=160, height=90, fps=24, audio=False)
+    mkv = reencode(first, tmp_path / "ms.mkv")
+    with av.open(str(mkv)) as c:
+        assert c.streams.video[0].time_base == Fraction(1, 1000)
+        src = [f.to_ndarray(format="gray").astype(int) for f in c.decode(c.streams.video[0])]
+    again = reencode(mkv, tmp_path / "again.mp4")
+    with av.open(str(again)) as c:
+        out = [f.to_ndarray(format="gray").astype(int) for f in c.decode(c.streams.video[0])]
+    assert len(out) == len(src) == 48
+    steps = [np.abs(b - a).mean() for a, b in zip(out, out[1:])]
+    assert min(steps) > 0.2, steps  # the disc moved between every two frames: none repeated
+    for i in range(1, len(out) - 1):  # frame i is source frame i, not its neighbour
+        assert np.abs(out[i] - src[i]).mean() < min(np.abs(out[i] - src[j]).mean() for j in (i - 1, i + 1))
 
 
 def test_a_cut_keeps_the_stretch_asked_for(src, tmp_path):

@@ -32,6 +32,9 @@ FITS = ("stretch", "pad", "fill")
 PIXEL_FORMATS = ("yuv420p", "yuv420p10le")
 _VFR_STEPS = (1, 1, 2, 1, 1, 1, 2, 1, 3, 1, 1, 2)  # source frames from one kept frame to the next
 _VFR_TIME_BASE = Fraction(1, 1000)
+# a source frame's time may be this much late (Matroska/WebM store times rounded to the millisecond:
+# a 24 fps frame at 0.042 s is the one due at 1/24 s, not a reason to repeat the one before it)
+_TIME_SLACK_S = 1e-3
 _PULLDOWN = ((0, 0), (1, 1), (1, 2), (2, 3), (3, 3))  # (top field's film frame, bottom field's) per output frame
 # codec -> (container suffix, video codec, audio codec, default height px, encoder options besides crf)
 SCREENERS: dict[str, tuple[str, str, str, int, dict[str, str]]] = {
@@ -213,11 +216,12 @@ def _vfr(frames):
 
 
 def _repeat(frames, rate: Fraction):
-    """At every output time i / rate, the last source frame shown at or before it."""
+    """At every output time i / rate, the last source frame shown at or before it (its time within
+    ``_TIME_SLACK_S``)."""
     i = 0
     prev = None
     for t, rgb in frames:
-        while prev is not None and i / rate < t - 1e-6:
+        while prev is not None and i / rate < t - _TIME_SLACK_S:
             yield prev
             i += 1
         prev = rgb
