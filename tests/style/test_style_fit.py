@@ -21,11 +21,12 @@ from shared_data import shared_clip
 
 @pytest.fixture(scope="module")
 def films(tmp_path_factory) -> dict[str, pipeline.Analysis]:
-    """Analyses of the material scene (24 s) and the Sintel trailer clip (52 s)."""
+    """Analyses of the material scene (24 s), the Sintel trailer clip (52 s) and the BBB opening (30 s)."""
     folder = tmp_path_factory.mktemp("style-fit-films")
     return {"material": pipeline.analyse(write_scene(folder / "material.mp4", scenes.material_scene(),
                                                      width=160, height=90)),
-            "sintel": pipeline.analyse(shared_clip("sintel_trailer_480x204_h264_aac.mp4"))}
+            "sintel": pipeline.analyse(shared_clip("sintel_trailer_480x204_h264_aac.mp4")),
+            "bbb": pipeline.analyse(shared_clip("bbb_opening_30s_1280x720_vp8_vorbis.webm"))}
 
 
 def _vibration_mae(analysis, style, wanted) -> float:
@@ -80,3 +81,28 @@ def test_a_version_1_document_still_loads_and_has_no_floors():
     assert style.threshold_scale == 0.8 and not any(style.vibration_floor) and style.fans_floor == 0.0
     assert Style(vibration_floor=(0.2,) * 9).to_dict()["version"] == 2
     assert not Style(fans_floor=0.1).is_identity
+
+
+def test_a_drawn_burst_over_ticks_only_low_thresholds_wake_does_not_move_the_threshold_scale(films):
+    from autohaptics.params import GenerateParams
+    from autohaptics.style.fit import SCALE_GRID, _scale_evidence
+
+    film = films["bbb"]  # few events: a 2 s burst holds most of the ticks a step below 0.7 wakes
+    edited = edit(Designer("events", "", threshold_scale=0.7), film, one_offs=0)
+    on = _scale_evidence([(film, edited)], GenerateParams(), [np.arange(film.n_ticks)])[0]
+    woken_low = on[:, np.argmin(np.abs(SCALE_GRID - 0.45))] & ~on[:, np.argmin(np.abs(SCALE_GRID - 0.69))]
+    start = int(np.argmax(np.convolve(woken_low, np.ones(20), "valid")))
+    assert woken_low[start:start + 20].sum() >= 5
+    edited.vibration[start:start + 20, [1, 2, 6]] = 0.6  # a one-off burst on three actuators for 2 s
+    assert learn([(film, edited)]).threshold_scale == pytest.approx(0.7, rel=0.05)
+
+
+def test_a_zone_whose_levels_all_lie_below_the_floor_takes_the_pooled_floor():
+    from autohaptics.style.fit import _zone_floors
+
+    rng = np.random.default_rng(3)
+    x = rng.uniform(0.01, 1.0, (600, 9))
+    seat = [i for i, a in enumerate(ACTUATORS) if a.zone == "seat"]
+    x[:, seat] = rng.uniform(0.01, 0.18, (600, len(seat)))
+    floors = _zone_floors(x, np.where(x < 0.25, 0.0, x))
+    assert floors == pytest.approx(0.25, abs=0.01)

@@ -4,7 +4,8 @@ other films.
 Each simulated designer (:data:`autohaptics.testing.designers.DESIGNERS`: a documented taste plus
 seeded one-off edits on each film) edits every film; a style is learned on one film's edits and
 applied to each other film, and both the plain derive and the styled one are compared with the
-designer's taste on that film (their edit without the one-offs, which no style can foresee).
+designer's taste on that film (their edit without the one-offs, which no style can foresee); per
+learn film, and jointly (all films but one learn one style, applied to that one).
 Films: the shared clips and synthetic scenes, analysed once into ``--work``; ``--hours H`` adds a
 written film of H hours (the learn time on it is the figure for a feature film). Figures are
 printed, never asserted.
@@ -52,30 +53,41 @@ def run(args: argparse.Namespace) -> int:
     print(f"films: {', '.join(f'{n} ({films[n].n_ticks} ticks)' for n in names)}")
     identity = [learn([(a, _plain(a))]).is_identity for a in films.values()]
     print(f"unedited films learn the identity: {sum(identity)} of {len(identity)}")
-    rows, closed_rows, learn_s = [], [], {}
+    rows, closed_rows, per_film_rows, joint_rows, learn_s = [], [], [], [], {}
     for designer in DESIGNERS:
         edited = {n: edit(designer, films[n], seed=args.seed + i) for i, n in enumerate(names)}
         taste = {n: edit(designer, films[n], one_offs=0) for n in names}
-        plain, styled, scales, own_plain, own_styled = [], [], [], [], []
+        bare = {n: _errors(_plain(films[n]), taste[n]) for n in names}
+        plain, styled, scales, own_plain, own_styled, per_film = [], [], [], [], [], []
         for source in names:
             t0 = time.perf_counter()
             style = learn([(films[source], edited[source])], name=designer.name)
             learn_s.setdefault(source, []).append(time.perf_counter() - t0)
             scales.append(style.threshold_scale)
-            own_plain.append(_errors(_plain(films[source]), taste[source]))
+            own_plain.append(bare[source])
             own_styled.append(_errors(_styled(films[source], style), taste[source]))
-            for target in (n for n in names if n != source):
-                plain.append(_errors(_plain(films[target]), taste[target]))
-                styled.append(_errors(_styled(films[target], style), taste[target]))
+            others = [n for n in names if n != source]
+            styled_here = [_errors(_styled(films[t], style), taste[t]) for t in others]
+            plain += [bare[t] for t in others]
+            styled += styled_here
+            per_film.append(f"{style.threshold_scale:.2f}: {_worst(_closed([bare[t] for t in others], styled_here))}")
+        joint = [_errors(_styled(films[t], learn([(films[n], edited[n]) for n in names if n != t])), taste[t])
+                 for t in names]
         rows.append(_row(designer, plain, styled, scales))
-        other, own = _closed(plain, styled), _closed(own_plain, own_styled)
+        other, own, together = _closed(plain, styled), _closed(own_plain, own_styled), _closed(list(bare.values()), joint)
         closed_rows.append([designer.name, *(other[k] for k in DISTANCES), _worst(other),
                             *(own[k] for k in DISTANCES), _worst(own)])
+        per_film_rows.append([designer.name, *per_film])
+        joint_rows.append([designer.name, *(together[k] for k in DISTANCES), _worst(together)])
     print(table(rows, ["designer", "taste", "scales", "vib MAE plain", "styled", "onset F1 plain", "styled",
                        "temp MAE C plain", "styled", "fan MAE plain", "styled", "edit reproduced"]))
     print("share of the default's distance closed per metric (- where the default is not off), "
           "other films | the learn film:")
     print(table(closed_rows, ["designer", *DISTANCES, "worst", *DISTANCES, "worst"]))
+    print("per learn film: the scale learned there and the worst share closed on the other films:")
+    print(table(per_film_rows, ["designer", *names]))
+    print("joint: the other films learn one style together, applied to each film in turn (share closed):")
+    print(table(joint_rows, ["designer", *DISTANCES, "worst"]))
     print("learn time per film (median over designers, s): "
           + ", ".join(f"{n} {np.median(v):.3f}" for n, v in learn_s.items()))
     return 0
