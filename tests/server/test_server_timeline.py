@@ -282,6 +282,42 @@ def test_a_restarted_server_loads_the_project_worked_on_last_before_it_is_asked(
         assert restarted.get(f"/api/projects/{pid}/timeline.bin").status_code == 200
 
 
+def test_a_cold_server_answers_the_first_requests_from_disk(client, project, base_project, data_dir, monkeypatch):
+    """The whole gzipped answers of the revision on show are kept in the project's bins/ folder: a
+    restarted server answers them without loading the project's layer, the same bytes; an edit's
+    revision gets its own answers (equal to the plain ones), and the older revision's files go."""
+    pid = project["id"]
+    url, first = f"/api/projects/{pid}/timeline.bin", {"blocks": "vibration,temperature_c,fan_activity,features"}
+
+    def raw(c) -> bytes:
+        with c.stream("GET", url, params=first, headers={"Accept-Encoding": "gzip"}) as resp:
+            assert resp.status_code == 200 and resp.headers["content-encoding"] == "gzip"
+            return b"".join(resp.iter_raw())
+
+    wire = raw(client)
+    assert gzip.decompress(wire) == client.get(url, params=first, headers={"Accept-Encoding": "identity"}).content
+    bins = data_dir / "projects" / pid / "bins"
+    assert len(list(bins.iterdir())) == 1
+    assert client.patch(f"/api/projects/{base_project['id']}", json={"view": {"zoom": 3.0}}).status_code == 200
+    refused = [True]
+
+    def guarded(path):
+        assert not (refused[0] and Path(path).parent.name == pid), f"{path} was loaded for a kept answer"
+        return generated_file.load_npz(path)
+
+    monkeypatch.setattr("autohaptics.server.composer.load_npz", guarded)
+    with LocalClient(create_app(Settings(data_dir=data_dir, frontend_dir=None))) as restarted:
+        assert raw(restarted) == wire  # from the file: the layer was not loaded
+        refused[0] = False
+        res = edit(restarted, pid, {"op": "set", "lanes": ["A3"], "t0": 10, "t1": 40, "value": 0.5})
+        changed = raw(restarted)
+        header, blocks = decode(gzip.decompress(changed))
+        assert header["revision"] == res["revision"] and changed != wire
+        assert gzip.decompress(changed) == restarted.get(url, params=first,
+                                                         headers={"Accept-Encoding": "identity"}).content
+        assert [p.name.split("-")[0] for p in bins.iterdir()] == [str(res["revision"])]
+
+
 def test_npz_round_trip_and_errors(tmp_path):
     tl = known()
     tl.features["loudness"] = np.linspace(0, 1, N_TICKS, dtype=np.float32)

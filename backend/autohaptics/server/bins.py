@@ -11,9 +11,12 @@ A revision no longer kept here is answered whole, without ``since``.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import os
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -55,10 +58,9 @@ class BinaryCache:
             if hit is not None:
                 self._bins.move_to_end(key)
                 return hit
-        encoded, before = self._encoded_blocks(pid, layer, revision, tl, since)
-        chosen_names = {b.name for b in binary.select_blocks([e.block for e in encoded],
-                                                             None if names is None else list(names))}
-        chosen = [e for e in encoded if e.block.name in chosen_names]
+        wanted = binary.wanted_names([name for name, _, _ in binary.block_sources(tl)], names)
+        encoded, before = self._encoded_blocks(pid, layer, revision, tl, since, wanted)
+        chosen = [e for e in encoded if e.block.name in wanted]
         header = dict(header)
         if before is not None:
             unchanged = [e.block.name for e in chosen if (old := before.get(e.block.name)) is not None
@@ -81,18 +83,29 @@ class BinaryCache:
                 self._bins.popitem(last=False)
         return data
 
-    def _encoded_blocks(self, pid: str, layer: str, revision: int, tl: Timeline,
-                        since: int | None) -> tuple[list[Encoded], dict[str, Encoded] | None]:
-        """Every block of ``tl`` quantised and laid out, reusing the latest kept revision's blocks
-        whose source values are the same (an edit of one lane leaves the fans' 11 MB as they were),
-        and the blocks of revision ``since`` (None when not kept or not asked for)."""
+    def prepare(self, pid: str, layer: str, revision: int, tl: Timeline) -> None:
+        """Quantise every block of ``tl`` ahead of the requests (a project being warmed)."""
+        self._encoded_blocks(pid, layer, revision, tl, None, None)
+
+    def _encoded_blocks(self, pid: str, layer: str, revision: int, tl: Timeline, since: int | None,
+                        wanted: set[str] | None) -> tuple[list[Encoded], dict[str, Encoded] | None]:
+        """The blocks of ``tl`` named in ``wanted`` (None: all) quantised and laid out, with those
+        of the revision already done, reusing the latest kept revision's blocks whose source values
+        are the same (an edit of one lane leaves the fans' 11 MB as they were), and the blocks of
+        revision ``since`` (None when not kept or not asked for)."""
         with self._lock:
             history = self._encoded.get((pid, layer), OrderedDict())
-            previous = history.get(revision) or (next(reversed(history.values())) if history else {})
+            current = history.get(revision) or {}
+            latest = next((v for r, v in reversed(history.items()) if r != revision), {})
+            previous = {**latest, **current}
             before = history.get(since) if since is not None else None
         same: dict[tuple[int, int], bool] = {}
         out: dict[str, Encoded] = {}
         for name, dtype, src in binary.block_sources(tl):
+            if wanted is not None and name not in wanted:
+                if name in current:
+                    out[name] = current[name]
+                continue
             e = previous.get(name)
             if e is not None:
                 pair = (id(e.source), id(src))
@@ -113,6 +126,41 @@ class BinaryCache:
             while len(self._encoded) > 2 * self._size:
                 self._encoded.popitem(last=False)
         return list(out.values()), before
+
+
+class BinFiles:
+    """Whole answers (no ``since``) of the revision on show, kept on disk in ``<project>/bins/``: a
+    server that has not loaded the project yet (just started, or a job just ended) answers the
+    editor's first requests from the file, without loading the generated layer. An answer is the
+    same for as long as the revision is (every change bumps it); the files of older revisions are
+    removed when a newer one is written, and the folder goes with the project."""
+
+    def __init__(self, folder_of):
+        self._folder_of = folder_of  # project id -> its folder
+
+    def _path(self, pid: str, revision: int, layer: str, names: tuple | None, gzipped: bool) -> Path:
+        what = hashlib.sha1(repr((layer, names, gzipped)).encode()).hexdigest()[:16]  # no request text in a path
+        return self._folder_of(pid) / "bins" / f"{int(revision)}-{what}.bin"
+
+    def read(self, pid: str, revision: int, layer: str, names: tuple | None, gzipped: bool) -> bytes | None:
+        try:
+            return self._path(pid, revision, layer, names, gzipped).read_bytes()
+        except OSError:
+            return None
+
+    def write(self, pid: str, revision: int, layer: str, names: tuple | None, gzipped: bool, data: bytes) -> None:
+        """Keep ``data`` as the answer at ``revision`` (written whole, then renamed into place)."""
+        path = self._path(pid, revision, layer, names, gzipped)
+        try:
+            path.parent.mkdir(exist_ok=True)
+            for old in path.parent.iterdir():
+                if not old.name.startswith(f"{int(revision)}-"):
+                    old.unlink(missing_ok=True)
+            part = path.with_name(f"{path.name}.{threading.get_ident()}.part")
+            part.write_bytes(data)
+            os.replace(part, path)
+        except OSError:  # the project folder went away meanwhile, or the disk is full: answered anyway
+            pass
 
 
 def same_values(a, b) -> bool:

@@ -30,7 +30,7 @@ from autohaptics.formats.importing import parse_timeline
 from autohaptics.timeline import edits as edit_ops
 from autohaptics.timeline.npz import load_npz
 from autohaptics.server import shots
-from autohaptics.server.bins import BinaryCache, same_values
+from autohaptics.server.bins import BinaryCache, BinFiles, same_values
 from autohaptics.server.store import Conflict, NotFound, Store, new_id
 from autohaptics.server.styles import style_of
 from autohaptics.server.waveform import cached_peaks
@@ -82,6 +82,7 @@ class Composer:
         self._json: OrderedDict[str, tuple[Composed, bytes]] = OrderedDict()
         self._tracks: OrderedDict[str, dict[str, tuple]] = OrderedDict()  # per project: (generated, keys, composed)
         self.bins = BinaryCache(cache_size)
+        self.bin_files = BinFiles(store.project_dir)
         self._waveform_locks: dict[str, threading.Lock] = {}
         self._size = cache_size
         self.writer = LayerWriter(store, self._written)
@@ -159,11 +160,13 @@ class Composer:
         threading.Thread(target=load, name=f"warm-analysis {pid}", daemon=True).start()
 
     def warm(self, pid: str) -> None:
-        """Load ``pid``'s generated layer, its composition and its feature cache in the background:
-        at start-up, the project worked on last opens without waiting for a long film's files."""
+        """Load ``pid``'s generated layer, its composition (its blocks quantised) and its feature
+        cache in the background: at start-up, the project worked on last opens without waiting for
+        a long film's files, and after a job, the first commit finds them loaded."""
         def load() -> None:
             try:
-                self.compose(pid)
+                composed = self.compose(pid)
+                self.bins.prepare(pid, "composed", composed.revision, composed.timeline)
             except Exception as exc:  # the editor's own requests will report it
                 log.info("project %s: not loaded ahead (%s)", pid, exc)
             self._warm_analysis(pid)
@@ -388,14 +391,24 @@ class Composer:
         ``blocks``: the block names to send (None: all; see :func:`binary.select_blocks`);
         ``since``: a revision the client holds, whose unchanged blocks are left out (:mod:`.bins`).
         The composed layer's header carries the markers."""
-        composed = self.compose(pid)
         names = None if blocks is None else tuple(sorted(set(blocks)))
-        tag = (f"{pid}-{composed.revision}-{layer}-{','.join(names) if names else 'all'}"
-               f"{'' if since is None else f'-since{since}'}")
+
+        def tag(revision: int) -> str:
+            return (f"{pid}-{revision}-{layer}-{','.join(names) if names else 'all'}"
+                    f"{'' if since is None else f'-since{since}'}")
+
+        kept = since is None and gzipped  # an editor's first requests: kept on disk (.bins.BinFiles)
+        if kept and (data := self.bin_files.read(pid, revision := self.store.revision(pid), layer, names,
+                                                 gzipped)) is not None:
+            return data, tag(revision)
+        composed = self.compose(pid)
         tl = composed.timeline if layer == "composed" else self.require_generated(pid)
         header = {"markers": composed.markers} if layer == "composed" else {}
-        return self.bins.get(pid, layer, composed.revision, tl, header=header, names=names, gzipped=gzipped,
-                             since=since), tag
+        data = self.bins.get(pid, layer, composed.revision, tl, header=header, names=names, gzipped=gzipped,
+                             since=since)
+        if kept and self.writer.pending(pid) is None:  # the generated layer it came from is on disk
+            self.bin_files.write(pid, composed.revision, layer, names, gzipped, data)
+        return data, tag(composed.revision)
 
     # ------------------------------------------------------------------ waveform
     def waveform(self, pid: str, points: int) -> dict:

@@ -17,6 +17,8 @@ def to_u8(values: np.ndarray, scale: float = 1.0) -> np.ndarray:
         chunk = src[a:a + _CHUNK].astype(np.float64)
         if scale != 1.0:
             chunk *= scale
-        np.clip(np.nan_to_num(chunk, nan=0.0), 0.0, 1.0, out=chunk)
-        out[a:a + _CHUNK] = np.floor(chunk * 255.0 + 0.5)
+        np.clip(np.nan_to_num(chunk, copy=False, nan=0.0), 0.0, 1.0, out=chunk)
+        chunk *= 255.0
+        chunk += 0.5
+        out[a:a + _CHUNK] = np.floor(chunk, out=chunk)
     return out.reshape(np.shape(values))

@@ -56,7 +56,8 @@ def block_sources(tl: Timeline) -> list[tuple[str, str, np.ndarray]]:
 def quantise(name: str, dtype: str, source: np.ndarray) -> Block:
     if name == "fan_activity":
         fans = np.asarray(source)
-        return Block(name, "u8", to_u8((fans > 0).reshape(fans.shape[0], -1).mean(axis=1)))
+        cols = int(np.prod(fans.shape[1:]))  # the share of fans on: count / cols is their mean, bit for bit
+        return Block(name, "u8", to_u8(np.count_nonzero(fans.reshape(-1, cols) > 0, axis=1) / cols))
     if dtype == "u8":
         return Block(name, "u8", to_u8(source))
     return Block(name, "f32", np.asarray(source, dtype="<f4"))
@@ -68,12 +69,17 @@ def timeline_blocks(tl: Timeline) -> list[Block]:
 
 
 def select_blocks(blocks: list[Block], names: list[str] | None) -> list[Block]:
-    """The blocks named in ``names`` (None: all), in file order. A name is a block name
+    """The blocks named in ``names`` (None: all), in file order (:func:`wanted_names`)."""
+    wanted = wanted_names([b.name for b in blocks], names)
+    return [b for b in blocks if b.name in wanted]
+
+
+def wanted_names(known: Sequence[str], names: Sequence[str] | None) -> set[str]:
+    """The block names of ``known`` that ``names`` asks for (None: all). A name is a block name
     (``vibration``, ``temperature_c``, ``fans``, ``fan_activity``, ``features.loudness``) or
     ``features`` for every feature block; ParameterError for an unknown one."""
     if names is None:
-        return list(blocks)
-    known = {b.name for b in blocks}
+        return set(known)
     wanted = set()
     for name in names:
         if name == "features":
@@ -81,8 +87,8 @@ def select_blocks(blocks: list[Block], names: list[str] | None) -> list[Block]:
         elif name in known:
             wanted.add(name)
         else:
-            raise ParameterError(f"unknown block {name!r}; blocks are {', '.join(sorted(known | {'features'}))}")
-    return [b for b in blocks if b.name in wanted]
+            raise ParameterError(f"unknown block {name!r}; blocks are {', '.join(sorted({*known, 'features'}))}")
+    return wanted
 
 
 def block_bytes(block: Block) -> bytes:
