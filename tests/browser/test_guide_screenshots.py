@@ -374,6 +374,11 @@ def test_guide_screenshots_of_the_workflow(page, api, tmp_path):
     lane_rect(page, "temperature")
     _shot(page, "guide_temperature", clip=_union(page, "[data-testid=lane-temperature]", pad=2))
 
+    # 4d. Shots: two shots selected on the filmstrip, the panel by loudness; shots like one of them.
+    from guide_shots import guide_shots
+
+    guide_shots(page, api, pid, _shot, _union)
+
     # 5. Regenerate with other settings (the edits are kept on top).
     page.click("[data-testid=regenerate]")
     dialog = page.locator("[data-testid=regenerate-dialog]")

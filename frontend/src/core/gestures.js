@@ -159,10 +159,15 @@ function selectGesture(view, canvas, entry, p0, pointer) {
   const extend = p0.event.shiftKey && prev;
   const anchorTick = extend ? (p0.tick < prev.t0 ? prev.t1 : prev.t0) : p0.tick;
   let dragged = false;
+  // Edges snap to shot boundaries a few pixels away, unless Alt is held while dragging.
+  const snap = (/** @type {number} */ t, /** @type {LanePointer} */ p) => (view.snapTick && !p.event.altKey ? view.snapTick(t) : t);
   /** @param {LanePointer} p @returns {Selection} */
   const selAt = (p) => {
-    const t0 = Math.min(anchorTick, p.tick);
-    const t1 = Math.max(anchorTick, p.tick) + 1;
+    let t0 = Math.min(anchorTick, p.tick);
+    let t1 = Math.max(anchorTick, p.tick) + 1;
+    const s0 = snap(t0, p);
+    const s1 = snap(t1, p);
+    if (s1 > s0) [t0, t1] = [s0, s1];
     /** @type {string[]} */
     let lanes;
     if (startRow >= 0) {

@@ -1,6 +1,7 @@
 /**
- * The selection: a tick range [t0, t1) on a set of edit lanes. Pure helpers the timeline core
- * uses to clamp it, to find the edit rows a drag crosses, and to draw it over a lane.
+ * The selection: a tick range [t0, t1) on a set of edit lanes, or (selected by shots) several
+ * disjoint ranges `ranges` with [t0, t1) their span. Pure helpers the timeline core uses to clamp
+ * it, to find the edit rows a drag crosses, and to draw it over a lane.
  */
 
 /**
@@ -15,9 +16,32 @@
  */
 export function normaliseSelection(sel, nTicks) {
   if (!sel) return null;
-  const t0 = Math.max(0, Math.min(nTicks - 1, Math.floor(Math.min(sel.t0, sel.t1))));
-  const t1 = Math.max(t0 + 1, Math.min(nTicks, Math.ceil(Math.max(sel.t0, sel.t1))));
-  return { t0, t1, lanes: [...new Set(sel.lanes)] };
+  const lanes = [...new Set(sel.lanes)];
+  if (sel.ranges && sel.ranges.length) {
+    /** @type {Array<[number, number]>} */
+    const ranges = [];
+    const sorted = sel.ranges.map(([a, b]) => clampRange(a, b, nTicks)).sort((p, q) => p[0] - q[0]);
+    for (const r of sorted) {
+      const last = ranges[ranges.length - 1];
+      if (last && r[0] < last[1]) last[1] = Math.max(last[1], r[1]); // overlapping: one range
+      else ranges.push(r);
+    }
+    return { t0: ranges[0][0], t1: ranges[ranges.length - 1][1], lanes, ranges };
+  }
+  const [t0, t1] = clampRange(sel.t0, sel.t1, nTicks);
+  return { t0, t1, lanes };
+}
+
+/** @param {number} a @param {number} b @param {number} nTicks @returns {[number, number]} */
+function clampRange(a, b, nTicks) {
+  const t0 = Math.max(0, Math.min(nTicks - 1, Math.floor(Math.min(a, b))));
+  const t1 = Math.max(t0 + 1, Math.min(nTicks, Math.ceil(Math.max(a, b))));
+  return [t0, t1];
+}
+
+/** The tick ranges a selection covers: its `ranges`, or its one range. @param {Selection} sel @returns {Array<[number, number]>} */
+export function rangesOf(sel) {
+  return sel.ranges && sel.ranges.length ? sel.ranges.map(([a, b]) => [a, b]) : [[sel.t0, sel.t1]];
 }
 
 /**
@@ -44,23 +68,22 @@ export function allEditRows(lanes) {
  */
 export function drawSelection(ctx, lane, sel, view) {
   if (!sel) return;
-  const x0 = view.tickToX(sel.t0);
-  const x1 = view.tickToX(sel.t1);
-  if (x1 < 0 || x0 > view.width) return;
+  if (view.tickToX(sel.t1) < 0 || view.tickToX(sel.t0) > view.width) return;
   const rows = lane.editRows ? lane.editRows(lane.height) : [];
   const chosen = rows.filter((r) => sel.lanes.includes(r.lane));
   ctx.save();
-  if (chosen.length) {
-    ctx.fillStyle = "rgba(96, 165, 250, 0.22)";
-    ctx.strokeStyle = "rgba(147, 197, 253, 0.9)";
-    ctx.lineWidth = 1;
+  ctx.fillStyle = chosen.length ? "rgba(96, 165, 250, 0.22)" : "rgba(96, 165, 250, 0.07)";
+  ctx.strokeStyle = "rgba(147, 197, 253, 0.9)";
+  ctx.lineWidth = 1;
+  for (const [t0, t1] of rangesOf(sel)) {
+    const x0 = view.tickToX(t0);
+    const x1 = view.tickToX(t1);
+    if (x1 < 0 || x0 > view.width) continue;
+    if (!chosen.length) ctx.fillRect(x0, 0, x1 - x0, lane.height);
     for (const r of chosen) {
       ctx.fillRect(x0, r.y0, x1 - x0, r.y1 - r.y0);
       ctx.strokeRect(x0 + 0.5, r.y0 + 0.5, Math.max(0, x1 - x0 - 1), r.y1 - r.y0 - 1);
     }
-  } else {
-    ctx.fillStyle = "rgba(96, 165, 250, 0.07)";
-    ctx.fillRect(x0, 0, x1 - x0, lane.height);
   }
   ctx.restore();
 }

@@ -21,7 +21,8 @@ export const MAX_PX_PER_S = 400; // 40 px per 100 ms tick
  * @typedef {{width: number, height: number, view: TimelineView}} LaneFrame
  * @typedef {{x: number, y: number, timeS: number, tick: number, event: PointerEvent, view: TimelineView}} LanePointer
  * @typedef {{lane: string, y0: number, y1: number}} EditRow
- * @typedef {{t0: number, t1: number, lanes: string[]}} Selection  ticks [t0, t1) on edit lanes
+ * @typedef {{t0: number, t1: number, lanes: string[], ranges?: Array<[number, number]>}} Selection  ticks [t0, t1)
+ *   on edit lanes; `ranges`: disjoint ranges inside it (a selection of shots)
  *
  * @typedef {Object} Lane
  * @property {string} id
@@ -76,6 +77,10 @@ export class TimelineView extends Emitter {
     this.defaultLanes = [...defaultLanes];
     /** @type {"select"|"pencil"|"points"} */
     this.tool = "select";
+    /** @type {null|((ctx: CanvasRenderingContext2D, lane: Lane, frame: LaneFrame) => void)} drawn over every lane (shot lines) */
+    this.overlay = null;
+    /** @type {null|((tick: number) => number)} where a selection edge at `tick` snaps to (Alt: not at all) */
+    this.snapTick = null;
     /** @type {LaneEntry[]} */
     this.lanes = [];
     /** @type {Set<string>} */
@@ -308,7 +313,9 @@ export class TimelineView extends Emitter {
     const dpr = canvas.width / Math.max(1, this.width);
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
     ctx.clearRect(0, 0, this.width, lane.height);
-    lane.draw(ctx, { width: this.width, height: lane.height, view: this });
+    const frame = { width: this.width, height: lane.height, view: this };
+    lane.draw(ctx, frame);
+    if (this.overlay) this.overlay(ctx, lane, frame);
     drawSelection(ctx, lane, this.selection, this);
   }
 

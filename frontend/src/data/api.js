@@ -195,6 +195,30 @@ export class Api {
     return this.request("GET", `/api/projects/${enc(id)}/timeline/values?${q}`);
   }
 
+  /** The shot list at the current revision (docs/API.md "Shots"). @param {string} id */
+  shots(id) {
+    return this.request("GET", `/api/projects/${enc(id)}/shots`);
+  }
+
+  /**
+   * Every other shot by ascending distance (0..1) to one shot.
+   * @param {string} id @param {number} shotId
+   * @returns {Promise<{revision: number, shot: number, similar: Array<{id: number, distance: number}>}>}
+   */
+  similarShots(id, shotId) {
+    return this.request("GET", `/api/projects/${enc(id)}/shots/${shotId}/similar`);
+  }
+
+  /** @param {string} id @returns {Promise<{frame_w: number, frame_h: number, per_tile: number, steps: number[]}>} */
+  filmstrip(id) {
+    return this.request("GET", `/api/projects/${enc(id)}/filmstrip`);
+  }
+
+  /** @param {string} id @param {number} step @param {number} tile */
+  filmstripTileUrl(id, step, tile) {
+    return `${this.base}/api/projects/${enc(id)}/filmstrip/${step}/${tile}.jpg`;
+  }
+
   /** @param {string} id @returns {Promise<EditList>} */
   edits(id) {
     return this.request("GET", `/api/projects/${enc(id)}/edits`);

@@ -3,7 +3,30 @@
  * selection, and the clipboard. Pure functions: the editor submits what they return.
  */
 
+import { rangesOf } from "../core/selection.js";
+
 /** @typedef {import("../core/timeline.js").Selection} Selection */
+
+/** Most sub-ops one `group` op takes. */
+export const GROUP_MAX = 10000;
+
+/**
+ * One op per range of the selection (a selection of several shots has several), as ONE op: the
+ * op itself for one range, else a `group` (one undo step).
+ * @param {Selection} sel
+ * @param {(range: Selection) => Record<string, any>} build
+ */
+export function perRange(sel, build) {
+  const ops = rangesOf(sel).map(([t0, t1]) => build({ t0, t1, lanes: sel.lanes }));
+  return groupOf(ops);
+}
+
+/** Ops as one: the op itself when alone, else `{"op": "group", "ops": [...]}`. @param {Array<Record<string, any>>} ops */
+export function groupOf(ops) {
+  if (!ops.length) throw new Error("There is nothing to change.");
+  if (ops.length > GROUP_MAX) throw new Error(`One operation changes at most ${GROUP_MAX} ranges.`);
+  return ops.length === 1 ? ops[0] : { op: "group", ops };
+}
 
 /**
  * `set`: one value on every selected lane. Temperature values are in C, the others 0..1, so a
@@ -106,9 +129,12 @@ export class Clipboard {
     return this.content;
   }
 
-  /** @param {number} t0 tick where the copy starts */
-  pasteOp(t0) {
+  /**
+   * @param {number} t0 tick where the copy starts
+   * @param {number} [t1] with it, the copy is fitted (resampled in time) to [t0, t1)
+   */
+  pasteOp(t0, t1) {
     if (!this.content) throw new Error("Copy a selection first.");
-    return { op: "paste", t0, values: this.content.values };
+    return t1 === undefined ? { op: "paste", t0, values: this.content.values } : { op: "paste", t0, t1, values: this.content.values };
   }
 }

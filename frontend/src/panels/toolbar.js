@@ -22,6 +22,8 @@ const LANE_TEXT = /** @type {Record<string, string>} */ ({ temperature: "Temp", 
  *   addMarker: () => void,
  *   renameMarker: () => void,
  *   deleteMarker: () => void,
+ *   splitShot: () => void,
+ *   mergeShot: () => void,
  * }} ToolbarActions
  */
 
@@ -66,6 +68,8 @@ export class EditToolbar {
     this.markerAdd = btn("Add marker", "marker-add", () => actions.addMarker(), "Add a marker at the playhead");
     this.markerRename = btn("Rename", "marker-rename", () => actions.renameMarker());
     this.markerDelete = btn("Delete", "marker-delete", () => actions.deleteMarker());
+    this.splitBtn = btn("Split", "shot-split", () => actions.splitShot(), "Split the shot at the playhead (S)");
+    this.mergeBtn = btn("Merge", "shot-merge", () => actions.mergeShot(), "Merge the shot at the playhead with the next (M)");
     this.info = h("span", { class: "selection-info", "data-testid": "selection-info", "aria-live": "polite" });
 
     this.el = h(
@@ -79,13 +83,15 @@ export class EditToolbar {
       h("div", { class: "btn-group" }, this.copyBtn, this.pasteBtn),
       this.pointsGroup,
       h("div", { class: "btn-group", role: "group", "aria-label": "Markers" }, this.markerAdd, this.markerRename, this.markerDelete),
+      h("div", { class: "btn-group", role: "group", "aria-label": "Shots" }, this.splitBtn, this.mergeBtn),
       this.info,
     );
   }
 
   /**
    * @param {{tool: string, selection: import("../core/timeline.js").Selection|null, lanes: string[],
-   *   tickS: number, canPaste: boolean, points: number, markerSelected: boolean, ready: boolean, cells?: number}} s
+   *   tickS: number, canPaste: boolean, points: number, markerSelected: boolean, ready: boolean, cells?: number,
+   *   shots?: boolean}} s
    */
   update(s) {
     for (const [name, b] of Object.entries(this.tools)) b.setAttribute("aria-pressed", String(name === s.tool));
@@ -97,13 +103,19 @@ export class EditToolbar {
     this.setBtn.title = mixed ? "Select temperature on its own to set a temperature" : "Set the selection to the value";
     this.value.setAttribute("aria-label", s.lanes.length === 1 && s.lanes[0] === "temperature" ? "Temperature to set, °C" : "Value to set, 0..1");
     this.pasteBtn.disabled = !s.canPaste || !s.ready;
+    const ranges = s.selection && s.selection.ranges ? s.selection.ranges : null;
+    this.pasteBtn.title = ranges ? `Paste onto the ${ranges.length} selected shot(s), fitted to each (Ctrl+V)` : "Paste at the playhead (Ctrl+V)";
+    this.splitBtn.disabled = this.mergeBtn.disabled = !s.shots || !s.ready;
     this.pointsGroup.hidden = s.tool !== "points";
     this.applyPointsBtn.disabled = s.points === 0;
     this.discardPointsBtn.disabled = s.points === 0;
     this.markerAdd.disabled = !s.ready;
     this.markerRename.disabled = !s.markerSelected;
     this.markerDelete.disabled = !s.markerSelected;
-    if (s.selection) {
+    if (ranges) {
+      const ticks = ranges.reduce((n, [a, b]) => n + b - a, 0);
+      this.info.textContent = `${ranges.length} shot${ranges.length === 1 ? "" : "s"} from ${formatTime(s.selection.t0 * s.tickS)} (${ticks} ticks) on ${s.lanes.join(", ")}`;
+    } else if (s.selection) {
       const { t0, t1 } = s.selection;
       const region = s.cells && s.lanes.includes("fans") ? ` (${s.cells} fans picked on the grid)` : "";
       this.info.textContent = `${formatTime(t0 * s.tickS)} – ${formatTime(t1 * s.tickS)} (${t1 - t0} ticks) on ${s.lanes.join(", ")}${region}`;

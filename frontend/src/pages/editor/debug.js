@@ -34,6 +34,7 @@ export function debugState(page) {
       ? { revision: page.played.revision, minC: page.played.minC, maxC: page.played.maxC, lo: page.played.lo, hi: page.played.hi }
       : null,
     markers: page.markers.list.map((m) => ({ ...m })),
+    shots: page.shots.debug(),
     timing: { ...page.timing },
     waveformReady: !Number.isNaN(page.timing.waveformLoaded),
     saveState: saveEl ? saveEl.dataset.state || "" : "",

@@ -4,7 +4,8 @@
  * through the edit session (autosave); the composed timeline is reloaded when the server took it.
  */
 
-import { Clipboard, clearOp, fadeOp, inRegion, scaleOp, setOp, tempPointsOp } from "../../data/edit-ops.js";
+import { rangesOf } from "../../core/selection.js";
+import { Clipboard, clearOp, fadeOp, groupOf, inRegion, perRange, scaleOp, setOp, tempPointsOp } from "../../data/edit-ops.js";
 import { errorText } from "../../data/http.js";
 import { EditToolbar } from "../../panels/toolbar.js";
 import { toast } from "../../panels/widgets.js";
@@ -46,6 +47,8 @@ export class EditActions {
       addMarker: () => markers.add(this.page.media.player.currentTime),
       renameMarker: () => markers.selected && markers.rename(markers.selected),
       deleteMarker: () => markers.selected && markers.remove(markers.selected),
+      splitShot: () => this.page.shots.split(),
+      mergeShot: () => this.page.shots.merge(),
     }, this.page.layout.editLanes);
     return this.toolbar.el;
   }
@@ -65,6 +68,7 @@ export class EditActions {
       markerSelected: !!page.markers.selected,
       ready: !!page.data,
       cells: this.region.length,
+      shots: !!page.shots.list && page.shots.list.length > 0,
     });
   }
 
@@ -87,7 +91,10 @@ export class EditActions {
     this.updateToolbar();
   }
 
-  /** @param {(sel: Selection) => Record<string, any>} build */
+  /**
+   * One op on the selection: on each of its ranges when it has several (shots), as one `group`.
+   * @param {(sel: Selection) => Record<string, any>} build
+   */
   selectionOp(build) {
     const sel = this.page.timeline.selection;
     if (!sel) {
@@ -96,7 +103,7 @@ export class EditActions {
     }
     let op;
     try {
-      op = inRegion(build(sel), this.region);
+      op = perRange(sel, (range) => inRegion(build(range), this.region));
     } catch (err) {
       toast(errorText(err), "warn");
       return Promise.resolve(false);
@@ -165,10 +172,16 @@ export class EditActions {
     this.updateToolbar();
   }
 
+  /** Paste at the playhead; onto selected shots, fitted to each shot's length (one op). */
   paste() {
-    const { data, media } = this.page;
+    const { data, media, timeline } = this.page;
     if (!this.clipboard.content) return Promise.resolve(false);
     if (!data) return Promise.resolve(false);
+    const sel = timeline.selection;
+    if (sel && sel.ranges) {
+      const ranges = rangesOf(sel);
+      return this.submit(groupOf(ranges.map(([t0, t1]) => this.clipboard.pasteOp(t0, t1))));
+    }
     return this.submit(this.clipboard.pasteOp(data.tickAt(media.player.currentTime)));
   }
 

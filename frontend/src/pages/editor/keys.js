@@ -14,7 +14,10 @@ const KEYS = [
   ["Space", "play / pause"], ["← →", "step one tick (Shift: one second)"], ["Home / End", "start / end"],
   ["+ / − / 0", "zoom in / out / whole film"], ["Ctrl+wheel, pinch", "zoom at the pointer"], ["Wheel", "pan"],
   ["Alt+drag, middle drag", "pan"], ["Drag on lanes", "select a range (across heat-map rows: several actuators)"],
-  ["Ctrl+Z / Ctrl+Shift+Z", "undo / redo"], ["Ctrl+C / Ctrl+V", "copy / paste at the playhead"],
+  ["Alt while dragging", "no snapping to shot boundaries"],
+  ["Click / Shift-click a shot", "select it / add it (Shots lane or panel); double-click: play it"],
+  ["S / M", "split the shot at the playhead / merge it with the next"],
+  ["Ctrl+Z / Ctrl+Shift+Z", "undo / redo"], ["Ctrl+C / Ctrl+V", "copy / paste at the playhead (onto selected shots: fitted to each)"],
   ["Delete", "clear the selection, or delete the selected marker"], ["Escape", "stop the chair (when connected); drop the selection or the points"],
 ];
 
@@ -75,7 +78,7 @@ function editKey(page, e) {
 }
 
 /**
- * Plain keys: playback, stepping, zoom, Delete and Escape. Returns whether the key was used.
+ * Plain keys: playback, stepping, zoom, shot split and merge, Delete and Escape. Returns whether the key was used.
  * @param {import("./shell.js").EditorPage} page
  * @param {KeyboardEvent} e
  */
@@ -101,6 +104,10 @@ function viewKey(page, e) {
     tl.zoomBy(1 / ZOOM_STEP);
   } else if (e.key === "0") {
     tl.fit();
+  } else if ((e.key === "s" || e.key === "S") && !e.altKey) {
+    page.shots.split();
+  } else if ((e.key === "m" || e.key === "M") && !e.altKey) {
+    page.shots.merge();
   } else if (e.key === "Delete" || e.key === "Backspace") {
     if (markers.selected) markers.remove(markers.selected);
     else if (tl.selection) page.edits.selectionOp((sel) => clearOp(sel));

@@ -1,5 +1,5 @@
 /**
- * The editor's lanes, top to bottom: audio, one per feature, the actuators' heat map, one
+ * The editor's lanes, top to bottom: shots (the filmstrip, ./shots.js), audio, one per feature, the actuators' heat map, one
  * actuator's detail, temperature, fans, markers; and the "Lanes" menu that shows or hides them.
  * Each lane reads the current timeline through the page and reports edits back to its parts.
  * Lane heights the user drags are kept in this browser for every project (data/local-store.js).
@@ -71,7 +71,9 @@ export class EditorLanes {
       onAdd: (t) => markers.add(t),
       onRename: (id) => markers.rename(id),
     });
-    for (const lane of [this.waveform, ...this.features, this.actuators, this.detail, this.temperature, this.fans, this.markers]) tl.addLane(lane);
+    const shots = page.shots.lane(tl);
+    for (const lane of [shots, this.waveform, ...this.features, this.actuators, this.detail, this.temperature, this.fans, this.markers]) tl.addLane(lane);
+    page.shots.wireContextMenu(/** @type {import("../../core/timeline.js").LaneEntry} */ (tl.laneEntry("shots")).canvas);
     this._fillMenu(tl);
     this._keepHeights(tl);
   }

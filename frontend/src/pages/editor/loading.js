@@ -91,6 +91,7 @@ export class TimelineLoader {
       page.media.attach();
       if (Number.isNaN(page.timing.firstRender)) page.timing.firstRender = performance.now() - page.timing.start;
       if (data.hasFans) page.host.dataset.ready = "true";
+      page.shots.load(data.revision);
     });
     if (!data.hasFans) await this._loadFans(seq);
   }

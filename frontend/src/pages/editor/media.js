@@ -64,6 +64,7 @@ export class EditorMedia {
       h("div", { class: "btn-group", role: "group", "aria-label": "Zoom" }, zoomOut, zoomFit, zoomIn),
       this.followBtn,
       this.overlayBtn,
+      page.shots.panel.toggleButton(),
       page.lanes.menu,
       keysMenu(),
     );

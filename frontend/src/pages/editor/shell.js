@@ -26,6 +26,7 @@ import { TimelineLoader, startEditorLoads } from "./loading.js";
 import { MarkerActions } from "./markers.js";
 import { EditorMedia } from "./media.js";
 import { ParamsControl } from "./params.js";
+import { ShotActions } from "./shots.js";
 import { ViewSettings } from "./view.js";
 
 /**
@@ -73,6 +74,7 @@ export class EditorPage {
     this.laneText = new LaneText(this);
     this.edits = new EditActions(this);
     this.markers = new MarkerActions(this);
+    this.shots = new ShotActions(this);
     this.view = new ViewSettings(this);
   }
 
@@ -124,10 +126,15 @@ export class EditorPage {
     const features = this.layout.features;
     const videoWrap = this.media.buildVideo(durationS);
     const side = h("aside", { class: "side" }, this.params.build(features), this.params.info, this.chair.buildPanel());
+    const stage = h("section", { class: "stage" }, videoWrap, this.chair.buildDiagram(), side, this.shots.panel.build());
+    this.shots.panel.onToggle = (open) => {
+      stage.classList.toggle("shots-open", open);
+      this.view.scheduleSave();
+    };
     this.notice = h("div", { class: "notice", hidden: true, role: "status", "data-testid": "editor-notice" });
     this.timelineHost = h("div", { class: "timeline-host" });
     this.main.append(
-      h("section", { class: "stage" }, videoWrap, this.chair.buildDiagram(), side),
+      stage,
       this.jobs.build(),
       this.notice,
       this.media.buildTransport(durationS),
@@ -154,6 +161,7 @@ export class EditorPage {
       tl.on("selection", () => {
         this.edits.updateToolbar();
         this.chair.panel.updateRange();
+        this.shots.panel.refresh();
       }),
       tl.on("selection-input", () => this.edits.updateToolbar()),
       closeMenusOutside(),
@@ -184,6 +192,7 @@ export class EditorPage {
     for (const fn of this.cleanups) fn();
     this.jobs.close();
     this.media.destroy();
+    this.shots.destroy();
     if (this.timeline) this.timeline.destroy();
   }
 }

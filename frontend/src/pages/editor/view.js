@@ -1,6 +1,6 @@
 /**
- * View settings: zoom, scroll, hidden lanes, the fan overlay, follow and the detail lane's
- * actuator. Saved with the project (PATCH, debounced), never undoable; restored when it opens.
+ * View settings: zoom, scroll, hidden lanes, the fan overlay, follow, the detail lane's
+ * actuator and whether the Shots panel is open. Saved with the project (PATCH, debounced), never undoable; restored when it opens.
  */
 
 import { errorText } from "../../data/http.js";
@@ -25,6 +25,7 @@ export class ViewSettings {
     if (typeof view.detail_actuator === "string") page.lanes.detail.setActuator(view.detail_actuator);
     if (view.fan_overlay) page.media.setOverlay(true);
     if (view.follow === false) page.media.setFollow(false);
+    if (view.shots_panel) page.shots.panel.show(true);
     if (typeof view.px_per_s === "number") {
       // The width is known after the first layout; restore then.
       requestAnimationFrame(() => {
@@ -60,6 +61,7 @@ export class ViewSettings {
       fan_overlay: page.media.fanOverlay.visible,
       follow: tl.follow,
       detail_actuator: page.lanes.detail.actuator,
+      shots_panel: page.shots.panel.open,
     };
     try {
       await page.api.patchProject(page.projectId, { view });
