@@ -17,6 +17,7 @@ from autohaptics.server import folder_lock
 from autohaptics.server.chair import ChairService
 from autohaptics.server.frontend import FrontendFiles
 from autohaptics.server.jobs import JobRunner
+from autohaptics.server.pictures import Pictures
 from autohaptics.server.routes import chair, jobs, projects, service, shots, styles, timeline
 from autohaptics.server.security import TrustBoundary, folder_token, host_names
 from autohaptics.server.settings import Settings
@@ -69,6 +70,9 @@ async def _services(app: FastAPI, settings: Settings):
     store = Store(settings.data_dir)
     interrupted = store.recover()
     composer = Composer(store)
+    pictures = Pictures(store, composer, bound_bytes=settings.picture_cache_bytes,
+                        busy=lambda: bool(store.active_jobs()))
+    composer.on_warm = pictures.ahead  # after a job, and the project opened at start-up
     recent = store.last_worked_on()
     if recent is not None:
         composer.warm(recent)
@@ -80,6 +84,7 @@ async def _services(app: FastAPI, settings: Settings):
     chair_service = ChairService(store, composer)
     chair_service.start()
     app.state.store, app.state.composer, app.state.runner = store, composer, runner
+    app.state.pictures = pictures
     app.state.chair = chair_service
     app.state.styles = Styles(settings.data_dir)
     try:
@@ -87,6 +92,7 @@ async def _services(app: FastAPI, settings: Settings):
     finally:
         await anyio.to_thread.run_sync(chair_service.close)  # STOP before anything else goes
         await anyio.to_thread.run_sync(runner.stop)
+        await anyio.to_thread.run_sync(pictures.close)
         await anyio.to_thread.run_sync(composer.writer.close)  # the last re-derive reaches the disk
         app.state.styles.close()
         store.close()

@@ -19,6 +19,7 @@ import logging
 import threading
 import time
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -86,6 +87,7 @@ class Composer:
         self._waveform_locks: dict[str, threading.Lock] = {}
         self._size = cache_size
         self.writer = LayerWriter(store, self._written)
+        self.on_warm: Callable[[str], None] | None = None  # also told of every warm (the pictures made ahead)
 
     # -------------------------------------------------------------------- loading
     def _cached(self, path: Path, load) -> Any:
@@ -172,6 +174,8 @@ class Composer:
             self._warm_analysis(pid)
 
         threading.Thread(target=load, name=f"warm {pid}", daemon=True).start()
+        if self.on_warm is not None:
+            self.on_warm(pid)
 
     def held(self, pid: str) -> bool:
         """Whether ``pid`` is warm: its composition at the current revision and its feature cache

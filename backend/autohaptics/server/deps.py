@@ -8,6 +8,7 @@ from fastapi import Depends, Request
 
 from autohaptics.server.chair import ChairService
 from autohaptics.server.jobs import JobRunner
+from autohaptics.server.pictures import Pictures
 from autohaptics.server.settings import Settings
 from autohaptics.server.store import Store
 from autohaptics.server.styles import Styles
@@ -38,9 +39,14 @@ def get_styles(request: Request) -> Styles:
     return request.app.state.styles
 
 
+def get_pictures(request: Request) -> Pictures:
+    return request.app.state.pictures
+
+
 SettingsDep = Annotated[Settings, Depends(get_settings)]
 StoreDep = Annotated[Store, Depends(get_store)]
 RunnerDep = Annotated[JobRunner, Depends(get_runner)]
 ComposerDep = Annotated[Composer, Depends(get_composer)]
 ChairDep = Annotated[ChairService, Depends(get_chair)]
 StylesDep = Annotated[Styles, Depends(get_styles)]
+PicturesDep = Annotated[Pictures, Depends(get_pictures)]

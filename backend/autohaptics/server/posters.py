@@ -1,25 +1,61 @@
-"""Shot posters: one JPEG per shot, the frame at the middle of the shot, made on demand (a seek to
-the keyframe before it, decoded up to it with :func:`autohaptics.media.iter_video`, scaled and
-encoded with OpenCV's ``imencode``) and kept in the project's folder (``posters/<tick>.jpg``, named
-by the frame's tick, so a split or merge that keeps a shot's middle keeps its poster); the folder
-goes with the project."""
+"""Pictures of the film at ticks: the decoding (PyAV seeks, :func:`frames_at`) and JPEG encoding
+(OpenCV's ``imencode``) that shot posters and filmstrip tiles (:mod:`.pictures`) share, and the
+posters themselves: one per shot, the frame at the middle of the shot, named by that tick
+(``posters/<tick>.jpg`` in the project's folder), so a split or merge that keeps a shot's middle
+keeps its poster. Pictures show the active picture (inside black bars, as the analysis found it)."""
 
 from __future__ import annotations
 
-import os
-import threading
+import json
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
+import numpy as np
 
 from autohaptics import media
 from autohaptics.errors import MediaError
 from autohaptics.timebase import TICK_S
 
-WIDTH = 160  # px: a filmstrip cell or a panel thumbnail
+WIDTH = 160  # px: a poster
 QUALITY = 80  # JPEG quality
-_locks: dict[Path, threading.Lock] = {}
-_guard = threading.Lock()
+SEEK_AFTER_S = 3.0  # a later frame this far past the last decoded one is reached by a seek, not by decoding on
+
+
+class Cancelled(Exception):
+    """A picture was left unmade: its maker was asked to stop."""
+
+
+@dataclass(frozen=True)
+class Film:
+    """What pictures are cut from: the media file, its probe, the active picture ``crop`` (x, y, w,
+    h px in display orientation; None: the whole frame) and its ``aspect`` (w / h)."""
+
+    path: Path
+    info: media.MediaInfo
+    crop: tuple[int, int, int, int] | None
+    aspect: float
+
+
+def film(media_path: Path, analysis_path: Path) -> Film:
+    """The film of a project: the active picture from its analysis's header (only the header is
+    read), else the whole frame."""
+    info = media.probe(media_path)
+    if info.video is None:
+        raise MediaError(f"{media_path.name} has no video stream to take pictures from")
+    crop = None
+    try:
+        with np.load(analysis_path, allow_pickle=False) as z:
+            header = json.loads(bytes(z["header"]).decode())
+        rect = header["stats"]["video"]["active_area"]["rect"]
+        if len(rect) == 4 and min(rect[2:]) > 0:
+            crop = tuple(int(v) for v in rect)
+    except (OSError, KeyError, TypeError, ValueError):
+        pass
+    w, h = crop[2:] if crop else info.video.display_size
+    return Film(Path(media_path), info, crop, w / max(1, h))
 
 
 def poster_tick(t0: int, t1: int) -> int:
@@ -27,43 +63,51 @@ def poster_tick(t0: int, t1: int) -> int:
     return (int(t0) + int(t1) - 1) // 2
 
 
-def poster(folder: Path, media_path: Path, tick: int) -> Path:
-    """The poster file of ``tick`` in ``folder``, made now if it is not there yet (one maker per file)."""
-    path = folder / f"{int(tick)}.jpg"
-    if path.exists():
-        return path
-    with _guard:
-        lock = _locks.setdefault(path, threading.Lock())
-    with lock:
-        if not path.exists():
-            data = _encode(media_path, tick)
-            folder.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
-            tmp.write_bytes(data)
-            tmp.replace(path)
-    return path
-
-
-def _encode(media_path: Path, tick: int) -> bytes:
-    """JPEG bytes, ``WIDTH`` px wide, of the first frame inside ``tick`` (the last frame before it
-    when the film ends first)."""
-    info = media.probe(media_path)
-    if info.video is None:
-        raise MediaError(f"{media_path.name} has no video stream to take a poster from")
-    at = (tick + 0.5) * TICK_S
-    chosen = None
-    stream = media.iter_video(media_path, info=info, start_s=max(0.0, at - 0.5))
+def frames_at(source: Film, ticks: Sequence[int], size: tuple[int, int], *,
+              cancel: Callable[[], bool] = lambda: False) -> list[np.ndarray]:
+    """The picture on screen at the middle of each tick (ticks increasing), RGB uint8 [shape=(h, w, 3)]
+    at ``size`` (w, h): the first frame that is still shown there (the last frame when the film
+    ends first). Close ticks are decoded on from one seek; a tick more than ``SEEK_AFTER_S`` past
+    the last decoded frame gets its own seek (to the keyframe before it)."""
+    period = 1.0 / max(source.info.video.fps, 1e-6)
+    out: list[np.ndarray] = []
+    stream, frame, pos, tail = None, None, -math.inf, None
     try:
-        for frame in stream:
-            chosen = frame
-            if frame.time_s >= at - 0.5 * TICK_S:
-                break
+        for tick in ticks:
+            want = (int(tick) + 0.5) * TICK_S - period  # a frame after this is on screen at the middle
+            if stream is None or want - pos > SEEK_AFTER_S:
+                if stream is not None:
+                    stream.close()
+                start = max(0.0, want - 0.5)
+                stream = media.iter_video(source.path, info=source.info, start_s=start, crop=source.crop)
+                frame, pos, tail = None, start, None
+            while tail is None and (frame is None or frame.time_s <= want):
+                if cancel():
+                    raise Cancelled()
+                nxt = next(stream, None)
+                if nxt is None:  # the film ends first: its last frame
+                    if frame is None:
+                        raise MediaError(f"{source.path.name}: no frame could be decoded near tick {tick}")
+                    tail = frame.proxy(*size)
+                else:
+                    frame, pos = nxt, nxt.time_s
+            out.append(tail if tail is not None else frame.proxy(*size))
     finally:
-        stream.close()
-    if chosen is None:
-        raise MediaError(f"{media_path.name}: no frame could be decoded near {at:.1f} s")
-    rgb = chosen.proxy(WIDTH)
-    ok, buf = cv2.imencode(".jpg", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, QUALITY])
+        if stream is not None:
+            stream.close()
+    return out
+
+
+def jpeg(rgb: np.ndarray) -> bytes:
+    """JPEG bytes of an RGB picture (``QUALITY``)."""
+    ok, buf = cv2.imencode(".jpg", cv2.cvtColor(np.ascontiguousarray(rgb), cv2.COLOR_RGB2BGR),
+                           [cv2.IMWRITE_JPEG_QUALITY, QUALITY])
     if not ok:
-        raise MediaError(f"{media_path.name}: the poster at {at:.1f} s could not be encoded")
+        raise MediaError("a picture could not be encoded as JPEG")
     return buf.tobytes()
+
+
+def poster_jpeg(source: Film, tick: int, *, cancel: Callable[[], bool] = lambda: False) -> bytes:
+    """The poster of ``tick``: ``WIDTH`` px wide at the active picture's aspect."""
+    size = (WIDTH, max(2, round(WIDTH / source.aspect)))
+    return jpeg(frames_at(source, [tick], size, cancel=cancel)[0])

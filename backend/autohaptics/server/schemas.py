@@ -214,6 +214,15 @@ class ShotsOut(BaseModel):
     shots: list[ShotOut]
 
 
+class FilmstripOut(BaseModel):
+    """Frames ``frame_w`` x ``frame_h`` px, ``per_tile`` to a tile, at each of ``steps`` (ticks apart)."""
+
+    frame_w: int
+    frame_h: int
+    per_tile: int
+    steps: list[int]
+
+
 class SimilarShotOut(BaseModel):
     id: int
     distance: float = Field(ge=0.0, le=1.0)

@@ -40,6 +40,7 @@ class Settings(BaseModel):
         service answers to.
     allowed_hosts : further Host names the service answers to (e.g. a LAN name, on purpose;
         docs/API.md "Security"); 127.0.0.1, localhost and ::1 always are.
+    picture_cache_bytes : most bytes of posters and filmstrip tiles kept per project (oldest evicted).
     """
 
     model_config = ConfigDict(frozen=True)
@@ -53,6 +54,7 @@ class Settings(BaseModel):
     waveform_max_points: int = Field(default=100_000, ge=1)
     bind_host: str | None = None
     allowed_hosts: tuple[str, ...] = ()
+    picture_cache_bytes: int = Field(default=100 * MIB, ge=1)
 
     @classmethod
     def from_env(cls, **overrides) -> "Settings":

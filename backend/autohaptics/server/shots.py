@@ -50,6 +50,18 @@ def shot_list(pid: str, analysis, composed) -> dict:
     return answer
 
 
+def poster_ticks(analysis, composed) -> list[int]:
+    """The poster tick of every shot of the composed timeline's shot list, in film order."""
+    t0, t1 = _bounds(analysis, composed)[:2]
+    return [poster_tick(a, b) for a, b in zip(t0.tolist(), t1.tolist())]
+
+
+def _bounds(analysis, composed) -> tuple:
+    """(t0, t1, kind codes) of the shots at the composed revision."""
+    n = int(composed.timeline.n_ticks)
+    return shot_arrays(apply_shot_ops(base_starts(analysis.shots, n), composed.ops, n), n)
+
+
 def similar_shots(pid: str, analysis, composed, shot_id: int) -> dict:
     """``{revision, shot, similar: [{id, distance}]}``: every other shot of the list at the composed
     revision by ascending distance (:mod:`autohaptics.shots.similar`); features kept while the
@@ -57,7 +69,7 @@ def similar_shots(pid: str, analysis, composed, shot_id: int) -> dict:
     if analysis is None:
         raise Conflict("the project has no analysis yet; its shots come from the analysis")
     n = int(composed.timeline.n_ticks)
-    t0, t1, _ = shot_arrays(apply_shot_ops(base_starts(analysis.shots, n), composed.ops, n), n)
+    t0, t1, _ = _bounds(analysis, composed)
     i = int(np.searchsorted(t0, shot_id))
     if i >= t0.size or t0[i] != shot_id:
         raise NotFound(f"no shot starts at tick {shot_id} (shot ids are their first ticks)")
@@ -87,8 +99,7 @@ def similar_shots(pid: str, analysis, composed, shot_id: int) -> dict:
 def _build(pid: str, analysis, composed) -> dict:
     tl = composed.timeline
     n = int(tl.n_ticks)
-    starts = apply_shot_ops(base_starts(analysis.shots, n), composed.ops, n)
-    t0, t1, kinds = shot_arrays(starts, n)
+    t0, t1, kinds = _bounds(analysis, composed)
     v = analysis.video if analysis.video is not None and analysis.n_ticks == n else None
     audio = analysis.audio or {}
     s = summarise(t0, t1, vibration=tl.vibration, temperature_c=tl.temperature_c, fans=tl.fans,

@@ -9,7 +9,7 @@ from fastapi import APIRouter, Query, Request, Response
 from fastapi.responses import FileResponse
 
 from autohaptics.errors import ParameterError
-from autohaptics.server.deps import ComposerDep, RunnerDep, SettingsDep, StoreDep, StylesDep
+from autohaptics.server.deps import ComposerDep, PicturesDep, RunnerDep, SettingsDep, StoreDep, StylesDep
 from autohaptics.server.schemas import ProjectOut, ProjectPatch, WaveformOut
 from autohaptics.server.store import new_id
 from autohaptics.server.styles import style_ref
@@ -95,9 +95,10 @@ def patch_project(project_id: str, body: ProjectPatch, store: StoreDep) -> dict:
 
 
 @router.delete("/api/projects/{project_id}", status_code=204)
-def delete_project(project_id: str, store: StoreDep, runner: RunnerDep) -> Response:
+def delete_project(project_id: str, store: StoreDep, runner: RunnerDep, pictures: PicturesDep) -> Response:
     store.get_project(project_id)
     runner.cancel_project(project_id)
+    pictures.forget(project_id)  # no picture is being made into the folder as it goes
     store.delete_project(project_id)
     return Response(status_code=204)
 
