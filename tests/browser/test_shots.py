@@ -152,6 +152,7 @@ def test_click_shift_click_and_set_on_several_shots_is_one_undo_step(vpage, api,
     for button, check in [
         ("edit-set", lambda v, t: v == pytest.approx(0.5)),
         ("edit-scale", lambda v, t: v == pytest.approx(0.75)),
+        ("edit-fade-in", None),
         ("edit-fade-out", None),
         ("edit-clear", lambda v, t: v == 0.0),
     ]:
@@ -171,9 +172,11 @@ def test_click_shift_click_and_set_on_several_shots_is_one_undo_step(vpage, api,
                     assert all(check(v, t) for t, v in enumerate(now[lane][shot["t0"]:shot["t1"]])), (button, lane)
                 elif button == "edit-fade-out":
                     assert now[lane][shot["t1"] - 1] == 0.0
+                else:
+                    assert now[lane][shot["t0"]] == 0.0
             assert now[lane][b["t0"]:b["t1"]] == before[lane][b["t0"]:b["t1"]], "the shot between is unchanged"
     # Undo: each operation on both shots is one step.
-    for k in range(4):
+    for k in range(5):
         s_before = state(vpage)
         vpage.keyboard.press("Control+z")
         s_after = wait_revision_above(vpage, s_before["revision"])
@@ -183,6 +186,14 @@ def test_click_shift_click_and_set_on_several_shots_is_one_undo_step(vpage, api,
     # Shift-click a selected shot takes it out.
     click_shot(vpage, a, tick_s, ["Shift"])
     assert state(vpage)["selection"]["ranges"] == [[c["t0"], c["t1"]]]
+    # A drag across the lane selects the run of shots it crosses, each shot a range of its own.
+    y = lane_y(vpage, "shots")
+    vpage.mouse.move(shot_x(vpage, a, tick_s), y)
+    vpage.mouse.down()
+    vpage.mouse.move(shot_x(vpage, c, tick_s), y, steps=6)
+    vpage.mouse.up()
+    run = [[s["t0"], s["t1"]] for s in doc["shots"] if a["t0"] <= s["t0"] <= c["t0"]]
+    assert state(vpage)["selection"]["ranges"] == run
 
 
 def test_double_click_plays_the_shot_and_stops_at_its_end(vpage, api, project_copy):
@@ -291,15 +302,16 @@ def test_shots_panel_sorts_filters_and_jumps(vpage, api, project_copy):
     vpage.select_option("[data-testid=shots-filter]", "vibration")
     kept = [s for s in shots if (s["vibration_peak"] or 0) > 0]
     assert vpage.text_content("[data-testid=shots-count]") == (str(len(shots)) if len(kept) == len(shots) else f"{len(kept)} of {len(shots)}")
-    target = sorted(kept, key=lambda s: (-s["motion"], s["t0"]))[0]
+    target, other = sorted(kept, key=lambda s: (-s["motion"], s["t0"]))[:2]
     assert first_ids()[0] == target["id"]
     vpage.click(f"[data-testid=shot-row][data-id='{target['id']}']")
     s = state(vpage)
     assert s["selection"]["ranges"] == [[target["t0"], target["t1"]]]
     wait_until(lambda: abs(state(vpage)["currentTime"] - target["t0"] * tick_s) < 0.06, "the playhead at the shot")
     assert vpage.get_attribute(f"[data-testid=shot-row][data-id='{target['id']}']", "aria-selected") == "true"
+    vpage.click(f"[data-testid=shot-row][data-id='{other['id']}']", modifiers=["Shift"])
+    assert state(vpage)["selection"]["ranges"] == sorted([[target["t0"], target["t1"]], [other["t0"], other["t1"]]])
     # The panel's state is a view setting: a reload finds it open.
-    vpage.wait_for_function(f"() => true")
     wait_until(lambda: (api.get(f"/api/projects/{pid}").json().get("view") or {}).get("shots_panel") is True, "the view saved")
     open_editor(vpage, pid)
     vpage.wait_for_selector("[data-testid=shots-panel]:not([hidden])")
@@ -348,8 +360,14 @@ def test_select_similar_previews_the_count_then_one_operation_changes_them_all(v
     similar = r.json()["similar"]
     assert len(similar) >= 3
     lanes = actuators(vpage)
+    # From the lane's context menu, then from the panel's button with the shot selected.
+    vpage.mouse.click(shot_x(vpage, src, tick_s), lane_y(vpage, "shots"), button="right")
+    vpage.click("[data-testid=shots-menu-similar]")
+    vpage.wait_for_selector("[data-testid=shots-similar]:not([hidden])")
+    assert state(vpage)["shots"]["similar"]["shot"] == src["id"]
+    vpage.click("[data-testid=shots-similar-cancel]")
+    assert state(vpage)["shots"]["similar"] is None
     click_shot(vpage, src, tick_s)
-    vpage.click("[data-testid=toggle-shots]")
     vpage.click("[data-testid=shots-similar-open]")
     vpage.wait_for_selector("[data-testid=shots-similar]:not([hidden])")
     s0 = state(vpage)

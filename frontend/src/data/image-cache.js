@@ -8,7 +8,7 @@
 
 const RETRY_MS = 5000;
 
-/** @typedef {{img: HTMLImageElement|null, pixels: number, used: number, state: "queued"|"loading"|"ready"|"failed", at: number}} Entry */
+/** @typedef {{img: ImageBitmap|null, pixels: number, used: number, state: "queued"|"loading"|"ready"|"failed", at: number}} Entry */
 
 export class ImageCache {
   /**
@@ -83,14 +83,18 @@ export class ImageCache {
   async _load(url, e) {
     e.state = "loading";
     this.inFlight++;
-    const img = new Image();
-    img.decoding = "async";
-    img.src = url;
     try {
-      await img.decode();
-      if (this.disposed) return;
+      // An ImageBitmap is decoded once, off the main thread, and stays decoded: drawing it costs a
+      // copy (an <img> may be decoded again on the frame that first draws it).
+      const res = await fetch(url);
+      if (!res.ok) throw new Error(`${res.status}`);
+      const img = await createImageBitmap(await res.blob());
+      if (this.disposed) {
+        img.close();
+        return;
+      }
       e.img = img;
-      e.pixels = img.naturalWidth * img.naturalHeight;
+      e.pixels = img.width * img.height;
       e.state = "ready";
       this.pixels += e.pixels;
       this.loaded++;
@@ -113,6 +117,7 @@ export class ImageCache {
       if (this.pixels <= this.maxPixels) break;
       this.entries.delete(url);
       this.pixels -= e.pixels;
+      if (e.img) e.img.close();
     }
   }
 
@@ -125,6 +130,7 @@ export class ImageCache {
 
   dispose() {
     this.disposed = true;
+    for (const e of this.entries.values()) if (e.img) e.img.close();
     this.entries.clear();
     this.pixels = 0;
   }

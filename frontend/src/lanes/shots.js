@@ -106,7 +106,7 @@ export class ShotsLane extends BaseLane {
       const img = this.hooks.cache.get(this.hooks.tileUrl(step, tile));
       if (!img) continue;
       const f = k - tile * per;
-      coverDraw(ctx, img, f * strip.frame_w, 0, strip.frame_w, img.naturalHeight, view.tickToX(k * step), y, slot, dh);
+      coverDraw(ctx, img, f * strip.frame_w, 0, strip.frame_w, img.height, view.tickToX(k * step), y, slot, dh);
     }
   }
 
@@ -125,10 +125,10 @@ export class ShotsLane extends BaseLane {
       const img = this.hooks.cache.get(this.hooks.posterUrl(s));
       if (!img) continue;
       // The poster repeated along the shot at its own aspect, like frames of a filmstrip.
-      const fw = (img.naturalWidth * dh) / Math.max(1, img.naturalHeight);
+      const fw = (img.width * dh) / Math.max(1, img.height);
       const end = Math.min(x1, width + 1);
       let x = x0 < -fw ? x0 + Math.floor(-x0 / fw) * fw : x0;
-      for (; x < end; x += fw) coverDraw(ctx, img, 0, 0, img.naturalWidth, img.naturalHeight, x, y, Math.min(fw, x1 - x), dh);
+      for (; x < end; x += fw) coverDraw(ctx, img, 0, 0, img.width, img.height, x, y, Math.min(fw, x1 - x), dh);
     }
   }
 
