@@ -4,11 +4,12 @@ parameters the designer started from. Fitted on sampled ticks, without decoding:
 
 1. the threshold scale (0.25..4 in 1/24 octaves): the intensity rule applied to the analysis's own
    decision curves (the novelty the thresholds apply to) says which ticks vibrate at each scale;
-   the scale is the one that best separates the ticks vibrating in the edited timelines from the
-   others, moved away from 1 only when :data:`STEP_SHARE` of the ticks it changes agree;
-2. a floor per body zone (back, armrests, seat: their actuators' levels pooled) and one for the
-   fans: the level below which the edited timelines are off (then 1 and 2 once more with the
-   floors known, the ticks a floor clears left out of the scale's fit);
+   each tick votes by how much better "woken, in the style" explains its edited levels than "off"
+   (a drawn one-off burst votes near 0), and the scale moves away from 1 only while the ticks it
+   changes vote :data:`STEP_SHARE` its way;
+2. a floor per body zone (back, armrests, seat: their actuators' levels pooled; the floor of all
+   of them where the zone's levels cannot place one) and one for the fans: the level below which
+   the edited timelines are off (then 1 and 2 once more with the floors known);
 3. a tone curve per actuator and one for the fans, on the levels the derive at that scale has at
    or above the floor: the edit ``edited - derived`` as a piecewise-linear function of the derived
    level, fitted by a robust loss per 2 s block (:data:`BLOCK_TICKS`: a block that does not follow
