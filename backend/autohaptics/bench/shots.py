@@ -45,7 +45,20 @@ def write_film(path: Path, duration_s: float, shot_s: float, *, write: bool = Tr
                ) -> tuple[Path, list[tuple[int, str]]]:
     """The film (written unless ``write`` is False) and its boundaries [(tick, kind)] (a fade's
     tick is its black's middle)."""
-    from autohaptics.testing import Scene, Segment, Texture, write_scene
+    from autohaptics.testing import Scene, write_scene
+
+    segs, truth = shot_segments(duration_s, shot_s)
+    scene = Scene(duration_s, background=segs, name=NAME)
+    if not write:
+        return path, truth
+    return write_scene(path, scene, width=64, height=36, fps=5, long=True, quality="low", audio=True,
+                       sample_rate=24000), truth
+
+
+def shot_segments(duration_s: float, shot_s: float) -> tuple[tuple, list[tuple[int, str]]]:
+    """The background segments of a film whose shots change every ``shot_s`` seconds (hard cuts,
+    every 5th a 1 s dissolve, every 7th a fade through black) and its boundaries [(tick, kind)]."""
+    from autohaptics.testing import Segment, Texture
 
     colours = [(40, 60, 150), (170, 70, 40), (50, 150, 70), (140, 140, 140), (150, 60, 140), (200, 180, 70)]
     segs, truth, t, i = [], [], 0.0, 0
@@ -66,11 +79,7 @@ def write_film(path: Path, duration_s: float, shot_s: float, *, write: bool = Tr
             if i:
                 truth.append((round(t * 10), "dissolve" if dissolve else "cut"))
         t, i = end, i + 1
-    scene = Scene(duration_s, background=tuple(segs), name=NAME)
-    if not write:
-        return path, truth
-    return write_scene(path, scene, width=64, height=36, fps=5, long=True, quality="low", audio=True,
-                       sample_rate=24000), truth
+    return tuple(segs), truth
 
 
 def _project(api: httpx.Client, film: Path) -> tuple[str, dict | None]:
@@ -87,7 +96,7 @@ def _project(api: httpx.Client, film: Path) -> tuple[str, dict | None]:
     return r.json()["id"], job
 
 
-def _settled_rss(proc, *, wait_s: float = 30.0) -> float:
+def settled_rss(proc, *, wait_s: float = 30.0) -> float:
     """The server's RSS, MiB, once three samples 0.5 s apart agree within 2 MiB (at most ``wait_s``)."""
     samples = [server_rss_mb(proc)]
     deadline = time.monotonic() + wait_s
@@ -116,7 +125,7 @@ def run(args) -> int:
         pid, job = _project(api, film)
         rss_closed = server_rss_mb(proc)
         open_ms, _ = _timed(api, "GET", f"/api/projects/{pid}/timeline.bin")  # the editor opens the project
-        rss0 = _settled_rss(proc)  # the server warms the analysis for the first commit in the background
+        rss0 = settled_rss(proc)  # the server warms the analysis for the first commit in the background
         first, answer = _timed(api, "GET", f"/api/projects/{pid}/shots")
         doc = answer.json()
         screen = doc["shots"][len(doc["shots"]) // 2:][:20]  # a first screen of posters, mid-film, made now
