@@ -9,15 +9,20 @@ generated in the work folder is reused), then the bench prints the answer times 
 revision again (median of ``--repeat``), the first after a threshold commit (new summaries over
 the same boundaries), after a ``shot_split`` edit, all with the project open (its timeline.bin fetched first, the
 server's memory settled); the server's RSS with the project closed, open, and after the shots; the first
-screen of posters (20 mid-film shots, made on demand, then again from the disk cache); and the
-boundaries found against the film's own (precision and recall within one tick, and within two:
-one frame at 5 fps). Figures are printed (and written as JSON), never asserted.
+screen of posters (20 mid-film shots, made on demand while the background maker runs, then again
+from the disk cache); filmstrip tiles on demand; a shot's similar shots (first and again); one
+``group`` of ``scale`` ops over the 300 shots nearest a shot (target <= 150 ms) and its undo; the
+time until every poster and the coarse filmstrip are made ahead, and the picture cache's size on
+disk (target <= 100 MB; the pictures of an earlier run are removed first); and the boundaries
+found against the film's own (precision and recall within one tick, and within two: one frame at
+5 fps). Figures are printed (and written as JSON), never asserted.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import statistics
 import time
 from pathlib import Path
@@ -119,11 +124,15 @@ def run(args) -> int:
     film = work / f"shots-{args.hours:g}h-{args.shot_s:g}s.mp4"
     print(f"film {film} …", flush=True)
     film, truth = write_film(film, args.hours * 3600.0, args.shot_s, write=not film.exists())
-    proc, url = start_server(work / f"data-{film.stem}", log_path=work / "server.log", timeout_s=120.0)
+    data = work / f"data-{film.stem}"
+    for folder in [*data.glob("projects/*/posters"), *data.glob("projects/*/filmstrip")]:
+        shutil.rmtree(folder)  # the pictures are made again, ahead and on demand
+    proc, url = start_server(data, log_path=work / "server.log", timeout_s=120.0)
     try:
         api = httpx.Client(base_url=url, timeout=600)
         pid, job = _project(api, film)
         rss_closed = server_rss_mb(proc)
+        t_open = time.perf_counter()
         open_ms, _ = _timed(api, "GET", f"/api/projects/{pid}/timeline.bin")  # the editor opens the project
         rss0 = settled_rss(proc)  # the server warms the analysis for the first commit in the background
         first, answer = _timed(api, "GET", f"/api/projects/{pid}/shots")
@@ -133,6 +142,8 @@ def run(args) -> int:
         poster_ms = [_timed(api, "GET", s["poster_url"])[0] for s in screen]
         screen_ms = 1000 * (time.perf_counter() - t0)
         cached_ms = statistics.median(_timed(api, "GET", s["poster_url"])[0] for s in screen)
+        strip = _filmstrip(api, pid)
+        similar = _similar_and_group(api, pid, doc, args.repeat)
         again = statistics.median(_timed(api, "GET", f"/api/projects/{pid}/shots")[0] for _ in range(args.repeat))
         loud = api.get(f"/api/projects/{pid}").json()["params"]["thresholds"]["loudness"]
         other = 0.6 if loud == 0.5 else 0.5
@@ -146,6 +157,8 @@ def run(args) -> int:
                              json={"base_revision": rev, "op": {"op": "shot_split", "t": split_at}})
         after_split, _ = _timed(api, "GET", f"/api/projects/{pid}/shots")
         rss1 = server_rss_mb(proc)
+        ahead = _made_ahead(data / "projects" / pid, len(doc["shots"]), t_open)
+        ahead["rss_after_pictures_mb"] = server_rss_mb(proc)
     finally:
         stop_server(proc)
     found = [s["t0"] for s in doc["shots"][1:] if s["kind"] != "split"]  # an earlier run's split is no find
@@ -162,11 +175,62 @@ def run(args) -> int:
            "generate_s": job_seconds(job) if job else None,
            "posters": len(screen), "poster_first_ms_median": statistics.median(poster_ms),
            "poster_first_ms_max": max(poster_ms), "posters_screen_ms": screen_ms, "poster_cached_ms": cached_ms,
-           "poster_cache_kb": sum(p.stat().st_size for p in (work / f"data-{film.stem}").rglob("posters/*.jpg")) / 1024}
+           **strip, **similar, **ahead}
     for k, v in out.items():
         print(f"{k}: {round(v, 3) if isinstance(v, float) else v}")
     (work / "bench_shots.json").write_text(json.dumps(out, indent=1))
     return 0
+
+
+def _filmstrip(api: httpx.Client, pid: str) -> dict:
+    """The filmstrip's geometry, and tiles on demand mid-film at a fine, a middle and the coarsest step."""
+    ms, r = _timed(api, "GET", f"/api/projects/{pid}/filmstrip")
+    geo = r.json()
+    out = {"filmstrip_ms": ms, "filmstrip_steps": len(geo["steps"]), "frame_w": geo["frame_w"]}
+    n = api.get(f"/api/projects/{pid}/shots").json()["n_ticks"]
+    for step in (1, 16, geo["steps"][-1]):
+        tile = (n // (16 * step)) // 2
+        out[f"tile_step{step}_ms"], r = _timed(api, "GET", f"/api/projects/{pid}/filmstrip/{step}/{tile}.jpg")
+        out[f"tile_step{step}_kb"] = len(r.content) / 1024
+    return out
+
+
+def _similar_and_group(api: httpx.Client, pid: str, doc: dict, repeat: int) -> dict:
+    """A mid-film shot's similar shots (first: the features are computed; then again, other shots),
+    one ``group`` scaling the 300 nearest shots' vibration, the shot list after it, and its undo."""
+    shots = doc["shots"]
+    mid = shots[len(shots) // 2]["id"]
+    first, r = _timed(api, "GET", f"/api/projects/{pid}/shots/{mid}/similar")
+    near = r.json()["similar"][:300]
+    again = statistics.median(_timed(api, "GET", f"/api/projects/{pid}/shots/{s['id']}/similar")[0]
+                              for s in shots[:repeat])
+    ends = {s["id"]: s["t1"] for s in shots}
+    ops = [{"op": "scale", "lanes": ["A1", "A2", "A5"], "t0": s["id"], "t1": ends[s["id"]], "factor": 0.5}
+           for s in near]
+    rev = api.get(f"/api/projects/{pid}").json()["revision"]
+    group_ms, r = _timed(api, "POST", f"/api/projects/{pid}/edits",
+                         json={"base_revision": rev, "op": {"op": "group", "ops": ops}})
+    after_group, _ = _timed(api, "GET", f"/api/projects/{pid}/shots")
+    undo_ms, _ = _timed(api, "POST", f"/api/projects/{pid}/undo", json={"base_revision": r.json()["revision"]})
+    return {"similar_first_ms": first, "similar_again_ms": again, "similar_picked": len(near),
+            "similar_distance_300th": near[-1]["distance"], "group_ops": len(ops), "group_ms": group_ms,
+            "after_group_shots_ms": after_group, "undo_group_ms": undo_ms}
+
+
+def _made_ahead(folder: Path, n_shots: int, t_open: float, *, wait_s: float = 900.0) -> dict:
+    """Seconds from the open until every shot's poster is on disk (the background maker does the coarse
+    filmstrip first), and the picture cache's size then."""
+    deadline = time.perf_counter() + wait_s
+    count = 0
+    while time.perf_counter() < deadline:
+        count = len(list((folder / "posters").glob("*.jpg")))
+        if count >= n_shots:
+            break
+        time.sleep(1.0)
+    files = [p for d in ("posters", "filmstrip") for p in (folder / d).glob("*.jpg")]
+    return {"ahead_posters": count, "ahead_all_s": time.perf_counter() - t_open,
+            "ahead_tiles": len(list((folder / "filmstrip").glob("*.jpg"))),
+            "picture_cache_mb": sum(p.stat().st_size for p in files) / 2**20}
 
 
 def _matches(found: list[int], truth: list[int], tol: int = 1) -> int:

@@ -6,8 +6,8 @@ Filmstrip: frames ``FRAME_H`` px high at the active picture's aspect, ``PER_TILE
 side; frame k of tile i at step s is the picture at tick (PER_TILE i + k) s; steps 1, 2, 4, ... up to
 the first power of two >= n_ticks / PER_TILE (the whole film in one tile).
 
-Ahead (:meth:`Pictures.ahead`: after a job, when a timeline is opened): the filmstrip steps of at most
-``AHEAD_FRAMES`` frames, coarsest first, then every shot's poster. The thread runs at the lowest CPU
+Ahead (:meth:`Pictures.ahead`: after a job, when a timeline is opened): the shots' similarity
+features, the filmstrip steps of at most ``AHEAD_FRAMES`` frames, coarsest first, then every shot's poster. The thread runs at the lowest CPU
 priority, waits while any generation job is queued or running, and stops between two pictures when
 the server stops or the project goes (:meth:`Pictures.forget`).
 """
@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from autohaptics.server import posters
-from autohaptics.server.shots import poster_ticks
+from autohaptics.server.shots import features_of, poster_ticks
 from autohaptics.server.store import NotFound
 
 log = logging.getLogger("autohaptics.server.pictures")
@@ -242,6 +242,8 @@ class Pictures:
         with self._lock:
             if self._planned.get(pid) == state:
                 return
+        if analysis is not None:
+            features_of(pid, analysis, composed)  # a shot's similar shots then answer at once
         n = composed.timeline.n_ticks
         work = [(self.tile, (s, t)) for s in reversed(steps(n)) if -(-n // s) <= AHEAD_FRAMES
                 for t in range(n_tiles(n, s))]

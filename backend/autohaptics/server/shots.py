@@ -64,36 +64,41 @@ def _bounds(analysis, composed) -> tuple:
 
 def similar_shots(pid: str, analysis, composed, shot_id: int) -> dict:
     """``{revision, shot, similar: [{id, distance}]}``: every other shot of the list at the composed
-    revision by ascending distance (:mod:`autohaptics.shots.similar`); features kept while the
-    analysis and the boundaries are the same (a track edit or a threshold change keeps them)."""
-    if analysis is None:
-        raise Conflict("the project has no analysis yet; its shots come from the analysis")
-    n = int(composed.timeline.n_ticks)
-    t0, t1, _ = _bounds(analysis, composed)
+    revision by ascending distance (:mod:`autohaptics.shots.similar`)."""
+    t0, features = features_of(pid, analysis, composed)
     i = int(np.searchsorted(t0, shot_id))
     if i >= t0.size or t0[i] != shot_id:
         raise NotFound(f"no shot starts at tick {shot_id} (shot ids are their first ticks)")
-    key = t0.tobytes()
-    with _lock:
-        hit = _features.get(pid)
-    if hit is not None and hit[0] is analysis and hit[1] == key:
-        features = hit[2]
-    else:
-        v = analysis.video if analysis.video is not None and analysis.n_ticks == n else None
-        features = shot_features(t0, t1, mean_rgb=v.mean_rgb if v is not None and v.mean_rgb.any() else None,
-                                 motion=v.motion if v is not None else None,
-                                 loudness=(analysis.audio or {}).get("loudness") if analysis.n_ticks == n else None,
-                                 beta=v.beta if v is not None else None,
-                                 saliency_mask=v.saliency_mask if v is not None else None)
-        with _lock:
-            _features[pid] = (analysis, key, features)
-            _features.move_to_end(pid)
-            while len(_features) > _KEEP:
-                _features.popitem(last=False)
     order, d = nearest(features, i)
     ids, dist = t0[order].tolist(), np.round(d, 4).tolist()
     return {"revision": composed.revision, "shot": int(shot_id),
             "similar": [{"id": a, "distance": b} for a, b in zip(ids, dist)]}
+
+
+def features_of(pid: str, analysis, composed) -> tuple[np.ndarray, np.ndarray]:
+    """(shot starts, features) of the shots at the composed revision; kept while the analysis and the
+    boundaries are the same (a track edit or a threshold change keeps them)."""
+    if analysis is None:
+        raise Conflict("the project has no analysis yet; its shots come from the analysis")
+    n = int(composed.timeline.n_ticks)
+    t0, t1, _ = _bounds(analysis, composed)
+    key = t0.tobytes()
+    with _lock:
+        hit = _features.get(pid)
+    if hit is not None and hit[0] is analysis and hit[1] == key:
+        return t0, hit[2]
+    v = analysis.video if analysis.video is not None and analysis.n_ticks == n else None
+    features = shot_features(t0, t1, mean_rgb=v.mean_rgb if v is not None and v.mean_rgb.any() else None,
+                             motion=v.motion if v is not None else None,
+                             loudness=(analysis.audio or {}).get("loudness") if analysis.n_ticks == n else None,
+                             beta=v.beta if v is not None else None,
+                             saliency_mask=v.saliency_mask if v is not None else None)
+    with _lock:
+        _features[pid] = (analysis, key, features)
+        _features.move_to_end(pid)
+        while len(_features) > _KEEP:
+            _features.popitem(last=False)
+    return t0, features
 
 
 def _build(pid: str, analysis, composed) -> dict:

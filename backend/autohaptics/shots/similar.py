@@ -46,7 +46,7 @@ def shot_features(t0: np.ndarray, t1: np.ndarray, *, mean_rgb: np.ndarray | None
     if per_tick is not None:
         groups.append(mean(np.log1p(np.maximum(per_tick, 0.0))))
     if beta is not None and saliency_mask is not None:
-        groups.append(_saliency_centroid(t0, np.asarray(beta, np.float64), np.asarray(saliency_mask, bool)))
+        groups.append(_saliency_centroid(t0, np.asarray(beta, np.float32), np.asarray(saliency_mask, bool)))
     cols = [_standardised(g) / np.sqrt(len(groups) * g.shape[1]) for g in groups]
     return np.concatenate(cols, axis=1) if cols else np.zeros((t0.size, 0))
 
@@ -55,9 +55,9 @@ def _saliency_centroid(t0: np.ndarray, beta: np.ndarray, mask: np.ndarray) -> np
     """Per shot, the weight-averaged actuator position (x, y 0..1) over its saliency ticks, drawn
     towards the film's mean by the share of its ticks without saliency (a shot where saliency ran
     on 2 ticks of 20 says little about where its subject is)."""
-    w = beta * mask[:, None]
-    weight = np.add.reduceat(w.sum(axis=1), t0)
-    where = np.add.reduceat(w @ ACTUATOR_XY, t0, axis=0)
+    w = np.where(mask[:, None], beta, 0.0)
+    per_shot = np.add.reduceat(w, t0, axis=0)  # (m, 9): the products with positions on the small array
+    weight, where = per_shot.sum(axis=1), per_shot @ ACTUATOR_XY
     length = np.diff(np.append(t0, mask.size))
     share = np.add.reduceat(mask & (w.sum(axis=1) > 1e-9), t0) / length
     seen = weight > 1e-9
