@@ -1,6 +1,7 @@
 """Shot boundaries on generated films with known answers (hard cuts, fades through black, cross-
-dissolves, a flash and a partial flash that are not cuts, a slow pan that is not a cut) at 24, 25,
-30 and 60 fps and three sizes: precision and recall >= 0.95 within one tick, the kinds right.
+dissolves, a flash and a partial flash that are not cuts, a slow pan that is not a cut; title cards
+of a few pixels of text) at 24, 25, 30 and 60 fps and three sizes: precision and recall >= 0.95
+within one tick, the kinds right.
 
 A boundary at t seconds is the tick round(t / 0.1): the first tick that is mostly the new shot; a
 fade's or a dissolve's is its middle. Films are written with synth.write_scene (H.264) and run
@@ -49,6 +50,29 @@ TRUTH = {20: "cut", 39: "cut", 57: "fade", 86: "dissolve", 109: "cut", 143: "dis
 NOT_CUTS = {"flash": range(96, 99), "pan": range(112, 141), "burst": range(181, 185)}
 
 
+def text(t_on: float, t_off: float, x: float, y: float) -> tuple[Shape, Shape]:
+    """Two lines of grey 'text' on a title card, bars a few pixels high: the 16 x 9 thumbnail is flat
+    (standard deviation about 4 grey levels, as the Sintel trailer's cards)."""
+    return (Shape("rect", (120, 120, 120), t_on=t_on, t_off=t_off, xy0=(x, y), size0=(0.2, 0.02)),
+            Shape("rect", (90, 90, 90), t_on=t_on, t_off=t_off, xy0=(x, y + 0.05), size0=(0.15, 0.015)))
+
+
+# Title cards and low-detail pictures, where the cut rule sees little but brightness: a picture that
+# dims (not to black) and cuts to a card, a card cut to black and a picture fading in, a picture cut
+# to a card, a card cut to another card, a card cut to black for the rest of the film.
+CARDS = Scene(12.0, name="cards", shapes=(*text(2.6, 4.6, 0.5, 0.45), *text(7.0, 9.0, 0.3, 0.2),
+                                          *text(9.0, 10.5, 0.65, 0.75)), background=(
+    Segment(0.0, 2.0, (60, 90, 160), texture=tex(1)),
+    Segment(2.0, 2.6, (60, 90, 160), rgb_end=(12, 12, 12), texture=tex(1)),  # dims, cut 2.6 to a card
+    Segment(2.6, 4.6, BLACK),                                                 # the card; black from 4.6
+    Segment(4.6, 5.0, BLACK),
+    Segment(5.0, 5.6, BLACK, rgb_end=(200, 90, 90), texture=tex(4)),          # fade in: middle of the black 4.8
+    Segment(5.6, 7.0, (200, 90, 90), texture=tex(4)),
+    Segment(7.0, 12.0, BLACK),                                                # cards at 7.0 and 9.0, black at 10.5
+))
+CARDS_TRUTH = {26: "cut", 48: "fade", 70: "cut", 90: "cut", 105: "cut"}
+
+
 def matched(found: np.ndarray, truth: list[int], tol: int = 1) -> tuple[int, list[int]]:
     """Greedy one-to-one matching within ``tol`` ticks: (matches, unmatched found ticks)."""
     free = list(truth)
@@ -62,9 +86,9 @@ def matched(found: np.ndarray, truth: list[int], tol: int = 1) -> tuple[int, lis
     return len(truth) - len(free), extra
 
 
-def film_boundaries(tmp_path, fps: float, size: tuple[int, int]) -> shots.Boundaries:
-    path = synth.write_scene(tmp_path / f"shots_{fps}_{size[0]}.mp4", FILM, width=size[0], height=size[1], fps=fps,
-                             audio=False)
+def film_boundaries(tmp_path, fps: float, size: tuple[int, int], film: Scene = FILM) -> shots.Boundaries:
+    path = synth.write_scene(tmp_path / f"{film.name}_{fps}_{size[0]}.mp4", film, width=size[0], height=size[1],
+                             fps=fps, audio=False)
     info = media.probe(path)
     n = n_ticks(info.duration_s)
     v = video_pass(info, n, params=resolve_params()[0], need_saliency=np.zeros(n, bool), need_flow=True,
@@ -91,3 +115,14 @@ def test_boundaries_known_answers(tmp_path, fps, size):
         assert got == [kind], (t, kind, kinds)
     for (s0, s1), t in zip(b.span.tolist(), b.tick.tolist()):
         assert s0 <= t < s1
+
+
+@pytest.mark.parametrize("fps", [24, 25, 30, 60])
+@pytest.mark.parametrize("size", [(160, 90), (320, 180), (640, 360)])
+def test_title_cards_known_answers(tmp_path, fps, size):
+    b = film_boundaries(tmp_path, fps, size, CARDS)
+    hits, extra = matched(b.tick, sorted(CARDS_TRUTH))
+    assert hits == len(CARDS_TRUTH) and not extra, (b.tick.tolist(), extra)
+    kinds = {int(t): shots.KINDS[k] for t, k in zip(b.tick, b.kind)}
+    for t, kind in CARDS_TRUTH.items():
+        assert [kinds[u] for u in (t - 1, t, t + 1) if u in kinds] == [kind], (t, kind, kinds)

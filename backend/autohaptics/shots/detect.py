@@ -4,11 +4,12 @@
 - **Cuts**: in a run of ticks the video pass flagged (``cut``), each tick whose stored signature
   is in another shot than the tick before's by the cut rule (``airflow.cuts``) starts a shot (a
   flag of the flow pair alone is none). Flag runs up to ``flash_ticks`` apart whose outer ticks
-  are in the same shot are a flash (a few bright frames inside a shot): no boundary.
-- **Fades**: a run of flat ticks (thumbnail standard deviation below ``flat_std``) that the
-  picture ramps into or out of over ``min_ramp`` ticks or more, with different shots at the outer
-  ends of the ramps; the boundary is the middle of the flat run, and cut flags on the ramps are
-  part of the fade.
+  are in the same shot are a flash (a few bright frames inside a shot): no boundary. Where the
+  cut rule sees only brightness (a flat tick: a title card, a dim picture), two ticks with some
+  detail whose layouts differ are a cut, and so is a steady picture next to an empty run.
+- **Fades**: a run of flat ticks (thumbnail standard deviation below ``flat_std``; its empty
+  ticks where it has some) that the picture ramps into or out of over ``min_ramp`` ticks or more,
+  with different shots at the ramps' outer ends; the boundary is the run's middle.
 - **Dissolves**: a tick c whose thumbnail, in 3 x 4 blocks, is the mean of those w ticks before
   and after (residual below ``linear_max`` of their difference) where those two are in different
   shots by the cut rule, for at least two w in ``widths``, with no cut or fade between. The boundary is
@@ -36,6 +37,13 @@ _LUMA = np.array([0.299, 0.587, 0.114])
 @dataclass(frozen=True)
 class ShotParams:
     """flat_std : thumbnail standard deviation (grey levels) below which a tick is flat (5).
+    empty_std : the same below which a flat tick is empty (1): a flat run holding empty ticks is a
+        fade through them, its other flat ticks are low-detail pictures (title cards, dim ramps).
+    card_corr : thumbnail correlation up to which two ticks with detail, one of them flat, are
+        different pictures (0.5; the cut rule only weighs the brightness of flat ticks).
+    still_corr, change_corr : a cut between two still shots of one palette: the thumbnails
+        across it correlate <= change_corr (0.6), and each side with its other neighbour >=
+        still_corr (0.9): a change 4x what either shot moves in a tick (action moves on).
     dark_level : mean luma (grey levels) below which a tick is flat without signatures (16).
     min_ramp : ticks of gradual change into or out of a flat run that make it a fade (2).
     max_ramp : longest ramp followed outward from a flat run, ticks (30).
@@ -47,6 +55,10 @@ class ShotParams:
     """
 
     flat_std: float = 5.0
+    empty_std: float = 1.0
+    card_corr: float = 0.5
+    still_corr: float = 0.9
+    change_corr: float = 0.6
     dark_level: float = 16.0
     min_ramp: int = 2
     max_ramp: int = 30
@@ -113,11 +125,16 @@ def _detect(cut: np.ndarray, signature, mean_rgb, params: ShotParams) -> list[tu
     level, flat = _flatness(sigs, valid, mean_rgb, n, params)
     found: list[tuple[float, int, int, int]] = []
     claimed = np.zeros(n, bool)  # rows inside a fade's ramps
-    for s0, s1, pos in _fades(level, flat, cut, sigs, valid, mean_rgb, params):
+    card, step = _low_detail_cuts(sigs, valid, level, mean_rgb, params)
+    for s0, s1, pos in _fades(level, flat, cut, card, sigs, valid, mean_rgb, params):
         found.append((pos, FADE, s0, s1))
         claimed[s0 + 1:s1] = True  # cut flags between the span's rows; one at s0 is a cut into it
-    for k in _cuts(cut & ~claimed, sigs, valid, mean_rgb, params):
+    for k in _cuts((cut | card) & ~claimed, sigs, valid, mean_rgb, params):
         found.append((k - 0.5, CUT, k, k + 1))
+    cut_rows = {s0 for _, kind, s0, _ in found if kind == CUT}
+    for k in np.flatnonzero((step | _still_cuts(sigs, valid, level, params)) & ~claimed).tolist():
+        if not cut_rows & {k - 1, k, k + 1}:
+            found.append((k - 0.5, CUT, k, k + 1))
     busy = claimed.copy()
     for _, kind, s0, _ in found:
         if kind == CUT:
@@ -157,6 +174,8 @@ def _same_shot(i: int, j: int, sigs, valid, mean_rgb, params, *, either: bool = 
     little below 0.5 for the rounding of packed rows; ``either`` as in ``cuts.cut_scores``), else
     their mean colours are within 20 levels."""
     if sigs is not None and valid[i] and valid[j]:
+        if _pictures_differ(sigs[[i, j]], params)[0]:
+            return False
         return float(cuts.cut_scores(sigs[i], sigs[j], params=params.cut_params, either=either)[0]) < 0.45
     if mean_rgb is not None:
         rgb = np.asarray(mean_rgb, np.float64)
@@ -169,25 +188,108 @@ def _ramp(level: np.ndarray, stop: np.ndarray, start: int, step: int, params: Sh
     ramp, where the content stops growing or a cut (``stop[k]``: a cut between k - 1 and k) ends it."""
     j, n = start, level.size
     while 0 <= j + step < n and abs(j + step - start) < params.max_ramp and \
-            level[j + step] > 1.05 * level[j] + 0.5 and not stop[max(j, j + step)]:
+            level[j + step] > 1.05 * level[j] + min(0.5, 0.1 * level[j]) and not stop[max(j, j + step)]:
         j += step
     return j
 
 
-def _fades(level, flat, cut, sigs, valid, mean_rgb, params):
+def _fades(level, flat, cut, card, sigs, valid, mean_rgb, params):
     """(s0, s1, tick) of each fade through a flat picture: the span covers both ramps. A ramp
-    ends at a cut flagged between two ticks with content (the flat rule flags fast fades)."""
+    ends at a cut flagged between two ticks with content (the flat rule flags fast fades) or at
+    a layout change next to a flat tick (``card``)."""
     n = level.size
-    stop = cut & ~flat & ~np.roll(flat, 1)
-    for a, b in _runs(flat):
+    stop = (cut & ~flat & ~np.roll(flat, 1)) | card
+    for a, b in _cores(flat, level < params.empty_std):
         if a == 0 or b == n - 1:
             continue  # the film opens or ends on it: no shot on one side
         left, right = _ramp(level, stop, a - 1, -1, params), _ramp(level, stop, b + 1, 1, params)
         if max(a - left, right - b) < params.min_ramp:
             continue  # cut to a flat shot and back: the cut rule's
+        if min(a - left, right - b) < params.min_ramp and card[a:b + 2].any() and level[a:b + 1].max() >= params.empty_std:
+            continue  # a picture dims (not to black) and cuts to another: the cut's
         if _same_shot(left, right, sigs, valid, mean_rgb, params, either=True):
             continue  # a dip (or a flash) inside one shot
         yield left, right + 1, 0.5 * (a + b)
+
+
+def _cores(flat: np.ndarray, empty: np.ndarray) -> list[tuple[int, int]]:
+    """The runs a fade may pass through: each flat run, or its empty runs where it holds some
+    (the flat ticks around them are then pictures of little detail: a title card, a dim ramp)."""
+    out = []
+    for a, b in _runs(flat):
+        inner = [(a + c, a + d) for c, d in _runs(empty[a:b + 1])]
+        out.extend(inner or [(a, b)])
+    return out
+
+
+def _pictures_differ(pair: np.ndarray, params: ShotParams) -> np.ndarray:
+    """For signature pairs [shape=(m, 2, 192)] (or one pair (2, 192)): both thumbnails have detail
+    (std >= ``empty_std``), at least one is flat and their layouts differ (correlation <=
+    ``card_corr``). The cut rule weighs only the brightness of a flat tick, which a dark card or a
+    dim picture barely moves; bool [shape=(m,)]."""
+    th = cuts.thumbnails(pair.reshape(-1, cuts.PACKED_SIZE)).astype(np.float64)
+    th = th.reshape(-1, 2, th.shape[1])
+    dev = th - th.mean(axis=2, keepdims=True)
+    ss = (dev * dev).sum(axis=2)
+    std = np.sqrt(ss / th.shape[2])
+    corr = (dev[:, 0] * dev[:, 1]).sum(axis=1) / np.sqrt(np.maximum(ss[:, 0] * ss[:, 1], 1e-12))
+    return (std.min(axis=1) >= params.empty_std) & (std.min(axis=1) < params.flat_std) & (corr <= params.card_corr)
+
+
+def _low_detail_cuts(sigs, valid, level, mean_rgb, params) -> tuple[np.ndarray, np.ndarray]:
+    """Cuts the cut rule cannot see, per row k (between k - 1 and k), bool [shape=(n,)] each:
+    ``card``: :func:`_pictures_differ`; ``step``: a steady picture with some detail (std >= 3x
+    ``empty_std``, its other neighbour within 20 %) next to a run of empty ticks whose far side
+    is another shot or the film's end (a cut to or from an empty picture that its brightness does
+    not show; a fade ramps over ticks instead, a flash returns to the same shot)."""
+    n = level.size
+    card, step = np.zeros(n, bool), np.zeros(n, bool)
+    if sigs is None or n < 3:
+        return card, step
+    lo = np.minimum(level[1:], level[:-1])
+    cand = np.flatnonzero(valid[1:] & valid[:-1] & (lo >= params.empty_std) & (lo < params.flat_std)) + 1
+    if cand.size:
+        card[cand] = _pictures_differ(np.stack([sigs[cand - 1], sigs[cand]], axis=1), params)
+    lv = np.where(valid, level, 0.0)
+
+    def steady(k: int, far: int) -> bool:
+        return 0 <= far < n and valid[k] and valid[far] and lv[k] >= 3 * params.empty_std and \
+            abs(lv[k] - lv[far]) <= 0.2 * lv[k]
+
+    for a, b in _runs(valid & (level < params.empty_std)):
+        if 0 < a and b + 1 < n and _same_shot(a - 1, b + 1, sigs, valid, mean_rgb, params):
+            continue  # a flash or a dip inside one shot
+        step[a] = a > 0 and steady(a - 1, a - 2)
+        if b + 1 < n:
+            step[b + 1] = steady(b + 1, b + 2)
+    return card, step
+
+
+def _still_cuts(sigs, valid, level, params) -> np.ndarray:
+    """Per row k, bool [shape=(n,)]: a cut between rows k - 1 and k that the cut rule's colour
+    test misses (two shots of one palette), seen because the layout changes at k alone: rows
+    k - 2, k - 1 and k, k + 1 each correlate >= ``still_corr``, rows k - 1, k and k - 2, k + 1
+    <= ``change_corr``; all four have detail (std >= ``flat_std``)."""
+    n = level.size
+    out = np.zeros(n, bool)
+    if sigs is None or n < 4:
+        return out
+    ok = valid & (level >= params.flat_std)
+    corr1, corr3 = np.ones(n), np.ones(n)  # corr1[k]: rows k - 1, k; corr3[k]: rows k - 2, k + 1
+    for i in range(0, n, _CHUNK):  # unit-norm centred thumbnails in chunks (72,000 rows: 41 MB at once)
+        lo, hi = max(0, i - 2), min(n, i + _CHUNK + 1)
+        th = cuts.thumbnails(sigs[lo:hi]).astype(np.float64)
+        th -= th.mean(axis=1, keepdims=True)
+        th /= np.maximum(np.sqrt((th * th).sum(axis=1, keepdims=True)), 1e-9)
+        k = np.arange(max(i, 1), min(n, i + _CHUNK))
+        corr1[k] = np.einsum("ij,ij->i", th[k - 1 - lo], th[k - lo])
+        k3 = k[(k >= 2) & (k + 1 < hi)]
+        corr3[k3] = np.einsum("ij,ij->i", th[k3 - 2 - lo], th[k3 + 1 - lo])
+    k = np.arange(2, n - 1)
+    hit = ok[k - 2] & ok[k - 1] & ok[k] & ok[k + 1] & (corr1[k] <= params.change_corr) & \
+        (corr3[k] <= params.change_corr) & (corr1[k - 1] >= params.still_corr) & (corr1[k + 1] >= params.still_corr)
+    out[k[hit]] = True
+    return out
 
 
 def _cuts(cut: np.ndarray, sigs, valid, mean_rgb, params):
