@@ -133,7 +133,8 @@ THESIS_RULES: dict[str, Any] = {
     "flow.repeat_wait_s": 0.0,  # the default waits for the next distinct frame (repeats give no motion)
     "airflow.motion_sigma_ticks": 0.0,  # the default judges a tick on its shot's motion around it
     "airflow.near_sigma_ticks": 0.0,  # the default smooths nearness over neighbouring ticks of the shot
-    "airflow.near_share": 0.0,  # the default counts the nearest quarter of each tick's cells as near too
+    "airflow.near_share": 0.0,  # the default counts the nearest 40 % of each tick's cells as near too
+    "airflow.threshold_motion": "judged",  # the default takes the threshold from the motion without one-tick spikes
     "thermal.mapping": "thesis",  # the default maps a warm-cool measure around 33 C into the device range
 }
 

@@ -223,9 +223,12 @@ def test_near_cells_by_hand():
     half = airflow.near_cells(rows, params=airflow.AirflowParams(near_min=0.95, near_share=0.5))
     np.testing.assert_array_equal(half.any(axis=1), np.arange(FAN_ROWS) >= 4)
     assert half.all(axis=1)[4:].all()
-    # the default quarter: rows 8..7 (0 and 17 nearer, < 38.25); row 6 has 34 nearer too
-    quarter = airflow.near_cells(rows, params=airflow.AirflowParams(near_min=0.95))
+    # a quarter (the default before issue 31): rows 8..7 (0 and 17 nearer, < 38.25); row 6 has 34 nearer too
+    quarter = airflow.near_cells(rows, params=airflow.AirflowParams(near_min=0.95, near_share=0.25))
     np.testing.assert_array_equal(quarter.any(axis=1), np.arange(FAN_ROWS) >= 6)
+    # the default 40 %: rows 8..5 (0, 17, 34, 51 nearer, < 61.2); row 4 has 68 nearer
+    default = airflow.near_cells(rows, params=airflow.AirflowParams(near_min=0.95))
+    np.testing.assert_array_equal(default.any(axis=1), np.arange(FAN_ROWS) >= 5)
     # the bar adds what reaches it; without a share the bar alone decides (the thesis)
     bar = airflow.near_cells(rows, params=airflow.AirflowParams(near_min=0.3, near_share=0.5))
     np.testing.assert_array_equal(bar.any(axis=1), rows[:, 0] >= 0.3)
@@ -359,6 +362,50 @@ def test_an_uneven_run_blows_with_smoothed_motion_and_is_lost_without():
         blows[sigma] = fans.reshape(n, -1).max(axis=1) > 0
     assert blows[0.0][50:70].all() and not blows[0.0][10:30].any()
     assert blows[2.0][50:70].all() and blows[2.0][12:28].all()
+
+
+def test_despiked_motion_by_hand():
+    """The median of each tick and its two neighbours in its shot; another shot, a cut tick (which
+    reads 0) and beyond the clip count as still."""
+    m = np.array([0.0, 0.0, 2.0, 0.0, 0.1, 0.1, 0.1, 0.3, 0.1, 0.2, 0.02, 0.2, 0.02, 0.2])
+    out = airflow.despiked_motion(m, np.zeros(m.size, int))
+    np.testing.assert_allclose(out[:4], [0.0, 0.0, 0.0, 0.1])  # a one-tick spike falls to its neighbours' level
+    np.testing.assert_allclose(out[4:9], [0.1, 0.1, 0.1, 0.1, 0.2])
+    np.testing.assert_allclose(out[9:], [0.1, 0.2, 0.02, 0.2, 0.02])  # alternating samples swap: both levels kept
+    shot = np.array([0, 0, -1, 1, 1])
+    np.testing.assert_allclose(airflow.despiked_motion([0.5, 0.5, 9.0, 0.4, 0.4], shot), [0.5, 0.5, 0.0, 0.4, 0.4])
+    np.testing.assert_allclose(airflow.despiked_motion([0.5, 0.4, 0.0, 0.0, 0.0], np.zeros(5, int))[:2], [0.4, 0.4])
+    assert airflow.despiked_motion(np.zeros(0), np.zeros(0, int)).shape == (0,)
+
+
+def test_a_one_tick_spike_does_not_raise_the_threshold():
+    """Known answer: a strong run (0.2 frame widths/s), a weak one (0.08: above 0.3 x the strong run)
+    and one tick of 3.0 in a still stretch (an object popping in: flow reads nonsense there, and how
+    much differs between encodes). Smoothed over the shot first, the spike spreads over 19 ticks and
+    raises the 95th percentile: the weak run is lost. The default takes the threshold from the motion
+    with the spike left out: 0.3 x the strong run, and the weak run blows."""
+    n = 120
+    motion = np.zeros(n)
+    motion[10:30] = 0.2
+    motion[50:70] = 0.08
+    motion[95] = 3.0
+    cut = np.zeros(n, bool)
+    cells = np.zeros((n, FAN_ROWS, FAN_COLS), np.float32)
+    cells[:] = 1.0
+    near = np.ones_like(cells)
+    depth_mask = np.ones(n, bool)
+    got = {}
+    for rule in ("despiked", "judged"):
+        fans, stats = airflow.fan_track(motion, cells, near, cut, depth_mask,
+                                        params=airflow.AirflowParams(threshold_motion=rule))
+        got[rule] = (fans.reshape(n, -1).max(axis=1) > 0, stats["threshold_fw_per_s"])
+    blows, threshold = got["despiked"]
+    assert threshold == pytest.approx(0.3 * 0.2, rel=0.02)
+    assert blows[12:28].all() and blows[52:68].all()
+    blows, threshold = got["judged"]
+    assert threshold > 0.08 and not blows[50:70].any()
+    with pytest.raises(ParameterError, match="threshold_motion"):
+        airflow.AirflowParams(threshold_motion="median")
 
 
 def test_smoothed_cell_motion_over_cells_by_hand():

@@ -227,8 +227,6 @@ def test_resolution_and_frame_rate_invariance(invariance_pair):
     assert np.abs(targets[0][:r["ticks"]] - targets[1][:r["ticks"]]).mean() <= 0.5
 
 
-@pytest.mark.xfail(strict=True, reason="fan IoU 0.829 since the tick rule judges motion smoothed over the shot "
-                   "(airflow.motion_sigma_ticks=3: 13 blowing ticks at 320x180@24, 11 at 1280x720@30; 0.956 with 0)")
 def test_resolution_and_frame_rate_invariance_of_the_fans(invariance_pair):
     r = agreement(*invariance_pair)
     assert r["fan_iou"] >= 0.9

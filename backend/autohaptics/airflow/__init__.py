@@ -8,6 +8,7 @@
 from autohaptics.airflow.fans import (
     AirflowParams,
     cell_motion,
+    despiked_motion,
     fan_levels,
     fan_track,
     grid_means,
@@ -29,7 +30,7 @@ from autohaptics.airflow.flow import (
     optical_flow,
 )
 
-__all__ = ["AirflowParams", "DIS_PRESETS", "FLOW_METHODS", "FlowParams", "cell_motion", "fan_levels", "fan_track",
+__all__ = ["AirflowParams", "DIS_PRESETS", "FLOW_METHODS", "FlowParams", "cell_motion", "despiked_motion", "fan_levels", "fan_track",
            "grid_means", "is_fade", "is_static", "motion_magnitude", "motion_score", "motion_threshold", "near_cells",
            "optical_flow",
            "smoothed_cell_motion", "smoothed_motion", "smoothed_nearness", "sustained_motion"]

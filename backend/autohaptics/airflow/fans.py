@@ -1,9 +1,9 @@
 """The fan rule: which ticks and which of the 9 x 17 cells blow (ALGORITHM.md section 5, steps 2-5).
 
 A tick blows when its sustained motion exceeds the threshold: manual, or adaptive from the clip's
-own motion (``strong_rel`` x the 95th percentile of the ticks that move); the motion judged is
-averaged over the neighbouring ticks of the shot first, so a low-quality encode's uneven motion
-samples neither drop a run nor raise the threshold. In a blowing tick a cell
+own motion (``strong_rel`` x the 95th percentile of the ticks that move, one-tick spikes left out);
+the motion judged is averaged over the neighbouring ticks of the shot first, so a low-quality
+encode's uneven motion samples neither drop a run nor raise the threshold. In a blowing tick a cell
 blows where its motion, smoothed over the shot's neighbouring ticks and cells, reaches
 ``cell_rel`` of the strongest cell AND it is near; a near cell enclosed by blowing cells blows
 too (an object coming at the camera has a still centre). docs/BENCHMARKS.md ("Fans") has the
@@ -25,6 +25,9 @@ from autohaptics.layout import FAN_COLS, FAN_ROWS
 from autohaptics.imaging import finite32
 
 
+THRESHOLD_MOTIONS = ("despiked", "judged")
+
+
 @dataclass(frozen=True)
 class AirflowParams:
     """Which ticks and which cells blow.
@@ -34,23 +37,23 @@ class AirflowParams:
     strong_rel : adaptive threshold = strong_rel x the 95th percentile of the moving ticks' motion (0.3).
     cell_rel : a cell is "strong motion" at this fraction of the tick's strongest cell or more.
     near_min : a cell is "near" at this nearness or more (0..1, 1 = nearest).
-    near_share : the nearest ``near_share`` of a tick's cells are "near" too (0..1, default 0.25;
-        0 = ``near_min`` alone, the thesis; :func:`near_cells`).
-    static_level, static_fraction : a frame pair is static when fewer than ``static_fraction`` of the proxy's
-        pixels changed by more than ``static_level`` grey levels (noise tolerant, yet a small moving object is seen).
+    near_share : the nearest ``near_share`` of a tick's cells are "near" too (0..1, default 0.4;
+        0 = ``near_min`` alone, the thesis; 0.25 before issue 31; :func:`near_cells`).
+    static_level, static_fraction : a pair is static when under ``static_fraction`` of the proxy's pixels
+        changed by more than ``static_level`` grey levels (noise tolerant; a small moving object is seen).
     fill_enclosed : a near cell enclosed by "on" cells blows too (an approaching object's still centre).
     flat_std : a frame whose luma std is below this (grey levels) is flat; two flat frames: no motion (:func:`is_fade`).
     fade_min_step : a pair whose mean brightness moved by at least this (grey levels) and that differs in
         nothing else than a global brightness/contrast change is a fade: no motion (:func:`is_fade`).
-    cell_sigma_ticks : a blowing tick's cells are judged on their motion averaged over the
-        neighbouring ticks of its shot with Gaussian weights of this standard deviation (ticks;
-        default 2, 0 = the tick alone; :func:`smoothed_cell_motion`).
+    cell_sigma_ticks : a blowing tick's cells are judged on their motion averaged over the ticks of its
+        shot around it, Gaussian weights of this std (ticks; 2; 0 = the tick alone; :func:`smoothed_cell_motion`).
     cell_sigma_cells : that motion's blur over neighbouring cells (std in cells; 0.5; 0 = none).
-    near_sigma_ticks : a blowing tick's nearness is the Gaussian-weighted mean (this standard
-        deviation, ticks) over the neighbouring ticks of its shot where depth ran (default 2; 0 = the
-        tick's own, the thesis; :func:`smoothed_nearness`).
+    near_sigma_ticks : a blowing tick's nearness is the Gaussian-weighted mean (this std, ticks) over the ticks
+        of its shot around it where depth ran (default 2; 0 = its own, the thesis; :func:`smoothed_nearness`).
     motion_sigma_ticks : which ticks blow, and the adaptive threshold, judge each tick's motion smoothed as
         the cells' is, with this std (ticks; default 3; 0 = the tick's own, the thesis; :func:`smoothed_motion`).
+    threshold_motion : the adaptive threshold's motion: "despiked" (default: one-tick spikes out first,
+        :func:`despiked_motion`) | "judged" (the sustained judged motion: the thesis, the rule before issue 31).
     """
 
     STAGE: ClassVar[str] = DERIVE
@@ -60,7 +63,7 @@ class AirflowParams:
     strong_rel: float = 0.3
     cell_rel: float = 0.5
     near_min: float = 0.5
-    near_share: float = 0.25
+    near_share: float = 0.4
     static_level: float = field(default=12.0, metadata=stage(ANALYSIS))
     static_fraction: float = field(default=0.002, metadata=stage(ANALYSIS))
     fill_enclosed: bool = True
@@ -70,8 +73,12 @@ class AirflowParams:
     cell_sigma_cells: float = 0.5
     near_sigma_ticks: float = 2.0
     motion_sigma_ticks: float = 3.0
+    threshold_motion: str = "despiked"
 
     def __post_init__(self):
+        if self.threshold_motion not in THRESHOLD_MOTIONS:
+            raise ParameterError(f"airflow.threshold_motion must be one of {THRESHOLD_MOTIONS}, "
+                                 f"got {self.threshold_motion!r}")
         if self.threshold is not None and not (math.isfinite(self.threshold) and self.threshold >= 0):
             raise ParameterError(f"airflow.threshold must be >= 0 (frame widths/s) or None, got {self.threshold!r}")
         if not (0.0 <= float(self.floor) < 100.0):
@@ -205,6 +212,25 @@ def smoothed_motion(motion: np.ndarray, shot: np.ndarray, *, params: AirflowPara
     return smoothed_cell_motion(own, shot, np.arange(m.size), params=one_cell)[:, 0, 0]
 
 
+def despiked_motion(motion: np.ndarray, shot: np.ndarray) -> np.ndarray:
+    """Each tick's motion as the median of itself and its two neighbours, frame widths/s: float64 [shape=(n,)].
+
+    motion, shot : [shape=(n,)] as in :func:`smoothed_motion` (a neighbour of another shot, a cut or
+    beyond the clip counts as still; a cut tick reads 0). A one-tick spike (an object popping in, a
+    flash: flow reads nonsense there, and how much differs between encodes) falls to its
+    neighbours' level before it is smoothed over the shot; an alternating run keeps its level.
+    """
+    shot = np.asarray(shot)
+    m = np.where(shot >= 0, np.nan_to_num(np.asarray(motion, dtype=np.float64)), 0.0)
+    if m.size == 0:
+        return m
+    same_left = np.concatenate([[False], shot[1:] == shot[:-1]])
+    same_right = np.concatenate([shot[:-1] == shot[1:], [False]])
+    left = np.where(same_left, np.concatenate([[0.0], m[:-1]]), 0.0)
+    right = np.where(same_right, np.concatenate([m[1:], [0.0]]), 0.0)
+    return np.median(np.stack([left, m, right]), axis=0)
+
+
 def _gaussian(sigma: float) -> tuple[np.ndarray, np.ndarray]:
     """Offsets -r..r (r = ceil(3 sigma), 0 for sigma <= 0) and their Gaussian weights, summing to 1."""
     r = int(math.ceil(3.0 * sigma)) if sigma > 0 else 0
@@ -322,7 +348,9 @@ def fan_track(motion: np.ndarray, cell_motion_: np.ndarray, nearness: np.ndarray
     judged = smoothed_motion(motion, shot, params=params) if params.motion_sigma_ticks > 0 \
         else np.where(valid, motion, 0.0)
     sustained = sustained_motion(judged)
-    threshold = motion_threshold(sustained[valid], params=params)
+    basis = sustained if params.threshold_motion == "judged" else \
+        smoothed_motion(despiked_motion(motion, shot), shot, params=params)
+    threshold = motion_threshold(basis[valid], params=params)
     on = valid & (sustained > threshold) & depth_mask
     fans = np.zeros((n,) + cell_motion_.shape[1:], np.float32) if out is None else out
     ticks = np.flatnonzero(on)
