@@ -2,10 +2,15 @@
 flat grey frame of its own level (30 + 3 x tick): the tile geometry (the active picture's aspect at
 45 px, 16 frames a tile, the last tile narrower), each frame the picture of its tick, 404s with one
 sentence, immutable caching headers, the pictures made ahead after the generate, the cache bound
-evicting the oldest files, and the project's removal removing them."""
+evicting the oldest files, and the project's removal removing them. The pictures made ahead come
+from a separate nice-19 process: never this process's picture maker, no folder left after a removal
+during the work, the process restarted after it dies and gone once the server stops."""
 
 from __future__ import annotations
 
+import logging
+import os
+import signal
 import time
 from pathlib import Path
 
@@ -13,6 +18,7 @@ import cv2
 import numpy as np
 import pytest
 
+from autohaptics.server import posters
 from autohaptics.server.app import create_app
 from autohaptics.server.settings import Settings
 from autohaptics.testing import Scene, Segment, write_scene
@@ -194,3 +200,76 @@ def test_a_busy_server_makes_nothing_ahead_until_it_is_free(served, tmp_path_fac
         assert len(list((folder / "filmstrip").glob("*.jpg"))) == 5 + 3 + 2 + 1
     finally:
         maker.close()
+
+
+def first_picture(folder: Path, timeout_s: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not list(folder.glob("*/*.jpg")):
+        assert time.monotonic() < deadline, "no picture was made ahead"
+        time.sleep(0.02)
+
+
+def alive(pid: int) -> bool:
+    return Path(f"/proc/{pid}").exists()
+
+
+def test_the_pictures_ahead_come_from_a_nice_process_that_stops_with_the_server(tmp_path_factory, film,
+                                                                                 monkeypatch):
+    made_here = []
+    own = posters.picture_jpeg
+    monkeypatch.setattr(posters, "picture_jpeg", lambda *a, **k: made_here.append(a[1]) or own(*a, **k))
+    client, data = make_client(tmp_path_factory)
+    with client:
+        pictures = client.app.state.pictures
+        assert pictures.maker.pid is None  # started on the first picture
+        pid = new_project(client, film)
+        child = pictures.maker.pid
+        assert child is not None and child != os.getpid() and alive(child)
+        assert os.getpriority(os.PRIO_PROCESS, child) == 19
+        folder = data / "projects" / pid
+        assert len(list((folder / "filmstrip").glob("*.jpg"))) == 5 + 3 + 2 + 1
+        assert list((folder / "posters").glob("*.jpg"))
+        assert made_here == []  # every one of them made by the other process
+        (folder / "filmstrip" / "2-1.jpg").unlink()
+        assert client.get(f"/api/projects/{pid}/filmstrip/2/1.jpg").status_code == 200
+        assert made_here == [[32, 34, 36, 38, 40, 42, 44, 46, 48, 50, 52, 54, 56, 58, 60, 62]]  # on demand: here
+        assert list(folder.glob("*/*.tmp")) == []
+    assert not alive(child) and pictures.maker.pid is None
+
+
+def test_removing_a_project_while_its_pictures_are_made_ahead_leaves_no_folder(tmp_path_factory, film):
+    client, data = make_client(tmp_path_factory)
+    with client:
+        pictures = client.app.state.pictures
+        pictures.maker.pause_s = 0.3  # each picture waits before it is written
+        r = client.post("/api/projects", files={"file": ("ticks.mp4", film.read_bytes(), "video/mp4")})
+        pid, folder = r.json()["id"], data / "projects" / r.json()["id"]
+        assert client.finished_job(r.json()["job"]["id"])["status"] == "done"
+        first_picture(folder)
+        child = pictures.maker.pid
+        assert client.delete(f"/api/projects/{pid}").status_code == 204
+        assert not folder.exists()
+        time.sleep(1.0)  # longer than a picture's wait: nothing arrives late
+        assert pictures.wait_idle(10) and not folder.exists()
+        assert pictures.maker.pid == child and alive(child)  # the picture was cancelled, the process kept
+
+
+def test_a_picture_process_that_dies_is_logged_and_started_again(tmp_path_factory, film, caplog):
+    client, data = make_client(tmp_path_factory)
+    with client, caplog.at_level(logging.WARNING, logger="autohaptics.server.pictures"):
+        pictures = client.app.state.pictures
+        pictures.maker.pause_s = 0.3
+        r = client.post("/api/projects", files={"file": ("ticks.mp4", film.read_bytes(), "video/mp4")})
+        pid, folder = r.json()["id"], data / "projects" / r.json()["id"]
+        assert client.finished_job(r.json()["job"]["id"])["status"] == "done"
+        first_picture(folder)
+        child = pictures.maker.pid
+        os.kill(child, signal.SIGKILL)
+        assert pictures.wait_idle(30)
+        assert "pictures not made ahead (the picture process stopped" in caplog.text
+        assert len(list((folder / "filmstrip").glob("*.jpg"))) < 5 + 3 + 2 + 1  # that work was dropped
+        assert client.get(f"/api/projects/{pid}/shots").status_code == 200  # the server answers, asks again
+        pictures.maker.pause_s = 0.0
+        assert pictures.wait_idle(60)
+        assert pictures.maker.pid not in (None, child)
+        assert len(list((folder / "filmstrip").glob("*.jpg"))) == 5 + 3 + 2 + 1

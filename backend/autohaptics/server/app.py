@@ -71,7 +71,7 @@ async def _services(app: FastAPI, settings: Settings):
     interrupted = store.recover()
     composer = Composer(store)
     pictures = Pictures(store, composer, bound_bytes=settings.picture_cache_bytes,
-                        busy=lambda: bool(store.active_jobs()))
+                        busy=lambda: bool(store.active_jobs()), mp_context=settings.mp_context)
     composer.on_warm = pictures.ahead  # after a job, and the project opened at start-up
     recent = store.last_worked_on()
     if recent is not None:

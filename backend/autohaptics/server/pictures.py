@@ -1,15 +1,17 @@
 """A project's pictures on disk: shot posters (``posters/<tick>.jpg``) and filmstrip tiles
-(``filmstrip/<step>-<tile>.jpg``), made on demand (:meth:`Pictures.poster`, :meth:`Pictures.tile`)
-and ahead by one background thread, bounded per project (oldest files evicted), gone with the project.
+(``filmstrip/<step>-<tile>.jpg``), made on demand in the server (:meth:`Pictures.poster`, :meth:`Pictures.tile`: a request's worker
+thread, at once) and ahead in a separate low-priority process (:mod:`.ahead`), bounded per project
+(oldest files evicted, the ahead files counted too), gone with the project.
 
 Filmstrip: frames ``FRAME_H`` px high at the active picture's aspect, ``PER_TILE`` to a tile side by
 side; frame k of tile i at step s is the picture at tick (PER_TILE i + k) s; steps 1, 2, 4, ... up to
 the first power of two >= n_ticks / PER_TILE (the whole film in one tile).
 
 Ahead (:meth:`Pictures.ahead`: after a job, when a timeline is opened): the shots' similarity
-features, the filmstrip steps of at most ``AHEAD_FRAMES`` frames, coarsest first, then every shot's poster. The thread runs at the lowest CPU
-priority, waits while any generation job is queued or running, and stops between two pictures when
-the server stops or the project goes (:meth:`Pictures.forget`).
+features, the filmstrip steps of at most ``AHEAD_FRAMES`` frames, coarsest first, then every
+shot's poster. A server thread plans them and hands the process one picture at a time: it waits
+while any generation job is queued or running, and stops (the picture in progress left unmade)
+when the server stops or the project goes (:meth:`Pictures.forget`).
 """
 
 from __future__ import annotations
@@ -21,9 +23,8 @@ from collections import deque
 from collections.abc import Callable
 from pathlib import Path
 
-import numpy as np
-
 from autohaptics.server import posters
+from autohaptics.server.ahead import AheadMaker, MakerGone
 from autohaptics.server.shots import features_of, poster_ticks
 from autohaptics.server.store import NotFound
 
@@ -47,6 +48,11 @@ def n_tiles(n_ticks: int, step: int) -> int:
     return -(-int(n_ticks) // (PER_TILE * int(step)))
 
 
+def frame_width(film: posters.Film) -> int:
+    """A filmstrip frame's width (px): ``FRAME_H`` high at the active picture's aspect."""
+    return max(2, round(FRAME_H * film.aspect))
+
+
 def tile_ticks(n_ticks: int, step: int, tile: int) -> list[int]:
     """The ticks of a tile's frames (fewer than ``PER_TILE`` in the film's last tile)."""
     first = PER_TILE * tile * step
@@ -56,8 +62,10 @@ def tile_ticks(n_ticks: int, step: int, tile: int) -> list[int]:
 class Pictures:
     """The picture files of every project under ``store``; ``busy()`` says when to wait (a job runs)."""
 
-    def __init__(self, store, composer, *, bound_bytes: int, busy: Callable[[], bool]):
+    def __init__(self, store, composer, *, bound_bytes: int, busy: Callable[[], bool],
+                 mp_context: str = "spawn"):
         self.store, self.composer, self.bound, self.busy = store, composer, int(bound_bytes), busy
+        self.maker = AheadMaker(mp_context)  # the process started on the first picture made ahead
         self._lock = threading.Condition()
         self._files: dict[Path, threading.Lock] = {}
         self._used: dict[str, int] = {}  # bytes on disk per project, counted from a scan
@@ -90,7 +98,7 @@ class Pictures:
     def geometry(self, pid: str) -> dict:
         """``{frame_w, frame_h, per_tile, steps}`` of the project's filmstrip."""
         n = self.n_ticks(pid)
-        return {"frame_w": max(2, round(FRAME_H * self.film(pid).aspect)), "frame_h": FRAME_H,
+        return {"frame_w": frame_width(self.film(pid)), "frame_h": FRAME_H,
                 "per_tile": PER_TILE, "steps": steps(n)}
 
     def poster(self, pid: str, tick: int, *, cancel: Callable[[], bool] = lambda: False) -> bytes:
@@ -98,8 +106,9 @@ class Pictures:
         n = self.n_ticks(pid)
         if not 0 <= tick < n:
             raise NotFound(f"tick {tick} is not in this film's timeline (0..{n - 1})")
+        film = self.film(pid)
         return self._file(pid, "posters", f"{tick}.jpg",
-                          lambda: posters.poster_jpeg(self.film(pid), tick, cancel=cancel))
+                          lambda: posters.picture_jpeg(film, [tick], posters.poster_size(film), cancel=cancel))
 
     def tile(self, pid: str, step: int, tile: int, *, cancel: Callable[[], bool] = lambda: False) -> bytes:
         """The filmstrip tile JPEG (NotFound for a step not in the list or a tile past the end)."""
@@ -110,11 +119,8 @@ class Pictures:
         if not 0 <= tile < n_tiles(n, step):
             raise NotFound(f"tile {tile} is not in this filmstrip at step {step} (0..{n_tiles(n, step) - 1})")
 
-        def make() -> bytes:
-            frames = posters.frames_at(self.film(pid), tile_ticks(n, step, tile), (geo["frame_w"], FRAME_H),
-                                       cancel=cancel)
-            return posters.jpeg(np.hstack(frames))
-        return self._file(pid, "filmstrip", f"{step}-{tile}.jpg", make)
+        return self._file(pid, "filmstrip", f"{step}-{tile}.jpg", lambda: posters.picture_jpeg(
+            self.film(pid), tile_ticks(n, step, tile), (geo["frame_w"], FRAME_H), cancel=cancel))
 
     def _file(self, pid: str, folder: str, name: str, make: Callable[[], bytes]) -> bytes:
         """The bytes of a picture file, made (once, by one maker) when it is not on disk."""
@@ -134,16 +140,15 @@ class Pictures:
         return data
 
     def _write(self, pid: str, path: Path, data: bytes) -> None:
-        try:
-            path.parent.mkdir(exist_ok=True)  # not its parents: a removed project stays removed
-            tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
-            tmp.write_bytes(data)
-            tmp.replace(path)
-        except FileNotFoundError:
-            raise NotFound(f"project {pid} was removed") from None
+        if not posters.write(path, data):
+            raise NotFound(f"project {pid} was removed")
+        self._count(pid, len(data))
+
+    def _count(self, pid: str, size: int) -> None:
+        """Count a new picture file of ``size`` bytes; trim the project's files past the bound."""
         with self._lock:
             used = self._used.get(pid)
-            self._used[pid] = (used if used is not None else 0) + len(data)
+            self._used[pid] = (used if used is not None else 0) + size
             over = used is None or self._used[pid] > self.bound
         if over:
             self._trim(pid)
@@ -189,13 +194,19 @@ class Pictures:
                 self._lock.notify_all()
 
     def forget(self, pid: str) -> None:
-        """Stop making the project's pictures and wait until none is being made (before its folder goes)."""
+        """Stop making the project's pictures and wait until none is being made (before its folder
+        goes): the picture in progress is left unmade, or its process killed after 10 s."""
         with self._lock:
             self._cancelled.add(pid)
             if pid in self._queue:
                 self._queue.remove(pid)
+            if self._current == pid:
+                self.maker.cancel()
             self._lock.notify_all()
-            self._lock.wait_for(lambda: self._current != pid, timeout=30.0)
+            if not self._lock.wait_for(lambda: self._current != pid, timeout=10.0):
+                log.warning("project %s: the picture process did not stop in 10 s; killed", pid)
+                self.maker.kill()
+                self._lock.wait_for(lambda: self._current != pid, timeout=10.0)
             for table in (self._used, self._films, self._planned):
                 table.pop(pid, None)
 
@@ -205,16 +216,15 @@ class Pictures:
             return self._lock.wait_for(lambda: not self._queue and self._current is None, timeout=timeout_s)
 
     def close(self) -> None:
+        """Stop making pictures ahead and stop the picture process."""
         with self._lock:
             self._stop = True
+            self.maker.cancel()
             self._lock.notify_all()
-        self._thread.join(timeout=10.0)
+        self._thread.join(timeout=15.0)
+        self.maker.close()
 
     def _run(self) -> None:
-        try:  # this thread (and the decoder threads it starts) at the lowest CPU priority
-            os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), 19)
-        except (AttributeError, OSError):
-            pass
         while True:
             with self._lock:
                 self._lock.wait_for(lambda: self._stop or self._queue)
@@ -223,8 +233,8 @@ class Pictures:
                 pid = self._current = self._queue.popleft()
             try:
                 self._make_ahead(pid)
-            except posters.Cancelled:
-                pass
+            except MakerGone as exc:  # started again for the next project that asks
+                log.warning("project %s: pictures not made ahead (%s)", pid, exc)
             except Exception as exc:  # a request for the same picture reports it
                 log.info("project %s: pictures not made ahead (%s)", pid, exc)
             finally:
@@ -245,18 +255,27 @@ class Pictures:
         if analysis is not None:
             features_of(pid, analysis, composed)  # a shot's similar shots then answer at once
         n = composed.timeline.n_ticks
-        work = [(self.tile, (s, t)) for s in reversed(steps(n)) if -(-n // s) <= AHEAD_FRAMES
-                for t in range(n_tiles(n, s))]
+        film, folder = self.film(pid), self.store.project_dir(pid)
+        frame = (frame_width(film), FRAME_H)
+        work = [(folder / "filmstrip" / f"{s}-{t}.jpg", tile_ticks(n, s, t), frame)
+                for s in reversed(steps(n)) if -(-n // s) <= AHEAD_FRAMES for t in range(n_tiles(n, s))]
         if analysis is not None:
-            work += [(self.poster, (tick,)) for tick in poster_ticks(analysis, composed)]
-        cancel = lambda: self._stopped(pid)  # noqa: E731
-        for make, args in work:
-            while self.busy() and not cancel():
+            size = posters.poster_size(film)
+            work += [(folder / "posters" / f"{tick}.jpg", [tick], size) for tick in poster_ticks(analysis, composed)]
+        for path, ticks, size in work:
+            while self.busy() and not self._stopped(pid):
                 with self._lock:
-                    self._lock.wait_for(lambda: self._stop or pid in self._cancelled, timeout=0.5)
-            if cancel():
+                    self._lock.wait_for(lambda: self._stopped(pid), timeout=0.5)
+            with self._lock:
+                if self._stopped(pid):
+                    return
+                self.maker.arm()  # under the lock: a forget() now cancels this picture
+            if path.exists():
+                continue
+            made = self.maker.make(path, film, ticks, size)
+            if made is None:  # cancelled, or the project's folder is gone
                 return
-            make(pid, *args, cancel=cancel)
+            self._count(pid, made)
         with self._lock:
             self._planned[pid] = state
 

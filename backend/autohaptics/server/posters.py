@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -107,7 +109,25 @@ def jpeg(rgb: np.ndarray) -> bytes:
     return buf.tobytes()
 
 
-def poster_jpeg(source: Film, tick: int, *, cancel: Callable[[], bool] = lambda: False) -> bytes:
-    """The poster of ``tick``: ``WIDTH`` px wide at the active picture's aspect."""
-    size = (WIDTH, max(2, round(WIDTH / source.aspect)))
-    return jpeg(frames_at(source, [tick], size, cancel=cancel)[0])
+def poster_size(source: Film) -> tuple[int, int]:
+    """A poster's size (w, h px): ``WIDTH`` wide at the active picture's aspect."""
+    return WIDTH, max(2, round(WIDTH / source.aspect))
+
+
+def picture_jpeg(source: Film, ticks: Sequence[int], size: tuple[int, int], *,
+                 cancel: Callable[[], bool] = lambda: False) -> bytes:
+    """JPEG of the frames of ``ticks`` at ``size`` side by side: a poster (one tick) or a filmstrip tile."""
+    return jpeg(np.hstack(frames_at(source, ticks, size, cancel=cancel)))
+
+
+def write(path: Path, data: bytes) -> bool:
+    """Write a picture file atomically (a temporary file, then a rename); its folder is made, but
+    not the project's folder above it: False (nothing written) once the project is gone."""
+    tmp = path.with_name(f"{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")
+    try:
+        path.parent.mkdir(exist_ok=True)
+        tmp.write_bytes(data)
+        tmp.replace(path)
+    except FileNotFoundError:
+        return False
+    return True
