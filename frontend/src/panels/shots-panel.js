@@ -37,6 +37,8 @@ export class ShotsPanel {
     this.filter = "all";
     /** @type {{key: string, shots: import("../data/shot-list.js").Shot[]}|null} */
     this._arranged = null;
+    /** position of the keyboard's active row in the panel's order */
+    this.active = 0;
     /** @type {((open: boolean) => void)|null} the editor shows or hides the column */
     this.onToggle = null;
   }
@@ -57,28 +59,37 @@ export class ShotsPanel {
       "aria-label": "Similarity: the shots at least this similar are picked", "data-testid": "shots-similar-slider",
       oninput: () => this.actions.previewSimilar(1 - this.slider.valueAsNumber / 100) });
     this.similarText = h("span", { class: "shots-similar-text", "data-testid": "shots-similar-count", "aria-live": "polite" });
-    this.similarBox = h("div", { class: "shots-similar", hidden: true, "data-testid": "shots-similar" },
-      h("div", { class: "shots-similar-title", "data-testid": "shots-similar-title" }),
-      h("label", { class: "shots-similar-row" }, "Similarity", this.slider),
-      h("div", { class: "shots-similar-row" }, this.similarText,
-        h("button", { class: "btn btn-small btn-primary", type: "button", "data-testid": "shots-similar-apply", onclick: () => this.actions.applySimilar() }, "Select them"),
-        h("button", { class: "btn btn-small", type: "button", "data-testid": "shots-similar-cancel", onclick: () => this.actions.closeSimilar() }, "Cancel")));
+    this.similarBox = h("div", { class: "shots-similar", hidden: true, role: "group", "aria-label": "Shots like this", "data-testid": "shots-similar" },
+      h("div", { class: "shots-similar-row" }, h("span", { class: "shots-similar-title", "data-testid": "shots-similar-title" }), this.similarText),
+      h("div", { class: "shots-similar-row" }, this.slider,
+        h("button", { class: "btn btn-small btn-primary", type: "button", "data-testid": "shots-similar-apply", title: "Select them and the chosen shot", onclick: () => this._closing(() => this.actions.applySimilar(), this.listEl) }, "Select"),
+        h("button", { class: "btn btn-small", type: "button", "data-testid": "shots-similar-cancel", "aria-label": "Cancel", title: "Cancel (Escape): nothing changes", onclick: () => this._closing(() => this.actions.closeSimilar(), this.likeBtn) }, "✕")));
     this.spacer = h("div", { class: "shots-spacer" });
     this.rowsEl = h("div", { class: "shots-rows" });
-    this.listEl = h("div", { class: "shots-list", tabindex: "0", role: "list", "aria-label": "Shots", "data-testid": "shots-list" }, this.spacer, this.rowsEl);
+    this.listEl = h("div", { class: "shots-list", tabindex: "0", role: "listbox", "aria-multiselectable": "true",
+      "aria-label": "Shots: arrows move, Enter or Space jumps there and selects it, Shift adds it", "data-testid": "shots-list" }, this.spacer, this.rowsEl);
     this.listEl.addEventListener("scroll", () => this._renderRows());
     this.listEl.addEventListener("click", (e) => {
       const row = /** @type {HTMLElement|null} */ (/** @type {HTMLElement} */ (e.target).closest(".shot-row"));
       const list = this.actions.list;
       const shot = row && list ? list.get(Number(row.dataset.id)) : null;
-      if (shot) this.actions.jump(shot, e.shiftKey);
+      if (!shot) return;
+      this.active = this._shots().indexOf(shot);
+      this.actions.jump(shot, e.shiftKey);
     });
+    this.listEl.addEventListener("keydown", (e) => this._key(e));
+    this.listEl.addEventListener("focus", () => this._activate(this.active));
     this.el = h("section", { class: "panel shots-panel", hidden: true, "aria-label": "Shots", "data-testid": "shots-panel" },
-      h("div", { class: "shots-head" }, h("h2", { class: "panel-title" }, "Shots"), this.countEl),
+      h("div", { class: "shots-head" }, h("h2", { class: "panel-title" }, "Shots"), this.countEl, this.likeBtn),
       h("div", { class: "shots-controls" }, this.sortEl, this.filterEl),
-      h("div", { class: "shots-controls" }, this.likeBtn),
       this.similarBox,
       this.listEl);
+    this.el.addEventListener("keydown", (e) => {
+      if (e.key !== "Escape" || !this.actions.similar) return;
+      e.preventDefault();
+      e.stopPropagation(); // Escape closes the box and keeps the selection (the chair's STOP listens before this)
+      this._closing(() => this.actions.closeSimilar(), this.likeBtn);
+    });
     new ResizeObserver(() => this._renderRows()).observe(this.listEl);
     return this.el;
   }
@@ -112,15 +123,64 @@ export class ShotsPanel {
     this.likeBtn.disabled = !this.actions.selectedShot();
     this.similarBox.hidden = !similar;
     if (similar) {
-      const title = /** @type {HTMLElement} */ (this.similarBox.firstElementChild);
-      title.textContent = `Shots like the one at ${formatTime(similar.shot.t0 * this.actions.page.tickS)}`;
+      const title = /** @type {HTMLElement} */ (this.similarBox.querySelector(".shots-similar-title"));
+      title.textContent = `Like ${formatTime(similar.shot.t0 * this.actions.page.tickS)}:`;
       this.slider.value = String(Math.round((1 - similar.maxDistance) * 100));
       const n = similar.ids.size;
       this.similarText.textContent = `picks ${n} shot${n === 1 ? "" : "s"} (+ this one)`;
     }
     this.spacer.style.height = `${shots.length * ROW_PX}px`;
-    if (reorder) this.listEl.scrollTop = 0;
+    if (reorder) {
+      this.listEl.scrollTop = 0;
+      this.active = 0;
+    }
     this._renderRows();
+  }
+
+  /** Run `close` (the similar box closes), then focus `next` if the focus was in the box. @param {() => void} close @param {HTMLElement} next */
+  _closing(close, next) {
+    const inBox = this.similarBox.contains(document.activeElement);
+    close();
+    if (inBox) next.focus();
+  }
+
+  /** The list's keys: arrows, Home / End, Page Up / Down move; Enter or Space jumps (Shift: adds). @param {KeyboardEvent} e */
+  _key(e) {
+    const shots = this._shots();
+    if (!shots.length || e.ctrlKey || e.metaKey || e.altKey) return;
+    const page = Math.max(1, Math.floor(this.listEl.clientHeight / ROW_PX) - 1);
+    const moves = /** @type {Record<string, number>} */ ({ ArrowDown: 1, ArrowUp: -1, PageDown: page, PageUp: -page });
+    if (e.key in moves) this._activate(this.active + moves[e.key]);
+    else if (e.key === "Home") this._activate(0);
+    else if (e.key === "End") this._activate(shots.length - 1);
+    else if (e.key === "Enter" || e.key === " ") this.actions.jump(shots[Math.min(this.active, shots.length - 1)], e.shiftKey);
+    else return;
+    e.preventDefault();
+    e.stopPropagation(); // the editor's keys (Space plays, arrows and Home / End seek) stay out of the list
+  }
+
+  /** Make row `i` the active one and scroll it into view. @param {number} i */
+  _activate(i) {
+    const n = this._shots().length;
+    this.active = Math.max(0, Math.min(n - 1, i));
+    const top = this.active * ROW_PX;
+    const before = this.listEl.scrollTop;
+    if (top < before) this.listEl.scrollTop = top;
+    else if (top + ROW_PX > before + this.listEl.clientHeight) this.listEl.scrollTop = top + ROW_PX - this.listEl.clientHeight;
+    if (this.listEl.scrollTop !== before) this._renderRows();
+    else this._markActive(); // rows kept: a click whose press focused the list still lands on its row
+  }
+
+  /** Mark the active row among those drawn, and name it as the list's active descendant. */
+  _markActive() {
+    const shots = this._shots();
+    const id = this.active < shots.length ? String(shots[this.active].id) : null;
+    for (const row of /** @type {NodeListOf<HTMLElement>} */ (this.rowsEl.querySelectorAll(".shot-row"))) {
+      if (row.dataset.id === id) row.dataset.active = "true";
+      else delete row.dataset.active;
+    }
+    if (id === null) this.listEl.removeAttribute("aria-activedescendant");
+    else this.listEl.setAttribute("aria-activedescendant", `shot-row-${id}`);
   }
 
   /** The shots in the panel's order (kept until the list, order or filter change). */
@@ -147,6 +207,7 @@ export class ShotsPanel {
     const rows = [];
     for (let i = first; i < last; i++) rows.push(this._row(shots[i], i, selected.has(shots[i].id), preview.has(shots[i].id)));
     this.rowsEl.replaceChildren(...rows);
+    this._markActive();
     if (!shots.length) this.rowsEl.append(h("p", { class: "shots-empty" }, this.actions.status || "No shot matches."));
   }
 
@@ -160,7 +221,7 @@ export class ShotsPanel {
     const num = (/** @type {number|null} */ v, /** @type {number} */ d) => (v === null ? "–" : v.toFixed(d));
     const img = h("img", { class: "shot-poster", src: s.poster_url, alt: "", loading: "lazy", decoding: "async", width: 64, height: 36 });
     img.style.background = s.colour || "#1c2230";
-    const row = h("div", { class: "shot-row", role: "listitem", "data-testid": "shot-row", "data-id": String(s.id),
+    const row = h("div", { class: "shot-row", role: "option", id: `shot-row-${s.id}`, "data-testid": "shot-row", "data-id": String(s.id),
       "aria-selected": String(selected), title: `Shot ${formatTime(s.t0 * tickS)} (${s.kind}): click to jump and select it, Shift-click to add it` },
       img,
       h("div", { class: "shot-text" },

@@ -1,6 +1,8 @@
 /**
  * The editing toolbar: tools, the lanes an edit applies to, and one button per operation. It
- * holds no state of its own; the editor calls `update()` with what is selected.
+ * holds no state of its own; the editor calls `update()` with what is selected. The markers'
+ * buttons, the temperature points' Apply / Discard and the selection's description (`markersEl`,
+ * `pointsGroup`, `info`) go at the end of the transport bar, so the toolbar keeps to one line at 1366 px.
  */
 
 import { h } from "../core/dom.js";
@@ -40,7 +42,7 @@ export class EditToolbar {
     this.tools = {
       select: btn("Select", "tool-select", () => actions.tool("select"), "Select ranges (drag on lanes)"),
       pencil: btn("Pencil", "tool-pencil", () => actions.tool("pencil"), "Draw values on the Detail or Temperature lane"),
-      points: btn("Temp points", "tool-points", () => actions.tool("points"), "Place temperature breakpoints on the Temperature lane"),
+      points: btn("Points", "tool-points", () => actions.tool("points"), "Temperature points: place breakpoints on the Temperature lane"),
     };
     const toolGroup = h("div", { class: "btn-group", role: "group", "aria-label": "Tool" }, ...Object.values(this.tools));
 
@@ -71,6 +73,8 @@ export class EditToolbar {
     this.splitBtn = btn("Split", "shot-split", () => actions.splitShot(), "Split the shot at the playhead (S)");
     this.mergeBtn = btn("Merge", "shot-merge", () => actions.mergeShot(), "Merge the shot at the playhead with the next (M)");
     this.info = h("span", { class: "selection-info", "data-testid": "selection-info", "aria-live": "polite" });
+    this.markersEl = h("div", { class: "btn-group", role: "group", "aria-label": "Markers" }, this.markerAdd, this.markerRename, this.markerDelete);
+    this.editLanes = editLanes;
 
     this.el = h(
       "div",
@@ -81,10 +85,7 @@ export class EditToolbar {
       h("div", { class: "btn-group" }, this.factor, this.scaleBtn),
       h("div", { class: "btn-group" }, this.clearBtn, this.fadeInBtn, this.fadeOutBtn),
       h("div", { class: "btn-group" }, this.copyBtn, this.pasteBtn),
-      this.pointsGroup,
-      h("div", { class: "btn-group", role: "group", "aria-label": "Markers" }, this.markerAdd, this.markerRename, this.markerDelete),
       h("div", { class: "btn-group", role: "group", "aria-label": "Shots" }, this.splitBtn, this.mergeBtn),
-      this.info,
     );
   }
 
@@ -104,6 +105,7 @@ export class EditToolbar {
     this.value.setAttribute("aria-label", s.lanes.length === 1 && s.lanes[0] === "temperature" ? "Temperature to set, °C" : "Value to set, 0..1");
     this.pasteBtn.disabled = !s.canPaste || !s.ready;
     const ranges = s.selection && s.selection.ranges ? s.selection.ranges : null;
+    this.copyBtn.title = ranges && ranges.length > 1 ? "Copy takes one shot: select one (Ctrl+C)" : "Copy the selection (Ctrl+C)";
     this.pasteBtn.title = ranges ? `Paste onto the ${ranges.length} selected shot(s), fitted to each (Ctrl+V)` : "Paste at the playhead (Ctrl+V)";
     this.splitBtn.disabled = this.mergeBtn.disabled = !s.shots || !s.ready;
     this.pointsGroup.hidden = s.tool !== "points";
@@ -112,15 +114,36 @@ export class EditToolbar {
     this.markerAdd.disabled = !s.ready;
     this.markerRename.disabled = !s.markerSelected;
     this.markerDelete.disabled = !s.markerSelected;
+    const lanes = lanesText(s.lanes, this.editLanes);
     if (ranges) {
       const ticks = ranges.reduce((n, [a, b]) => n + b - a, 0);
-      this.info.textContent = `${ranges.length} shot${ranges.length === 1 ? "" : "s"} from ${formatTime(s.selection.t0 * s.tickS)} (${ticks} ticks) on ${s.lanes.join(", ")}`;
+      this.info.textContent = `${ranges.length} shot${ranges.length === 1 ? "" : "s"} from ${formatTime(s.selection.t0 * s.tickS)} (${ticks} ticks) on ${lanes}`;
     } else if (s.selection) {
       const { t0, t1 } = s.selection;
       const region = s.cells && s.lanes.includes("fans") ? ` (${s.cells} fans picked on the grid)` : "";
-      this.info.textContent = `${formatTime(t0 * s.tickS)} – ${formatTime(t1 * s.tickS)} (${t1 - t0} ticks) on ${s.lanes.join(", ")}${region}`;
+      this.info.textContent = `${formatTime(t0 * s.tickS)} – ${formatTime(t1 * s.tickS)} (${t1 - t0} ticks) on ${lanes}${region}`;
     } else {
       this.info.textContent = s.tool === "points" ? "Click the Temperature lane to place points" : "Drag on the lanes to select a range";
     }
+    this.info.title = this.info.textContent;
   }
+}
+
+/**
+ * The lanes as the toolbar names them, runs of three or more neighbouring chips as "first–last"
+ * ("A1–A9, Temp"). @param {string[]} lanes @param {string[]} order the chips' order
+ */
+export function lanesText(lanes, order) {
+  const on = new Set(lanes);
+  const parts = [];
+  for (let i = 0; i < order.length; i++) {
+    if (!on.has(order[i])) continue;
+    let j = i;
+    while (j + 1 < order.length && on.has(order[j + 1])) j++;
+    const name = (/** @type {number} */ k) => LANE_TEXT[order[k]] || order[k];
+    if (j - i >= 2) parts.push(`${name(i)}–${name(j)}`);
+    else for (let k = i; k <= j; k++) parts.push(name(k));
+    i = j;
+  }
+  return parts.join(", ") + lanes.filter((l) => !order.includes(l)).map((l) => `, ${l}`).join("");
 }

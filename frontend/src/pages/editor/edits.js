@@ -159,6 +159,11 @@ export class EditActions {
     const { timeline, data, api, projectId } = this.page;
     const sel = timeline.selection;
     if (!sel || !data) return;
+    const n = rangesOf(sel).length;
+    if (n > 1) {
+      toast(`Copy takes one shot or range, and ${n} shots are selected: click the one shot to copy, then Copy.`, "warn");
+      return;
+    }
     const t1 = Math.min(sel.t1, data.nTicks);
     let c;
     try {

@@ -133,14 +133,10 @@ export class EditorPage {
     };
     this.notice = h("div", { class: "notice", hidden: true, role: "status", "data-testid": "editor-notice" });
     this.timelineHost = h("div", { class: "timeline-host" });
-    this.main.append(
-      stage,
-      this.jobs.build(),
-      this.notice,
-      this.media.buildTransport(durationS),
-      this.edits.buildToolbar(),
-      this.timelineHost,
-    );
+    const toolbar = this.edits.buildToolbar();
+    const transport = this.media.buildTransport(durationS);
+    transport.append(this.edits.toolbar.markersEl, this.edits.toolbar.pointsGroup, this.edits.toolbar.info);
+    this.main.append(stage, this.jobs.build(), this.notice, transport, toolbar, this.timelineHost);
     this.timeline = new TimelineView(this.timelineHost, { durationS, tickS: this.tickS, frameLoop: this.loop, defaultLanes: this.layout.actuatorIds });
     this.lanes.add(this.timeline, features);
     this.laneText.attach(this.timeline);

@@ -301,6 +301,7 @@ export class ShotActions {
     this.similar = { shot, similar: got.similar, maxDistance, ids: new Set() };
     this.previewSimilar(maxDistance);
     this.panel.show(true);
+    this.panel.slider.focus(); // the keyboard goes on in the box (Escape closes it)
   }
 
   /** Mark the shots within `maxDistance` (0..1) of the chosen one; nothing changes. @param {number} maxDistance */
