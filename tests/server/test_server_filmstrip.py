@@ -273,3 +273,31 @@ def test_a_picture_process_that_dies_is_logged_and_started_again(tmp_path_factor
         assert pictures.wait_idle(60)
         assert pictures.maker.pid not in (None, child)
         assert len(list((folder / "filmstrip").glob("*.jpg"))) == 5 + 3 + 2 + 1
+
+
+def test_a_picture_process_that_does_not_stop_is_killed_on_close(film, tmp_path):
+    """The maker alone: a child that does not answer cannot hold up the close."""
+    import threading
+
+    from autohaptics.server.ahead import AheadMaker, MakerGone
+
+    maker, outcome = AheadMaker(), []
+    source = posters.film(film, tmp_path / "no-analysis.npz")
+    (tmp_path / "posters").mkdir()
+
+    def make() -> None:
+        try:
+            outcome.append(maker.make(tmp_path / "posters" / "3.jpg", source, [3], posters.poster_size(source)))
+        except MakerGone as exc:
+            outcome.append(exc)
+
+    thread = threading.Thread(target=make)
+    thread.start()
+    while maker.pid is None:
+        time.sleep(0.01)
+    child = maker.pid
+    os.kill(child, signal.SIGSTOP)  # a child that cannot answer, not even to its cancel
+    maker.close(timeout_s=1.0)
+    thread.join(10)
+    assert not thread.is_alive() and isinstance(outcome[0], MakerGone) and not alive(child)
+    assert not (tmp_path / "posters" / "3.jpg").exists()

@@ -73,6 +73,16 @@ CARDS = Scene(12.0, name="cards", shapes=(*text(2.6, 4.6, 0.5, 0.45), *text(7.0,
 CARDS_TRUTH = {26: "cut", 48: "fade", 70: "cut", 90: "cut", 105: "cut"}
 
 
+# Cross-dissolves between shots that both pan (different directions and speeds): the middle is where
+# the blend is half-way, though neither end holds still.
+PANS = Scene(10.0, name="pans", background=(
+    Segment(0.0, 3.37, (150, 110, 70), texture=tex(11), pan=(0.15, 0.0)),
+    Segment(3.37, 7.04, (70, 120, 170), texture=tex(12), pan=(-0.1, 0.06), dissolve_s=1.2),
+    Segment(7.04, 10.0, (90, 160, 90), texture=tex(13, 0.1), pan=(0.05, -0.12), dissolve_s=1.6),
+))
+PANS_TRUTH = {34: "dissolve", 70: "dissolve"}
+
+
 def matched(found: np.ndarray, truth: list[int], tol: int = 1) -> tuple[int, list[int]]:
     """Greedy one-to-one matching within ``tol`` ticks: (matches, unmatched found ticks)."""
     free = list(truth)
@@ -126,3 +136,12 @@ def test_title_cards_known_answers(tmp_path, fps, size):
     kinds = {int(t): shots.KINDS[k] for t, k in zip(b.tick, b.kind)}
     for t, kind in CARDS_TRUTH.items():
         assert [kinds[u] for u in (t - 1, t, t + 1) if u in kinds] == [kind], (t, kind, kinds)
+
+
+@pytest.mark.parametrize("fps", [24, 25, 30, 60])
+@pytest.mark.parametrize("size", [(160, 90), (320, 180), (640, 360)])
+def test_panning_dissolves_known_answers(tmp_path, fps, size):
+    b = film_boundaries(tmp_path, fps, size, PANS)
+    hits, extra = matched(b.tick, sorted(PANS_TRUTH))
+    assert hits == len(PANS_TRUTH) and not extra, (b.tick.tolist(), extra)
+    assert [shots.KINDS[k] for k in b.kind] == ["dissolve", "dissolve"]

@@ -77,7 +77,10 @@ class AheadMaker:
     def close(self, timeout_s: float = 5.0) -> None:
         """Stop the child (asked, then killed after ``timeout_s``) and wait for it."""
         self.cancel()
-        with self._lock:
+        if not self._lock.acquire(timeout=timeout_s):  # a picture that does not stop
+            self.kill()  # its make() raises MakerGone and lets go
+            self._lock.acquire()
+        try:
             if self._proc is not None:
                 try:
                     self._conn.send(None)
@@ -85,6 +88,8 @@ class AheadMaker:
                     pass
                 self._proc.join(timeout_s)
             self._drop()
+        finally:
+            self._lock.release()
 
     def _start(self) -> None:
         self._drop()

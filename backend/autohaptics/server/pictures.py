@@ -106,9 +106,11 @@ class Pictures:
         n = self.n_ticks(pid)
         if not 0 <= tick < n:
             raise NotFound(f"tick {tick} is not in this film's timeline (0..{n - 1})")
-        film = self.film(pid)
-        return self._file(pid, "posters", f"{tick}.jpg",
-                          lambda: posters.picture_jpeg(film, [tick], posters.poster_size(film), cancel=cancel))
+
+        def make() -> bytes:
+            film = self.film(pid)
+            return posters.picture_jpeg(film, [tick], posters.poster_size(film), cancel=cancel)
+        return self._file(pid, "posters", f"{tick}.jpg", make)
 
     def tile(self, pid: str, step: int, tile: int, *, cancel: Callable[[], bool] = lambda: False) -> bytes:
         """The filmstrip tile JPEG (NotFound for a step not in the list or a tile past the end)."""

@@ -356,12 +356,19 @@ def _dissolves(sigs, valid, blocked, params):
         widths[c] += 1
         better = r < best_r[c]
         best_r[c[better]], best_w[c[better]] = r[better], w
+    spans = []  # (s0, s1, k) of each run; runs whose spans overlap are one transition
     for a, b in _runs(np.isfinite(best_r)):
         if widths[a:b + 1].max() < 2:
             continue  # linear at one width only: a slow camera move, not a blend
         k = a + int(np.argmin(best_r[a:b + 1]))
         w = int(best_w[a:b + 1].max())
-        yield max(0, a - w), min(n, b + w + 1), _between(best_r, k)
+        s0, s1 = max(0, a - w), min(n, b + w + 1)
+        if spans and s0 < spans[-1][1] and usable[spans[-1][1] - 1:s0 + 1].all():
+            p0, _, pk = spans.pop()
+            s0, k = p0, (pk if best_r[pk] <= best_r[k] else k)
+        spans.append((s0, s1, k))
+    for s0, s1, k in spans:
+        yield s0, s1, _half_way(coarse, s0, s1 - 1, k, _between(best_r, k))
 
 
 def _between(best_r: np.ndarray, k: int) -> float:
@@ -375,6 +382,20 @@ def _between(best_r: np.ndarray, k: int) -> float:
     if np.isfinite(rl) and np.isfinite(rr) and max(rl, rr) - r0 > 1e-9:
         offset = 0.5 * (rl - rr) / (max(rl, rr) - r0)
     return k + offset
+
+
+def _half_way(coarse: np.ndarray, pa: int, pb: int, k: int, fallback: float) -> float:
+    """Where the blend weight crosses 0.5 (rows), nearest row ``k``: each row from ``pa`` to ``pb``
+    projected on the line between those two (the transition's outer ticks, in 3 x 4 blocks),
+    the crossing interpolated between rows; ``fallback`` where the weight never crosses."""
+    t = np.arange(pa, pb + 1)
+    d = coarse[pb] - coarse[pa]
+    w = (coarse[t] - coarse[pa]) @ d / max(float(d @ d), 1e-9)
+    up = np.flatnonzero((w[:-1] < 0.5) & (w[1:] >= 0.5))
+    if not up.size:
+        return fallback
+    j = int(up[np.argmin(np.abs(t[up] - k))])
+    return float(t[j] + (0.5 - w[j]) / (w[j + 1] - w[j]))
 
 
 def _spaced(found, n: int, min_shot: int):
