@@ -12,8 +12,9 @@
   with different shots at the ramps' outer ends; the boundary is the run's middle.
 - **Dissolves**: a tick c whose thumbnail, in 3 x 4 blocks, is the mean of those w ticks before
   and after (residual below ``linear_max`` of their difference) where those two are in different
-  shots by the cut rule, for at least two w in ``widths``, with no cut or fade between. The boundary is
-  the tick of least residual in a run of such ticks, placed between ticks by the residual's V.
+  shots by the cut rule, for at least two w in ``widths``, with no cut or fade between; runs whose
+  spans overlap are one. The boundary is where each tick's blend weight (projected on the line between
+  the span's outer ticks, 3 x 4 blocks) crosses 0.5.
 
 A slow pan keeps its palette (the cut rule's colour test) and fast action within a shot does not
 blend linearly, so neither makes a boundary. Without signatures (caches written before they were
