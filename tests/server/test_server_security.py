@@ -74,6 +74,7 @@ def project(client, film) -> dict:
     r = client.post(f"/api/projects/{pid}/undo", json={"base_revision": revision})
     assert r.status_code == 200, r.text
     client.app.state.composer.writer.flush(pid)
+    assert client.app.state.pictures.wait_idle(60)  # the pictures made ahead are on disk before a snapshot
     return client.get(f"/api/projects/{pid}").json()
 
 
