@@ -140,3 +140,55 @@ def test_a_finished_job_leaves_the_project_warm(tmp_path, film, monkeypatch):
             assert r.status_code == 202, r.text
             job_id = r.json()["job"]["id"]
         wait_done(client, job_id)
+
+
+def test_a_commit_during_the_warm_up_shares_its_fan_track(film, monkeypatch):
+    """A threshold commit's derive that starts while the warm-up after a job is computing the
+    picture's tracks (the fans most of all) waits for them instead of computing them again: two
+    derives from one feature cache, the second started while the first is inside the fan track,
+    compute it once and give the same timeline."""
+    import importlib
+    import threading
+
+    from autohaptics.server.composer import derive_timeline
+
+    derive_mod = importlib.import_module("autohaptics.pipeline.derive")  # the package's derive is the function
+
+    analysis = pipeline.analyse(film, params_from_doc(resolve_doc({"preset": "balanced"})[0])[0])
+    doc = {"preset": "balanced", "thresholds": HIGH, "overrides": THESIS}
+    inside, release, waiting = threading.Event(), threading.Event(), threading.Event()
+    calls = []
+    real_fans = derive_mod.fan_track
+
+    def fans(*args, **kwargs):
+        calls.append(threading.current_thread().name)
+        inside.set()
+        assert release.wait(60), "the second derive never came to wait"
+        return real_fans(*args, **kwargs)
+
+    class Making(dict):
+        def get(self, key, default=None):  # a derive that finds the entry being made is about to wait
+            found = super().get(key, default)
+            if found is not None:
+                waiting.set()
+            return found
+
+    monkeypatch.setattr(derive_mod, "fan_track", fans)
+    monkeypatch.setattr(derive_mod, "_MAKING", Making())
+    out = {}
+
+    def run(name: str) -> None:
+        out[name] = derive_timeline(analysis, doc, name="film")
+
+    warm = threading.Thread(target=run, args=("warm",), name="warm")
+    warm.start()
+    assert inside.wait(60)
+    commit = threading.Thread(target=run, args=("commit",), name="commit")
+    commit.start()
+    assert waiting.wait(60), "the commit's derive did not wait for the fan track being made"
+    release.set()
+    warm.join(60), commit.join(60)
+    assert calls == ["warm"]
+    np.testing.assert_array_equal(out["warm"].fans, out["commit"].fans)
+    np.testing.assert_array_equal(out["warm"].vibration, out["commit"].vibration)
+    np.testing.assert_array_equal(out["warm"].temperature_c, out["commit"].temperature_c)

@@ -10,6 +10,7 @@ import json
 import threading
 import time
 import weakref
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -83,6 +84,37 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
 _PICTURE: dict[int, tuple] = {}
 _PICTURE_KEPT = 2
 _PICTURE_LOCK = threading.Lock()
+_MAKING: dict[tuple, threading.Event] = {}  # (table, ident) of the entries some thread computes
+
+
+def _kept(table: dict, lock: threading.Lock, ident: Any, key: Any, alive: Callable[[tuple], bool],
+          compute: Callable[[], tuple]) -> tuple[tuple, bool]:
+    """``table[ident]`` when ``alive(hit)`` and its key is ``key``, else ``compute()`` (returning the
+    entry to keep), computed by one thread at a time: a derive that starts while another computes
+    the same entry (a commit during the warm-up after a job) waits for it instead of doing it again.
+    Returns (entry, whether this call computed it)."""
+    gate = (id(table), ident)  # the keys hold dicts: not hashable
+    while True:
+        with lock:
+            hit = table.get(ident)
+            if hit is not None and alive(hit) and hit[1] == key:
+                return hit, False
+            busy = _MAKING.get(gate)
+            if busy is None:
+                busy = _MAKING[gate] = threading.Event()
+                break
+        busy.wait()  # then read what it kept (or compute, when it failed or was evicted)
+    try:
+        entry = compute()
+        with lock:
+            table[ident] = entry
+            while len(table) > _PICTURE_KEPT:
+                table.pop(next(iter(table)))
+        return entry, True
+    finally:
+        with lock:
+            _MAKING.pop(gate, None)
+        busy.set()
 
 
 def _picture_tracks(video, params: GenerateParams, tl: Timeline, stats: dict) -> None:
@@ -92,27 +124,24 @@ def _picture_tracks(video, params: GenerateParams, tl: Timeline, stats: dict) ->
     shares read-only copies of them instead of recomputing them; the first one's own stay writable.
     """
     key = (params.thermal, params.airflow, "temperature" in params.tracks, "fans" in params.tracks)
-    with _PICTURE_LOCK:
-        hit = _PICTURE.get(id(video))
-    if hit is not None and hit[0]() is video and hit[1] == key:
-        arrays, kept_stats = hit[2], hit[3]
+
+    def compute() -> tuple:
+        own = _picture_compute(video, params, tl)
+        arrays = {"temperature_c": tl.temperature_c, "fans": tl.fans,
+                  **{name: tl.features[name] for name in ("temperature_target_c", "motion", "motion_fw_per_s")
+                     if name in tl.features}}
+        kept = {}
+        for name, values in arrays.items():
+            kept[name] = np.array(values, dtype=np.float32)
+            kept[name].flags.writeable = False
+        return (weakref.ref(video), key, kept, json.loads(json.dumps(own)))
+
+    hit, computed = _kept(_PICTURE, _PICTURE_LOCK, id(video), key, lambda h: h[0]() is video, compute)
+    arrays, kept_stats = hit[2], hit[3]
+    if not computed:
         tl.temperature_c, tl.fans = arrays["temperature_c"], arrays["fans"]
         tl.features.update((name, arrays[name]) for name in arrays if name not in ("temperature_c", "fans"))
-        stats.update(json.loads(json.dumps(kept_stats)))
-        return
-    own = _picture_compute(video, params, tl)
-    stats.update(own)
-    arrays = {"temperature_c": tl.temperature_c, "fans": tl.fans,
-              **{name: tl.features[name] for name in ("temperature_target_c", "motion", "motion_fw_per_s")
-                 if name in tl.features}}
-    kept = {}
-    for name, values in arrays.items():
-        kept[name] = np.array(values, dtype=np.float32)
-        kept[name].flags.writeable = False
-    with _PICTURE_LOCK:
-        _PICTURE[id(video)] = (weakref.ref(video), key, kept, json.loads(json.dumps(own)))
-        while len(_PICTURE) > _PICTURE_KEPT:
-            _PICTURE.pop(next(iter(_PICTURE)))
+    stats.update(json.loads(json.dumps(kept_stats)))
 
 
 def _picture_compute(video, params: GenerateParams, tl: Timeline) -> dict:
@@ -166,16 +195,13 @@ def _decision_inputs(audio, params: inten.IntensityParams) -> tuple[dict, dict]:
     key = dataclasses.replace(params, **{f: getattr(inten.IntensityParams(), f) for f in inten.APPLIED_AFTER_CURVES})
     arrays = tuple(sorted(audio.items()))
     ident = tuple((name, id(values)) for name, values in arrays)
-    with _CURVES_LOCK:
-        hit = _CURVES.get(ident)
-    if hit is not None and all(ref() is values for ref, (_, values) in zip(hit[0], arrays)) and hit[1] == key:
-        return hit[2]
-    inputs = inten.decision_inputs(audio, params=params)
-    for curves in inputs:
-        for values in curves.values():
-            values.flags.writeable = False
-    with _CURVES_LOCK:
-        _CURVES[ident] = ([weakref.ref(values) for _, values in arrays], key, inputs)
-        while len(_CURVES) > _PICTURE_KEPT:
-            _CURVES.pop(next(iter(_CURVES)))
-    return inputs
+
+    def compute() -> tuple:
+        inputs = inten.decision_inputs(audio, params=params)
+        for curves in inputs:
+            for values in curves.values():
+                values.flags.writeable = False
+        return ([weakref.ref(values) for _, values in arrays], key, inputs)
+
+    alive = lambda hit: all(ref() is values for ref, (_, values) in zip(hit[0], arrays))  # noqa: E731
+    return _kept(_CURVES, _CURVES_LOCK, ident, key, alive, compute)[0][2]
