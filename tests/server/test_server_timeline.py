@@ -253,6 +253,32 @@ def test_rederive_keeps_the_derived_timeline_in_memory(client, project, monkeypa
     assert client.get(f"/api/projects/{pid}/timeline.bin").status_code == 200
 
 
+def test_a_commit_writes_its_generated_layer_after_it_settles(client, project, data_dir, monkeypatch):
+    """The re-derived layer is written ``settle_s`` after the commit (the editor's timeline request
+    right after it does not share the CPU with the write); commits within that time are written
+    once, the last one; a flush writes it at once."""
+    pid = project["id"]
+    writer = client.app.state.composer.writer
+    writes = []
+    real = type(writer)._write
+    monkeypatch.setattr(writer, "settle_s", 600.0)
+    monkeypatch.setattr(writer, "_write", lambda p, rev, tl: (writes.append(rev) if p == pid else None, real(writer, p, rev, tl)))
+    writer.flush()  # earlier tests' layers
+    path = data_dir / "projects" / pid / "generated.npz"
+    before = path.stat().st_ino, path.stat().st_mtime_ns
+    revisions = []
+    for level in (0.2, 0.3):
+        r = client.put(f"/api/projects/{pid}/params", json={"thresholds": {"loudness": level}})
+        assert r.status_code == 200 and r.json()["derived"], r.text
+        revisions.append(r.json()["revision"])
+        assert client.get(f"/api/projects/{pid}/timeline.bin", params={"since": r.json()["revision"] - 1}).status_code == 200
+    assert writer.pending(pid) is not None and writes == []
+    assert (path.stat().st_ino, path.stat().st_mtime_ns) == before
+    writer.flush(pid)
+    assert writer.pending(pid) is None and len(writes) == 1 and writes[0] > revisions[0]  # the last one, once
+    assert generated_file.load_npz(path).generator["params"]["thresholds"]["loudness"] == 0.3
+
+
 def test_a_restarted_server_loads_the_project_worked_on_last_before_it_is_asked(client, project, data_dir,
                                                                              monkeypatch):
     """The editor of the film open before a restart opens without waiting for its files to load."""
