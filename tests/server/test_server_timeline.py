@@ -224,6 +224,39 @@ def test_binary_since_a_revision_sends_only_the_changed_blocks(client, project):
 
 
 # -------------------------------------------------------------------- generated layer
+def test_a_request_for_some_blocks_that_ends_after_the_warm_keeps_the_others(monkeypatch):
+    """The warm-up after a job quantises every block of the revision while the editor's reload asks
+    for some of them: whichever ends last, the revision keeps every block, so the next commit's
+    ``since`` answer sends only what changed (before, the fan grid too when the reload ended last)."""
+    import threading
+
+    from autohaptics.server import bins as bins_mod
+
+    cache = bins_mod.BinaryCache(2)
+    tl = known()
+    inside, release = threading.Event(), threading.Event()
+    real = bins_mod.binary.quantise
+
+    def quantise(name, dtype, src):
+        if threading.current_thread().name == "reload" and not inside.is_set():
+            inside.set()
+            assert release.wait(60)
+        return real(name, dtype, src)
+
+    monkeypatch.setattr(bins_mod.binary, "quantise", quantise)
+    reload = threading.Thread(name="reload", target=lambda: cache.get(
+        "p", "composed", 1, tl, header={}, names=("vibration",), gzipped=False, since=None))
+    reload.start()
+    assert inside.wait(60)
+    cache.prepare("p", "composed", 1, tl)  # the warm, done while the reload quantises
+    release.set()
+    reload.join(60)
+    changed = known()
+    changed.vibration[:10] = 0.0
+    h, part = decode(cache.get("p", "composed", 2, changed.validate(), header={}, names=None, gzipped=False, since=1))
+    assert set(part) == {"vibration"} and "fans" in h["unchanged"]
+
+
 def test_generated_layer_is_npz_and_its_json_export(client, project, data_dir):
     pid = project["id"]
     pdir = data_dir / "projects" / pid

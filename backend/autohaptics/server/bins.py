@@ -118,7 +118,9 @@ class BinaryCache:
             out[name] = Encoded(block=block, source=src, plain=binary.block_bytes(block))
         with self._lock:
             history = self._encoded.setdefault((pid, layer), OrderedDict())
-            history[revision] = out
+            # merged: a request for some blocks that ends after the warm's prepare of the same
+            # revision keeps the others (a later ``since`` of it would send them all again)
+            history[revision] = {**history.get(revision, {}), **out}
             history.move_to_end(revision)
             while len(history) > REVISIONS_KEPT:
                 history.popitem(last=False)
