@@ -65,6 +65,12 @@ def project(client, film) -> dict:
     while client.get(f"/api/jobs/{r.json()['job']['id']}").json()["status"] not in TERMINAL:
         assert time.monotonic() < deadline, "the generation job did not end"
         time.sleep(0.2)
+    # The job's end warms the project in the background, which queues the pictures made ahead: wait
+    # for it, so that after the wait below only a request could change the files.
+    deadline = time.monotonic() + 60
+    while not client.app.state.composer.held(pid):
+        assert time.monotonic() < deadline, "the project was not warmed after its job"
+        time.sleep(0.1)
     revision = client.get(f"/api/projects/{pid}").json()["revision"]
     for value in (0.5, 1.0):
         r = client.post(f"/api/projects/{pid}/edits", json={"base_revision": revision, "op": {
@@ -74,7 +80,7 @@ def project(client, film) -> dict:
     r = client.post(f"/api/projects/{pid}/undo", json={"base_revision": revision})
     assert r.status_code == 200, r.text
     client.app.state.composer.writer.flush(pid)
-    assert client.app.state.pictures.wait_idle(60)  # the pictures made ahead are on disk before a snapshot
+    assert client.app.state.pictures.wait_idle(60)  # queued at the job's warm-up (above)
     return client.get(f"/api/projects/{pid}").json()
 
 
