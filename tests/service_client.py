@@ -4,6 +4,9 @@ answers to, docs/API.md "Security") and the session token from ``GET /api/sessio
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
 
 from fastapi.testclient import TestClient
 
@@ -29,3 +32,22 @@ class LocalClient(TestClient):
             assert time.monotonic() < deadline, f"job {job_id} did not end within {timeout_s:g} s: {job}"
             time.sleep(0.1)
         return job
+
+    def generated_project(self, film: Path, **form: str) -> dict:
+        """Upload ``film`` (form fields ``form``, e.g. ``mode="audio"``), wait for its generate job
+        to end done, and return the project."""
+        r = self.post("/api/projects", files={"file": (film.name, film.read_bytes(), "video/mp4")}, data=form)
+        assert r.status_code == 201, r.text
+        job = self.finished_job(r.json()["job"]["id"])
+        assert job["status"] == "done", job
+        return self.get(f"/api/projects/{r.json()['id']}").json()
+
+    @contextmanager
+    def duplicated(self, pid: str) -> Iterator[dict]:
+        """A copy of project ``pid`` for one test (its analysis and timeline reused), removed after."""
+        r = self.post(f"/api/projects/{pid}/duplicate")
+        assert r.status_code == 201, r.text
+        try:
+            yield r.json()
+        finally:
+            self.delete(f"/api/projects/{r.json()['id']}")

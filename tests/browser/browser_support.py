@@ -7,6 +7,8 @@ import os
 import shutil
 import subprocess
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import httpx
@@ -101,6 +103,20 @@ def copy_to_docs(src: Path, name: str) -> None:
         dest = REPO / "docs" / "img" / name
         dest.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(src, dest)
+
+
+@contextmanager
+def checked_page(browser, base_url: str, viewport: dict, **context_kw) -> Iterator:
+    """A page in a fresh browser context (20 s default timeout); the test fails on any uncaught
+    error in the page once it is done with it."""
+    context = browser.new_context(viewport=viewport, base_url=base_url, **context_kw)
+    pg = context.new_page()
+    errors: list[str] = []
+    pg.on("pageerror", lambda exc: errors.append(str(exc)))
+    pg.set_default_timeout(20_000)
+    yield pg
+    context.close()
+    assert not errors, f"uncaught errors in the page: {errors}"
 
 
 def open_editor(pg, project_id: str) -> None:

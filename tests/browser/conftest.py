@@ -16,7 +16,7 @@ import httpx
 import pytest
 
 from browser_support import (
-    CHROMIUM, CHROMIUM_ARGS, ServerError, api_client, media_clip, start_server, stop_server, upload,
+    CHROMIUM, CHROMIUM_ARGS, ServerError, api_client, checked_page, media_clip, start_server, stop_server, upload,
 )
 # Whichever conftest module pytest imports first answers ``from conftest import ...``: offer the
 # shared-data names here too (import them from shared_data in new code).
@@ -71,11 +71,5 @@ def browser():
 
 @pytest.fixture
 def page(browser, server):
-    context = browser.new_context(viewport=VIEWPORT, accept_downloads=True, base_url=server)
-    pg = context.new_page()
-    errors: list[str] = []
-    pg.on("pageerror", lambda exc: errors.append(str(exc)))
-    pg.set_default_timeout(20_000)
-    yield pg
-    context.close()
-    assert not errors, f"uncaught errors in the page: {errors}"
+    with checked_page(browser, server, VIEWPORT, accept_downloads=True) as pg:
+        yield pg

@@ -22,7 +22,7 @@ from autohaptics.server.chair import DRIFT_SEEK_S
 from autohaptics.server.store import Store
 from autohaptics.server.composer import Composer
 from browser_support import (
-    ServerError, api_client, media_clip, open_editor, start_server, stop_server, upload, wait_until,
+    ServerError, api_client, checked_page, media_clip, open_editor, start_server, stop_server, upload, wait_until,
 )
 
 pytestmark = pytest.mark.browser
@@ -63,15 +63,11 @@ def chair(tmp_path):
 
 @pytest.fixture
 def cpage(browser, chair_server, chair_api):
-    context = browser.new_context(viewport=VIEWPORT, base_url=chair_server[0])
-    pg = context.new_page()
-    errors: list[str] = []
-    pg.on("pageerror", lambda exc: errors.append(str(exc)))
-    pg.set_default_timeout(20_000)
-    yield pg
-    context.close()
-    chair_api.post("/api/chair/disconnect")
-    assert not errors, f"uncaught errors in the page: {errors}"
+    try:
+        with checked_page(browser, chair_server[0], VIEWPORT) as pg:
+            yield pg
+    finally:
+        chair_api.post("/api/chair/disconnect")
 
 
 def composed(data_dir, pid: str):

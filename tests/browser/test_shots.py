@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from browser_support import lane_rect, next_frame, open_editor, screenshot, state, wait_revision_above, wait_until
+from browser_support import checked_page, lane_rect, next_frame, open_editor, screenshot, state, wait_revision_above, wait_until
 
 pytestmark = pytest.mark.browser
 
@@ -19,14 +19,8 @@ LANE_BG = (18, 21, 28)
 
 @pytest.fixture(params=VIEWPORTS)
 def vpage(request, browser, server):
-    context = browser.new_context(viewport=request.param, base_url=server)
-    pg = context.new_page()
-    errors: list[str] = []
-    pg.on("pageerror", lambda exc: errors.append(str(exc)))
-    pg.set_default_timeout(20_000)
-    yield pg
-    context.close()
-    assert not errors, f"uncaught errors in the page: {errors}"
+    with checked_page(browser, server, request.param) as pg:
+        yield pg
 
 
 def shots_of(api, pid: str) -> dict:

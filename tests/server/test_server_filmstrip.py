@@ -44,11 +44,7 @@ def make_client(tmp_path_factory, **settings):
 
 
 def new_project(client, film: Path) -> str:
-    r = client.post("/api/projects", files={"file": ("ticks.mp4", film.read_bytes(), "video/mp4")})
-    assert r.status_code == 201, r.text
-    job = client.finished_job(r.json()["job"]["id"])
-    assert job["status"] == "done", job
-    pid = r.json()["id"]
+    pid = client.generated_project(film)["id"]
     assert client.get(f"/api/projects/{pid}/filmstrip").status_code == 200  # asks for the pictures ahead
     assert client.app.state.pictures.wait_idle(60)  # (the job's end asked too: both are done)
     return pid

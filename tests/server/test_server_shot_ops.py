@@ -45,19 +45,13 @@ def client(tmp_path_factory):
 def base_project(client, tmp_path_factory) -> dict:
     path = tmp_path_factory.mktemp("film") / "film.mp4"
     write_scene(path, alternating_scene(), width=96, height=54, fps=10, quality="low", sample_rate=24000)
-    r = client.post("/api/projects", files={"file": ("film.mp4", path.read_bytes(), "video/mp4")})
-    assert r.status_code == 201, r.text
-    job = client.finished_job(r.json()["job"]["id"])
-    assert job["status"] == "done", job
-    return client.get(f"/api/projects/{r.json()['id']}").json()
+    return client.generated_project(path)
 
 
 @pytest.fixture
 def project(client, base_project):
-    r = client.post(f"/api/projects/{base_project['id']}/duplicate")
-    assert r.status_code == 201, r.text
-    yield r.json()
-    client.delete(f"/api/projects/{r.json()['id']}")
+    with client.duplicated(base_project["id"]) as copy:
+        yield copy
 
 
 def revision(client, pid: str) -> int:

@@ -47,24 +47,13 @@ def base_project(client, tmp_path_factory) -> dict:
                   audio=(Tone(3.0, 6.0, 55.0, level_dbfs=-12.0), Tone(12.0, 13.0, 3000.0, level_dbfs=-18.0)),
                   name="timeline test")
     write_scene(path, scene, width=64, height=36, fps=5, quality="low", sample_rate=24000)
-    r = client.post("/api/projects", files={"file": ("film.mp4", path.read_bytes(), "video/mp4")}, data={"mode": "audio"})
-    assert r.status_code == 201, r.text
-    job_id = r.json()["job"]["id"]
-    for _ in range(1200):
-        job = client.get(f"/api/jobs/{job_id}").json()
-        if job["status"] in TERMINAL:
-            break
-        time.sleep(0.1)
-    assert job["status"] == "done", job
-    return client.get(f"/api/projects/{r.json()['id']}").json()
+    return client.generated_project(path, mode="audio")
 
 
 @pytest.fixture
 def project(client, base_project):
-    r = client.post(f"/api/projects/{base_project['id']}/duplicate")
-    assert r.status_code == 201, r.text
-    yield r.json()
-    client.delete(f"/api/projects/{r.json()['id']}")
+    with client.duplicated(base_project["id"]) as copy:
+        yield copy
 
 
 def edit(client, pid: str, op: dict) -> dict:
