@@ -32,7 +32,7 @@ from autohaptics.timeline import edits as edit_ops
 from autohaptics.timeline.npz import load_npz
 from autohaptics.server import shots
 from autohaptics.server.bins import BinaryCache, BinFiles, same_values
-from autohaptics.server.store import Conflict, NotFound, Store, new_id
+from autohaptics.server.store import Conflict, NotFound, Store, file_key, new_id
 from autohaptics.server.styles import style_of
 from autohaptics.server.waveform import cached_peaks
 from autohaptics.server.writer import LayerWriter
@@ -96,7 +96,7 @@ class Composer:
         with self._lock:
             gate = self._loading.setdefault(path, threading.Lock())
         with gate:
-            key = _file_key(path)
+            key = file_key(path)
             if key is None:
                 return None
             with self._lock:
@@ -140,7 +140,7 @@ class Composer:
         from it (the derive keeps what no threshold changes): a project whose timeline is being
         looked at is about to be re-derived (a threshold drag)."""
         path = self.store.analysis_path(pid)
-        key = _file_key(path)
+        key = file_key(path)
         with self._lock:
             hit = self._files.get(path)
             if key is None or (hit is not None and hit[0] == key) or path in self._warming:
@@ -183,7 +183,7 @@ class Composer:
         path = self.store.analysis_path(pid)
         with self._lock:
             hit, composed = self._files.get(path), self._composed.get(pid)
-            loaded = hit is not None and hit[0] == _file_key(path) and path not in self._warming
+            loaded = hit is not None and hit[0] == file_key(path) and path not in self._warming
         return loaded and composed is not None and composed[1].revision == self.store.revision(pid)
 
     def require_generated(self, pid: str) -> Timeline:
@@ -237,7 +237,7 @@ class Composer:
             return None
         self.store.swap_analyses(pid)
         for path, value in ((self.store.analysis_path(pid), before), (self.store.previous_analysis_path(pid), analysis)):
-            self._remember(path, _file_key(path), value)
+            self._remember(path, file_key(path), value)
         return before
 
     # ------------------------------------------------------------------- compose
@@ -423,11 +423,3 @@ class Composer:
         with lock:
             return cached_peaks(self.store.media_path(project), self.store.waveform_path(pid, points),
                                 points=points)
-
-
-def _file_key(path: Path) -> tuple | None:
-    try:
-        st = path.stat()
-    except FileNotFoundError:
-        return None
-    return (st.st_ino, st.st_mtime_ns, st.st_size)

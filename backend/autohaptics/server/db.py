@@ -1,4 +1,4 @@
-"""The data folder's database: its schema, ids, and the errors a store raises. Ids are 32 lower-case
+"""The data folder's database: its schema, ids, the errors a store raises and a file's identity. Ids are 32 lower-case
 hex digits chosen here; no client-supplied string ever becomes a path."""
 
 from __future__ import annotations
@@ -6,6 +6,7 @@ from __future__ import annotations
 import re
 import uuid
 from datetime import datetime, timezone
+from pathlib import Path
 
 from autohaptics.errors import AutohapticsError
 
@@ -91,3 +92,13 @@ def check_id(value: str, what: str = "project") -> str:
     if not isinstance(value, str) or not ID_PATTERN.match(value):
         raise NotFound(f"no {what} with id {value!r}")
     return value
+
+
+def file_key(path: Path) -> tuple | None:
+    """A file's identity (inode, mtime in ns, size), what the caches of its contents are keyed by;
+    None when it does not exist."""
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        return None
+    return (st.st_ino, st.st_mtime_ns, st.st_size)

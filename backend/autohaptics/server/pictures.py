@@ -26,7 +26,7 @@ from pathlib import Path
 from autohaptics.server import posters
 from autohaptics.server.ahead import AheadMaker, MakerGone
 from autohaptics.server.shots import features_of, poster_ticks
-from autohaptics.server.store import NotFound
+from autohaptics.server.store import NotFound, file_key
 
 log = logging.getLogger("autohaptics.server.pictures")
 
@@ -82,7 +82,7 @@ class Pictures:
     def film(self, pid: str) -> posters.Film:
         project = self.store.get_project(pid)
         media_path, analysis_path = self.store.media_path(project), self.store.analysis_path(pid)
-        key = tuple(_stat(p) for p in (media_path, analysis_path))
+        key = tuple(file_key(p) for p in (media_path, analysis_path))
         with self._lock:
             hit = self._films.get(pid)
         if hit is not None and hit[0] == key:
@@ -250,7 +250,7 @@ class Pictures:
     def _make_ahead(self, pid: str) -> None:
         composed = self.composer.compose(pid)
         analysis = self.composer.analysis(pid)
-        state = (composed.revision, _stat(self.store.analysis_path(pid)))
+        state = (composed.revision, file_key(self.store.analysis_path(pid)))
         with self._lock:
             if self._planned.get(pid) == state:
                 return
@@ -280,14 +280,6 @@ class Pictures:
             self._count(pid, made)
         with self._lock:
             self._planned[pid] = state
-
-
-def _stat(path: Path) -> tuple | None:
-    try:
-        st = path.stat()
-    except FileNotFoundError:
-        return None
-    return (st.st_ino, st.st_mtime_ns, st.st_size)
 
 
 def _read(path: Path) -> bytes | None:

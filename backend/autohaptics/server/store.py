@@ -40,6 +40,7 @@ from autohaptics.server.db import (  # noqa: F401  the store's own errors and id
     Conflict,
     NotFound,
     check_id,
+    file_key,
     new_id,
     now_iso,
 )
@@ -352,8 +353,7 @@ class Store:
             self._require(db, pid)
             path = self.generated_path(pid)
             os.replace(write_to, path)
-            st = path.stat()
-            return (st.st_ino, st.st_mtime_ns, st.st_size)
+            return file_key(path)
 
     def edits(self, pid: str) -> dict:
         """``{revision, cursor, ops}``: ops[:cursor] are applied, ops[cursor:] can be redone."""
