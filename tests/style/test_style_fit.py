@@ -1,13 +1,19 @@
 """Known answers for what a style can express and how it is fitted: a floor that clears weak
 levels, the threshold scale read off the analysis's own decision curves, per-zone curves that
-one-off edits on a few actuators do not drag, version 1 documents."""
+one-off edits on a few actuators do not drag, version 1 documents; the threshold scales' one-pass
+depths against one evaluation of the rule per scale."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
+from hypothesis.extra import numpy as hnp
 
-from autohaptics import pipeline
+from autohaptics import intensity as it, pipeline
+from autohaptics.intensity.rule import LEVEL_FEATURES, trigger_depths
 from autohaptics.layout import ACTUATORS
 from autohaptics.metrics import compare_tracks
 from autohaptics.style import KNOTS, Style, from_dict, learn
@@ -15,6 +21,7 @@ from autohaptics.style.apply import shape_levels
 from autohaptics.style.fit import fit_floor
 from autohaptics.testing import scenes, write_scene
 from autohaptics.testing.designers import Designer, edit
+from autohaptics.timebase import FRAMES_PER_TICK
 
 from shared_data import shared_clip
 
@@ -106,3 +113,24 @@ def test_a_zone_whose_levels_all_lie_below_the_floor_takes_the_pooled_floor():
     x[:, seat] = rng.uniform(0.01, 0.18, (600, len(seat)))
     floors = _zone_floors(x, np.where(x < 0.25, 0.0, x))
     assert floors == pytest.approx(0.25, abs=0.01)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.data(), st.sampled_from(it.RULES), st.sampled_from([0.0, 0.2, 0.5]), st.sampled_from([0.0, 0.04, 0.1, 0.3]))
+def test_trigger_depths_give_what_one_evaluation_per_threshold_set_gives(data, rule, gate, smoothing_s):
+    """The one-pass depths (a style's threshold scales) against the rule run once per threshold set:
+    the tick vibrates with exactly the first ``depth`` sets, pauses bridged as each set bridges them."""
+    n = data.draw(st.integers(1, 60))
+    feats = {f: data.draw(hnp.arrays(np.float64, n * FRAMES_PER_TICK, elements=st.floats(0, 10) | st.just(0.0)))
+             for f in it.FEATURES}
+    first = data.draw(st.lists(st.floats(0, 1.2), min_size=4, max_size=4))
+    steps = data.draw(hnp.arrays(np.float64, (data.draw(st.integers(1, 12)), 4), elements=st.floats(0, 0.3)))
+    thresholds = np.asarray(first) + np.cumsum(steps, axis=0) - steps[0]  # rising down each column
+    params = it.IntensityParams(rule=rule, loudness_gate=gate, smoothing_s=smoothing_s)
+    inputs = it.decision_inputs(feats, params=params)
+    value_features = it.FEATURES if rule == "thesis" else LEVEL_FEATURES
+    depth = trigger_depths(*inputs, thresholds, n, params=params, value_features=value_features)
+    for k, row in enumerate(thresholds):
+        one = dataclasses.replace(params, thresholds=dict(zip(it.FEATURES, row.tolist())))
+        on = it.audio_intensity(feats, n, params=one, inputs=inputs)[0] > 0
+        assert np.array_equal(on, depth > k), (k, row)

@@ -186,6 +186,35 @@ def triggered_values(normalised: dict[str, np.ndarray], curves: dict[str, np.nda
     return np.where(triggered, values, 0.0)
 
 
+def trigger_depths(normalised: dict[str, np.ndarray], curves: dict[str, np.ndarray], thresholds: np.ndarray,
+                   n_ticks: int, *, params: IntensityParams, value_features: tuple[str, ...]) -> np.ndarray:
+    """For threshold sets that only rise (``thresholds`` [shape=(sets, 4)], columns in
+    :data:`FEATURES` order, never decreasing down a column; 1 or more: that feature off), per tick
+    the count k of leading sets whose :func:`triggered_values` (scale 1, ``params``' gate and
+    pauses) vibrate it: the tick vibrates with sets 0..k-1 and none after (a rising threshold only
+    takes triggered frames away, and the bridged pauses with them). One pass for all the sets,
+    exactly what one evaluation per set gives. Returns int32 [shape=(n_ticks,)] in 0..sets."""
+    thresholds = np.asarray(thresholds, np.float64)
+    thr = np.where(thresholds < 1.0, thresholds, np.inf)
+    depth = np.zeros(len(curves[FEATURES[0]]), np.int32)
+    for f, column in zip(FEATURES, thr.T):
+        np.maximum(depth, np.searchsorted(column, np.asarray(curves[f], np.float64), side="left"), out=depth)
+    if params.loudness_gate > 0:
+        depth[np.asarray(normalised["loudness"], dtype=np.float64) < params.loudness_gate] = 0
+    n = depth.size
+    longest = min(2 * params.smoothing_frames() - 1, n - 2)  # no pause between two frames is longer
+    if longest >= 1:  # a frame in a pause of at most ``longest`` frames between two frames deep >= k
+        bridged = depth.copy()
+        after = np.zeros((longest + 1, n), np.int32)  # after[m][x]: the deepest of frames x+1..x+m
+        for m in range(1, longest + 1):
+            np.maximum(after[m - 1, :n - m], depth[m:], out=after[m, :n - m])
+        for a in range(1, longest + 1):
+            np.maximum(bridged[a:], np.minimum(depth[:-a], after[longest + 1 - a, a:]), out=bridged[a:])
+        depth = bridged
+    values = np.stack([np.asarray(normalised[f], dtype=np.float64) for f in value_features]).max(axis=0)
+    return frames_to_ticks(np.where(values > 0, depth, 0), n_ticks)
+
+
 def bridge_pauses(on: np.ndarray, longest: int) -> np.ndarray:
     """``on`` (bool [shape=(n,)]) with every run of False of at most ``longest`` frames that has True
     on both sides set True; a copy, ``on`` itself for longest < 1."""

@@ -175,7 +175,7 @@ def _intensity(analysis: Analysis, params: GenerateParams, tl: Timeline, stats: 
         intensity = np.zeros(n)
     else:
         intensity, curves, rule_stats = inten.audio_intensity(analysis.audio, n, params=params.intensity,
-                                                              inputs=_decision_inputs(analysis.audio, params.intensity))
+                                                              inputs=kept_decision_inputs(analysis.audio, params.intensity))
         for name in inten.FEATURES:
             tl.features[name] = curves[name]
         stats["intensity_rule"] = rule_stats
@@ -189,7 +189,7 @@ _CURVES: dict[tuple, tuple] = {}
 _CURVES_LOCK = threading.Lock()
 
 
-def _decision_inputs(audio, params: inten.IntensityParams) -> tuple[dict, dict]:
+def kept_decision_inputs(audio, params: inten.IntensityParams) -> tuple[dict, dict]:
     """:func:`intensity.decision_inputs` of ``audio`` (its dict of per-frame features), kept from an
     earlier derive of the same features when no parameter but those applied after them changed."""
     key = dataclasses.replace(params, **{f: getattr(inten.IntensityParams(), f) for f in inten.APPLIED_AFTER_CURVES})

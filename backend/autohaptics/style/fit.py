@@ -27,11 +27,11 @@ from collections.abc import Sequence
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.intensity.rule import audio_intensity, decision_inputs
+from autohaptics.intensity.rule import FEATURES, LEVEL_FEATURES, trigger_depths
 from autohaptics.layout import ACTUATORS, ZONES
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.cache import Analysis
-from autohaptics.pipeline.derive import derive
+from autohaptics.pipeline.derive import derive, kept_decision_inputs
 from autohaptics.style.apply import shape_vibration
 from autohaptics.style.model import KNOTS, TEMP_OFFSET_RANGE_C, TEMP_SCALE_RANGE, THRESHOLD_SCALE_RANGE, Style
 from autohaptics.timeline import Timeline
@@ -67,10 +67,12 @@ def learn(pairs: Sequence[Pair], params: GenerateParams | None = None, *, name: 
     vib_y = np.concatenate([e.vibration[p] for (_, e), p in zip(pairs, picks)])
     floors = np.zeros(vib_y.shape[1])
     evidence = _scale_evidence(pairs, params, picks)
-    scale = 1.0
+    scale, derived = 1.0, None
     for _ in range(2):
         scale, f1 = _threshold_scale(evidence, floors, at=scale)
-        bases = [derive(a, Style(threshold_scale=scale).apply_params(params)) for a, _ in pairs]
+        if derived != scale:  # the second pass's scale is most often the first's: its derive again
+            bases = [derive(a, Style(threshold_scale=scale).apply_params(params)) for a, _ in pairs]
+            derived = scale
         vib_x = np.concatenate([b.vibration[p] for b, p in zip(bases, picks)])
         floors = _zone_floors(vib_x, vib_y)
         if not floors.any():
@@ -154,13 +156,16 @@ def _scale_evidence(pairs: list[Pair], params: GenerateParams,
         return None
     lowest = Style(threshold_scale=THRESHOLD_SCALE_RANGE[0]).apply_params(params)
     rules = [Style(threshold_scale=float(s)).apply_params(params).intensity for s in SCALE_GRID]
+    thresholds = [[rule.threshold(f) for f in FEATURES] for rule in rules]
+    value_features = FEATURES if params.intensity.rule == "thesis" else LEVEL_FEATURES
     ons, levels, edits, blocks = [], [], [], []
     for i, ((analysis, edited), p) in enumerate(zip(pairs, picks)):
         if analysis.audio is None:
             continue
-        inputs = decision_inputs(analysis.audio, params=params.intensity)
-        ons.append(np.stack([audio_intensity(analysis.audio, analysis.n_ticks, params=rule, inputs=inputs)[0][p]
-                             for rule in rules], axis=1) > 0)
+        norm, curves = kept_decision_inputs(analysis.audio, params.intensity)
+        depth = trigger_depths(norm, curves, thresholds, analysis.n_ticks, params=params.intensity,
+                               value_features=value_features)
+        ons.append(depth[p][:, None] > np.arange(len(SCALE_GRID)))
         levels.append(derive(analysis, lowest).vibration[p])
         edits.append(edited.vibration[p])
         blocks.append(i * (1 << 32) + p // BLOCK_TICKS)
