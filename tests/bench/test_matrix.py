@@ -69,7 +69,7 @@ def test_the_scene_has_what_each_row_is_judged_on(clean):
 
 # rows not met yet, with what they measure (docs/BENCHMARKS.md, "The material matrix"); strict: one
 # that starts to pass fails here until it is taken off this list
-NOT_MET = {"screener H.264 360p crf 35": "onset F1 0.896 (precision 0.81) with intensity.smoothing_s=0.1, 0.974 with 0"}
+NOT_MET: dict[str, str] = {}
 
 
 @pytest.mark.slow

@@ -2,6 +2,8 @@
 tests write themselves (autohaptics.testing.sounds -> a real .wav -> the pipeline), and properties
 of the rule on any input."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -86,6 +88,21 @@ def test_a_file_cut_inside_the_score_does_not_jolt_at_its_start(tmp_path, start_
     assert later or not impacts  # an impact after the cut still vibrates as the uncut film's does
     for t in later if impacts else []:
         assert chair[_ticks(t, t + sounds.IMPACT_LENGTH_S)].min() >= 0.7 * chair.max()
+
+
+@pytest.mark.parametrize("delay_s", [0.02, 0.045, 0.08])
+def test_a_score_that_begins_a_moment_after_the_file_does_not_jolt_either(tmp_path, delay_s):
+    """A lossy encode's priming or a cut's first packets put a few silent frames (under GAP_S) before
+    the score: still under way before the file began, while the impacts after it vibrate."""
+    audio = sounds.music_bed(0.0, 16.0, level_dbfs=-20.0)
+    audio += [e for i, t in enumerate(sounds.IMPACT_TIMES_S) for e in sounds.impact(t, seed=i)]
+    cut = sounds.cut_in(Scene(duration_s=16.0, audio=tuple(audio), name="score"), 5.23, 6.0)
+    late = tuple(dataclasses.replace(ev, t0=ev.t0 + delay_s, t1=min(ev.t1 + delay_s, cut.duration_s)) for ev in cut.audio)
+    _, chair, _ = _run(tmp_path, Scene(duration_s=cut.duration_s, audio=late, name=f"late_{delay_s:g}"))
+    assert chair[_ticks(0.0, 0.5)].max() <= 0.2, chair[:8]
+    later = [t - 5.23 + delay_s for t in sounds.IMPACT_TIMES_S if 0.5 <= t - 5.23 <= cut.duration_s - 0.5]
+    inside = [_ticks(t + 0.05, t + sounds.IMPACT_LENGTH_S - 0.05) for t in later]  # whole ticks in the impact
+    assert later and all(chair[k].min() >= 0.7 * chair.max() for k in inside), chair
 
 
 @pytest.mark.parametrize("at_s", [0.3, 0.6, 1.5])

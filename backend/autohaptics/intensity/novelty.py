@@ -83,7 +83,8 @@ def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, cl
     base_n = max(1, int(round(baseline_s / FRAME_S)))
     opening_n = opening_frames(v) if opening_n is None else min(int(opening_n), n)
     if opening_n > 0:  # a hit of this feature's own ends its opening, whatever the loudness does
-        opening_n = _before_rise(v[:opening_n], float(v[:gap_n].max()))
+        first = int(np.argmax(v[:opening_n] > FLOOR))  # its own sound begins (a codec's delay, the median's lag)
+        opening_n = first + _before_rise(v[first:opening_n], float(v[first:first + gap_n].max()))
     pre_n = env_n + gap_n + base_n if opening_n > 0 else 0  # history for every window before t = 0
     env = trailing_max(np.concatenate([np.full(pre_n, v[:opening_n].max() if pre_n else 0.0), v]), env_n)
     cum = np.concatenate([[0.0], np.cumsum(env)])
