@@ -24,6 +24,7 @@ import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from collections.abc import Callable
 from typing import IO, Any
 
 import numpy as np
@@ -40,6 +41,7 @@ from autohaptics.layout import (
     layout_dict,
 )
 from autohaptics.outputs import atomic_output
+from autohaptics.timeline import numeric_json
 from autohaptics.timebase import TICK_S
 
 FORMAT = "autohaptics.timeline"
@@ -209,7 +211,7 @@ class Timeline:
     def load(cls, path: str | os.PathLike) -> "Timeline":
         """Read and validate a timeline file; errors name the file."""
         path = Path(path)
-        doc = read_json(path, "timeline JSON file")
+        doc = read_json(path, "timeline JSON file", arrays_at=_numeric_place)
         try:
             return cls.from_dict(doc)
         except ParameterError as exc:
@@ -235,6 +237,11 @@ def default_generator(**overrides: Any) -> dict:
 
 
 # ---------------------------------------------------------------------- private
+def _numeric_place(path: tuple) -> bool:
+    """Where a timeline document holds its big numeric arrays: a track or a feature curve."""
+    return len(path) == 2 and path[0] in ("tracks", "features")
+
+
 def _as_array(name: str, value: Any) -> np.ndarray:
     if isinstance(value, np.ndarray) and value.dtype in (np.float32, np.float64):
         return value  # no copy: a 2-hour fan track is 44 MB
@@ -314,10 +321,13 @@ def json_default(obj: Any) -> Any:
     raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
 
 
-def read_json(path: Path, what: str) -> Any:
+def read_json(path: Path, what: str, arrays_at: Callable[[tuple], bool] | None = None) -> Any:
     """The JSON document in ``path``; ParameterError naming the file when it is missing or not
-    JSON (``what`` says what it should have been)."""
+    JSON (``what`` says what it should have been). ``arrays_at``: the paths (tuples of keys) whose
+    big numeric arrays come back as float64 arrays (:func:`.numeric_json.loads`)."""
     try:
+        if arrays_at is not None:
+            return numeric_json.loads(Path(path).read_bytes(), arrays_at)
         with open(path, encoding="utf-8") as fh:
             return json.load(fh)
     except FileNotFoundError:
