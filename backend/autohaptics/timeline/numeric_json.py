@@ -22,7 +22,6 @@ _CANDIDATE = re.compile(rb"\[[0-9\[\],.eE+\- \t\r\n]{%d,}\]" % MIN_BYTES)
 _JSON_NUMBER = re.compile(rb"-?(?:0|[1-9][0-9]*)(?:\.[0-9]+)?(?:[eE][+-]?[0-9]+)?")
 _SPLIT_NUMBER = re.compile(rb"[0-9.eE+\-][ \t\r\n]+[0-9.eE+\-]")
 _MARK = "@autohaptics-numeric-array-"
-_AS_N = bytes.maketrans(_NUMBER_CHARS, b"n" * len(_NUMBER_CHARS))
 _AS_NW = bytes.maketrans(_NUMBER_CHARS + b"\t\r\n", b"n" * len(_NUMBER_CHARS) + b"   ")
 _P10 = 10 ** np.arange(16, dtype=np.int64)
 _ZEROS = b"0," * (_CHUNK + 64)
@@ -43,7 +42,7 @@ def _with_arrays(raw: bytes, places: Callable[[tuple], bool]) -> Any:
         return None
     pieces, arrays, last = [], [], 0
     for m in _CANDIDATE.finditer(raw):
-        arr = numeric_array(raw[m.start():m.end()])
+        arr = numeric_array(raw, m.start(), m.end())
         if arr is None:
             continue
         pieces += [raw[last:m.start()], f'"{_MARK}{len(arrays)}"'.encode()]
@@ -73,19 +72,24 @@ def _put_back(value: Any, arrays: list, used: list, places: Callable[[tuple], bo
     return value
 
 
-def numeric_array(text: bytes) -> np.ndarray | None:
-    """A JSON array of arrays ... of numbers (``text``, nothing around it) as a float64 array of its
-    shape, or None when it is not one (ragged, empty, not only numbers, a number JSON does not allow)."""
-    if b"n " in text.translate(_AS_NW) and _SPLIT_NUMBER.search(text):
+def numeric_array(raw: bytes, start: int = 0, end: int | None = None) -> np.ndarray | None:
+    """A JSON array of arrays ... of numbers (``raw[start:end]``, nothing around it) as a float64
+    array of its shape, or None when it is not one (ragged, empty, not only numbers, a number JSON
+    does not allow). Each copy of the text is let go as soon as it has served."""
+    text = raw[start:end]
+    marked = text.translate(_AS_NW)
+    if b"n " in marked and _SPLIT_NUMBER.search(text):
         return None  # white space inside a number
-    s = text.translate(None, b" \t\r\n")
-    marked = s.translate(_AS_N)
+    marked = marked.translate(None, b" ")
     if b"]n" in marked or b"n[" in marked:  # a number outside the innermost lists (empty slots: _chunk)
         return None
-    shape = _shape(s.translate(None, _NUMBER_CHARS))
+    shape = _shape(marked.translate(None, b"n"))
+    del marked
     if shape is None:
         return None
-    values = _numbers(s.translate(None, b"[]"), int(np.prod(shape)))
+    flat = text.translate(None, b" \t\r\n[]")
+    del text
+    values = _numbers(flat, int(np.prod(shape)))
     return None if values is None else values.reshape(shape)
 
 
