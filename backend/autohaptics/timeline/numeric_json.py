@@ -25,6 +25,7 @@ _MARK = "@autohaptics-numeric-array-"
 _AS_NW = bytes.maketrans(_NUMBER_CHARS + b"\t\r\n", b"n" * len(_NUMBER_CHARS) + b"   ")
 _P10 = 10 ** np.arange(16, dtype=np.int64)
 _ZEROS = b"0," * (_CHUNK + 64)
+_ZERO_INDEX = np.zeros(1, np.int64)
 
 
 def loads(raw: bytes, places: Callable[[tuple], bool] = lambda path: True) -> Any:
@@ -137,7 +138,8 @@ def _chunk(text: bytes, slow: list) -> np.ndarray | None:
         return np.zeros((len(text) + 1) // 2)
     b = np.frombuffer(text, np.uint8)
     commas = np.flatnonzero(b == ord(","))
-    starts, ends = np.r_[0, commas + 1], np.r_[commas, b.size]
+    starts = np.concatenate([_ZERO_INDEX, commas + 1])
+    ends = np.concatenate([commas, [b.size]])
     lengths = ends - starts
     if lengths.min() < 1:
         return None
@@ -159,11 +161,11 @@ def _decimals(b: np.ndarray, lengths: np.ndarray, slow: list) -> np.ndarray | No
     """Numbers written back to back (``b`` bytes, ``lengths`` per number): ``-?(0|[1-9]d*)(.d+)?``
     of at most 15 digits exactly (the integer of its digits over a power of ten, both exact: one
     correctly rounded division), any other JSON number by ``float``; None where one is not JSON."""
-    starts = np.r_[0, np.cumsum(lengths)[:-1]]
+    starts = np.concatenate([_ZERO_INDEX, np.cumsum(lengths)[:-1]])
     ends = starts + lengths
     digit = (b >= ord("0")) & (b <= ord("9"))
     dot, minus = b == ord("."), b == ord("-")
-    cum = [np.r_[0, np.cumsum(x, dtype=np.int64)] for x in (digit, dot, minus)]
+    cum = [np.concatenate([_ZERO_INDEX, np.cumsum(x, dtype=np.int64)]) for x in (digit, dot, minus)]
     digits, dots, minuses = (c[ends] - c[starts] for c in cum)
     neg = b[starts] == ord("-")
     first = starts + neg
