@@ -142,6 +142,49 @@ def test_a_finished_job_leaves_the_project_warm(tmp_path, film, monkeypatch):
         wait_done(client, job_id)
 
 
+def test_the_first_commit_after_a_job_derives_from_what_the_job_kept(tmp_path, film, monkeypatch):
+    """The job's worker hands over what its derive kept (:mod:`autohaptics.pipeline.handoff`): after
+    the job the server computes neither the fan track nor the intensity decision inputs, in the
+    warm-up or in the first commit, and the committed timeline, generated and composed, equals a
+    derive from the project's feature cache with the derive's tables emptied, bit for bit."""
+    import importlib
+
+    from autohaptics.server.composer import derive_timeline
+
+    derive_mod = importlib.import_module("autohaptics.pipeline.derive")  # the package's derive is the function
+    calls: list[str] = []
+    fans, inputs = derive_mod.fan_track, derive_mod.inten.decision_inputs
+    monkeypatch.setattr(derive_mod, "fan_track", lambda *a, **k: calls.append("fan_track") or fans(*a, **k))
+    monkeypatch.setattr(derive_mod.inten, "decision_inputs",
+                        lambda *a, **k: calls.append("decision_inputs") or inputs(*a, **k))
+    settings = Settings(data_dir=tmp_path / "data", frontend_dir=None)
+    with LocalClient(create_app(settings)) as client:
+        composer = client.app.state.composer
+        pid, job_id = thesis_project(client, film)
+        wait_done(client, job_id)
+        deadline = time.monotonic() + 60
+        while not composer.held(pid):
+            assert time.monotonic() < deadline, "the project was not loaded after its job"
+            time.sleep(0.05)
+        r = client.put(f"/api/projects/{pid}/params", json={"thresholds": LOW})
+        assert r.status_code == 200 and r.json()["derived"] and r.json()["job"] is None
+        assert calls == []
+        got, composed = composer.generated(pid), composer.compose(pid).timeline
+        project = composer.store.get_project(pid)
+        monkeypatch.setattr(derive_mod, "_PICTURE", {})
+        monkeypatch.setattr(derive_mod, "_CURVES", {})
+        fresh = derive_timeline(pipeline.Analysis.load(composer.store.analysis_path(pid)), project["params"],
+                                name=project["name"])
+    assert calls == ["decision_inputs", "fan_track"]  # the fresh derive's own
+    for tl in (got, composed):
+        for track in ("vibration", "temperature_c", "fans"):
+            assert np.array_equal(getattr(tl, track), getattr(fresh, track)), track
+    assert got.features.keys() == fresh.features.keys()
+    for name, values in got.features.items():
+        assert values.dtype == fresh.features[name].dtype and np.array_equal(values, fresh.features[name]), name
+    assert got.stats["vibration"] == fresh.stats["vibration"] and got.stats.get("airflow") == fresh.stats.get("airflow")
+
+
 def test_a_commit_during_the_warm_up_shares_its_fan_track(film, monkeypatch):
     """A threshold commit's derive that starts while the warm-up after a job is computing the
     picture's tracks (the fans most of all) waits for them instead of computing them again: two

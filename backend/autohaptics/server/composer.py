@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from autohaptics import pipeline
+from autohaptics.pipeline import handoff
 from autohaptics.params import params_from_doc
 from autohaptics.errors import ParameterError
 from autohaptics.formats.importing import parse_timeline
@@ -79,6 +80,8 @@ class Composer:
         self._files: OrderedDict[Path, tuple[tuple, Any]] = OrderedDict()
         self._loading: dict[Path, threading.Lock] = {}
         self._warming: set[Path] = set()
+        self._handed: OrderedDict[str, tuple] = OrderedDict()  # per project: a job's (analysis key, layer key, kept)
+        self._seeded: set[Path] = set()  # feature caches loaded with a job's complete hand-off
         self._composed: OrderedDict[str, tuple[tuple, Composed]] = OrderedDict()
         self._json: OrderedDict[str, tuple[Composed, bytes]] = OrderedDict()
         self._tracks: OrderedDict[str, dict[str, tuple]] = OrderedDict()  # per project: (generated, keys, composed)
@@ -133,7 +136,21 @@ class Composer:
             self._remember(self.store.generated_path(pid), key, tl)
 
     def analysis(self, pid: str) -> pipeline.Analysis | None:
-        return self._cached(self.store.analysis_path(pid), pipeline.Analysis.load)
+        return self._cached(self.store.analysis_path(pid), lambda path: self._load_analysis(pid, path))
+
+    def _load_analysis(self, pid: str, path: Path) -> pipeline.Analysis:
+        """Load the feature cache; when it is the file a job just wrote, keep what the job's derive
+        kept (:mod:`autohaptics.pipeline.handoff`), its picture tracks from the job's layer if loaded."""
+        analysis = pipeline.Analysis.load(path)
+        with self._lock:
+            handed = self._handed.pop(pid, None)
+        layer_path = self.store.generated_path(pid)
+        if complete := handed is not None and handed[0] == file_key(path):
+            layer = self._cached(layer_path, load_npz) if file_key(layer_path) == handed[1] else None
+            complete = handoff.seed(analysis, handed[2], layer)
+        with self._lock:  # a complete hand-off leaves the warm-up nothing to derive
+            (self._seeded.add if complete else self._seeded.discard)(path)
+        return analysis
 
     def _warm_analysis(self, pid: str) -> None:
         """Load the feature cache in the background when it is not in memory yet, and derive once
@@ -150,7 +167,7 @@ class Composer:
         def load() -> None:
             try:
                 analysis = self.analysis(pid)
-                if analysis is not None:  # the derive's kept curves and picture tracks, for the first commit
+                if analysis is not None and path not in self._seeded:  # the derive's kept curves and picture tracks
                     project = self.store.get_project(pid)
                     derive_timeline(analysis, project["params"], name=project["name"])
             except Exception as exc:  # the re-derive will report it
@@ -161,17 +178,25 @@ class Composer:
 
         threading.Thread(target=load, name=f"warm-analysis {pid}", daemon=True).start()
 
-    def warm(self, pid: str) -> None:
+    def warm(self, pid: str, kept: dict | None = None) -> None:
         """Load ``pid``'s generated layer, its composition (its blocks quantised) and its feature
         cache in the background: at start-up, the project worked on last opens without waiting for
-        a long film's files, and after a job, the first commit finds them loaded."""
+        a long film's files, and after a job, the first commit finds them loaded.
+
+        kept : after a job, what its derive kept (:func:`handoff.kept_of`), for its files as they are now."""
+        if kept is not None:
+            with self._lock:
+                self._handed[pid] = (file_key(self.store.analysis_path(pid)),
+                                     file_key(self.store.generated_path(pid)), kept)
+                while len(self._handed) > self._size:
+                    self._handed.popitem(last=False)
         def load() -> None:
+            self._warm_analysis(pid)  # beside the layer's load
             try:
                 composed = self.compose(pid)
                 self.bins.prepare(pid, "composed", composed.revision, composed.timeline)
             except Exception as exc:  # the editor's own requests will report it
                 log.info("project %s: not loaded ahead (%s)", pid, exc)
-            self._warm_analysis(pid)
 
         threading.Thread(target=load, name=f"warm {pid}", daemon=True).start()
         if self.on_warm is not None:

@@ -57,6 +57,7 @@ def run_job(spec: dict, events, cancel) -> dict:
     """
     from autohaptics import pipeline
     from autohaptics.params import params_from_doc
+    from autohaptics.pipeline.handoff import kept_of
     from autohaptics.runner.heap import release_between_passes
     from autohaptics.server.composer import derive_timeline
     from autohaptics.timeline.npz import save_npz
@@ -81,7 +82,8 @@ def run_job(spec: dict, events, cancel) -> dict:
     analysis.save(work / "analysis.npz")
     tl = derive_timeline(analysis, spec["params"], name=spec["name"])
     save_npz(tl, work / GENERATED)
-    return {"started_at": started, "n_ticks": tl.n_ticks, "needs_analysis": bool(tl.stats.get("needs_analysis"))}
+    return {"started_at": started, "n_ticks": tl.n_ticks, "needs_analysis": bool(tl.stats.get("needs_analysis")),
+            "kept": kept_of(analysis, tl)}  # the server's derives from the file need not compute it again
 
 
 # ------------------------------------------------------------------- server side
@@ -364,9 +366,9 @@ class JobRunner:
             with self._lock:
                 live.status = job["status"] if job else "cancelled"
                 self._live.pop(job_id, None)
+        if job is not None and job["status"] == "done" and self.composer is not None:  # before done is told
+            self.composer.warm(live.project_id, kept=result.get("kept") if params == live.params else None)
         self._publish_final(live, job)
-        if job is not None and job["status"] == "done" and self.composer is not None:
-            self.composer.warm(live.project_id)  # in the background: the first commit finds it loaded
         if more and job is not None and job["status"] == "done" and not self._stopping:
             self._refine_again(live.project_id, params)
 
