@@ -58,3 +58,37 @@ def test_a_missing_argument_does_not_import_the_pipeline():
 def test_every_command_has_its_own_help(command):
     rc, _, out = _run(command, "--help")
     assert rc == 0 and f"usage: autohaptics {command}" in out
+
+
+def test_generate_imports_only_what_it_uses(tmp_path):
+    """A plain ``generate`` (audio child included) loads no multiprocessing machinery, no socket
+    module and no ``ctypes.util`` (whose library search runs ``ldconfig`` in a child process)."""
+    from shared_data import shared_clip
+
+    out = tmp_path / "t.json"
+    rc, modules, text = _run("generate", str(shared_clip("bbb_1s_1280x720_vp8_vorbis.webm")), "-o", str(out), "--quiet")
+    assert rc == 0, text
+    assert out.is_file()
+    assert [m for m in ("multiprocessing", "multiprocessing.connection", "socket", "ctypes.util") if m in modules] == []
+
+
+def test_end_process_runs_the_exit_handlers_and_flushes_the_streams():
+    code = ("import atexit, sys\nfrom autohaptics.cli.main import end_process\n"
+            "atexit.register(lambda: print('handler ran'))\nprint('written', end=' ')\nsys.stderr.write('err')\n"
+            "end_process(3)\nprint('never')\n")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "backend"), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert (proc.returncode, proc.stdout, proc.stderr) == (3, "written handler ran\n", "err")
+
+
+def test_the_generate_program_writes_its_timeline_and_summary_before_it_ends(tmp_path):
+    from shared_data import shared_clip
+
+    out = tmp_path / "t.json"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "backend"), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.run([sys.executable, "-m", "autohaptics.cli.main", "generate",
+                           str(shared_clip("bbb_1s_1280x720_vp8_vorbis.webm")), "-o", str(out), "--quiet"],
+                          capture_output=True, text=True, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr.strip().splitlines()[-1].startswith(f"{out}: 10 ticks")
+    assert json.loads(out.read_text())["n_ticks"] == 10

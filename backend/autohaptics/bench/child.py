@@ -161,13 +161,20 @@ def _worker_generate(argv: list[str]) -> None:
 
 
 def _main(argv: list[str]) -> int:
-    """Entry point of the measured child processes (``python -m autohaptics.bench.child``)."""
+    """Entry point of the measured child processes (``python -m autohaptics.bench.child``). A
+    ``_generate`` child ends as the ``autohaptics generate`` program does
+    (:func:`autohaptics.cli.main.end_process`); the bare decode as any script does."""
     if not argv or argv[0] not in ("_decode", "_generate"):
         print("usage: python -m autohaptics.bench.child _decode|_generate ... (use `autohaptics bench accuracy`)",
               file=sys.stderr)
         return 2
-    (_worker_decode if argv[0] == "_decode" else _worker_generate)(argv[1:])
-    return 0
+    if argv[0] == "_decode":
+        _worker_decode(argv[1:])
+        return 0
+    from autohaptics.cli.main import end_process
+
+    _worker_generate(argv[1:])
+    end_process(0)
 
 
 if __name__ == "__main__":

@@ -23,7 +23,7 @@ def register(sub) -> None:
     add_generation_options(p)
     add_style_option(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, exit_at_once=True)  # nothing left open: cli.main.end_process
 
 
 def run(args) -> int:

@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import errno
 import json
-import socket
 import sys
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -79,6 +77,8 @@ def run(args) -> int:
 
 def bind_port(host: str, port: int) -> socket.socket:
     """A socket bound to ``host:port``; ParameterError in one line when the port is taken."""
+    import socket  # here, not at the top: every other command imports this module for its name
+
     try:
         infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
     except socket.gaierror as exc:
@@ -107,6 +107,7 @@ def _open_sample(url: str) -> None:
     import urllib.error
     import urllib.request
     import uuid
+    import tempfile
     import webbrowser
 
     try:

@@ -20,7 +20,6 @@ writable and hold no anonymous (copy-on-write) page are touched: their content i
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
 import functools
 
 
@@ -30,10 +29,11 @@ MMAP_THRESHOLD_BYTES = 1 << 20
 
 @functools.cache
 def _libc_fn(name: str, argtypes: tuple):
-    lib = ctypes.util.find_library("c")
+    """The C library's ``name``, looked up among the process's own symbols (``ctypes.util.find_library``
+    would run ``ldconfig -p`` in a child process); None where there is none."""
     try:
-        fn = getattr(ctypes.CDLL(lib), name) if lib else None
-    except (OSError, AttributeError):
+        fn = getattr(ctypes.CDLL(None), name)
+    except (OSError, AttributeError, TypeError):
         return None
     if fn is not None:
         fn.argtypes, fn.restype = list(argtypes), ctypes.c_int
