@@ -18,7 +18,7 @@ MIN_BYTES = 4096  # an array shorter than this is left to the standard parser
 _CHUNK = 1 << 16  # bytes of numbers parsed per step (bounds the temporaries; most of a fan track's are all 0)
 _MAX_SLOW = 100_000  # numbers per array parsed one by one (exponents, > 15 digits) before giving up
 _NUMBER_CHARS = b"0123456789.eE+-"
-_CANDIDATE = re.compile(rb"\[[0-9\[\],.eE+\- \t\r\n]{%d,}\]" % MIN_BYTES)
+_CANDIDATE = re.compile(rb"\[[0-9\[\],.eE+\- \t\r\n]{%d,}" % MIN_BYTES)  # to its last "]": linear
 _JSON_NUMBER = re.compile(rb"-?(?:0|[1-9][0-9]*)(?:\.[0-9]+)?(?:[eE][+-]?[0-9]+)?")
 _SPLIT_NUMBER = re.compile(rb"[0-9.eE+\-][ \t\r\n]+[0-9.eE+\-]")
 _MARK = "@autohaptics-numeric-array-"
@@ -43,12 +43,13 @@ def _with_arrays(raw: bytes, places: Callable[[tuple], bool]) -> Any:
         return None
     pieces, arrays, last = [], [], 0
     for m in _CANDIDATE.finditer(raw):
-        arr = numeric_array(raw, m.start(), m.end())
+        end = raw.rfind(b"]", m.start(), m.end()) + 1
+        arr = numeric_array(raw, m.start(), end) if end - m.start() > MIN_BYTES else None
         if arr is None:
             continue
         pieces += [raw[last:m.start()], f'"{_MARK}{len(arrays)}"'.encode()]
         arrays.append(arr)
-        last = m.end()
+        last = end
     if not arrays:
         return None
     try:
@@ -192,6 +193,6 @@ def _decimals(b: np.ndarray, lengths: np.ndarray, slow: list) -> np.ndarray | No
             return None
         try:
             values[i] = float(int(token)) if token.strip(b"-").isdigit() else float(token)
-        except OverflowError:
+        except (OverflowError, ValueError):  # too big for a float, or for int(): the standard parser says
             return None
     return values
