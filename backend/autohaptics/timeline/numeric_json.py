@@ -57,7 +57,10 @@ def _with_arrays(raw: bytes, places: Callable[[tuple], bool]) -> Any:
     except (json.JSONDecodeError, UnicodeDecodeError):
         return None  # a candidate inside a string leaves two strings side by side: not JSON
     used: list[int] = []
-    doc = _put_back(doc, arrays, used, places, ())
+    try:
+        doc = _put_back(doc, arrays, used, places, ())
+    except RecursionError:  # nested about as deep as the standard parser allows: leave it to that one
+        return None
     return doc if sorted(used) == list(range(len(arrays))) else None
 
 
