@@ -83,19 +83,10 @@ def test_big_buck_bunny_clips(name):
 
 
 @pytest.mark.slow
-def test_sintel_trailer_as_measured():
-    """Measured: 18 of 19 windows found, 1 boundary extra (precision = recall = 0.947). The dragon-
-    into-desert dissolve (camera and dragon moving through it) is found at 361, late: in the stored
-    luma thumbnail its first half is a haze over the dragon, not a step toward the desert
-    (docs/BENCHMARKS.md, "Shots")."""
-    found = clip_boundaries(SINTEL)
-    hits, extra, missed = score(found, CUT_LISTS[SINTEL], DONT_CARE[SINTEL])
-    assert hits >= 18 and extra <= 1, found
-
-
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="the Sintel trailer is at precision = recall = 0.947 (a moving dissolve "
-                                       "placed at its end): not the issue's 0.95")
 def test_sintel_trailer_meets_the_target():
+    """Measured: 19 of 19 windows found, nothing extra. The dragon-into-desert dissolve (35.0-36.3 s)
+    reads as linear only over its end; its span is widened to the contrast dip it sits in, and its
+    first half is a haze (both shots' weights well below a half), so it is placed like a fade: at
+    355, midway between the dragon half gone and the desert half there (docs/BENCHMARKS.md, "Shots")."""
     hits, extra, missed = score(clip_boundaries(SINTEL), CUT_LISTS[SINTEL], DONT_CARE[SINTEL])
-    assert hits / (hits + extra) >= 0.95 and hits / (hits + missed) >= 0.95
+    assert hits / (hits + extra) >= 0.95 and hits / (hits + missed) >= 0.95, clip_boundaries(SINTEL)

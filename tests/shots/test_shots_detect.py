@@ -12,6 +12,7 @@ from autohaptics import testing as synth
 from autohaptics.airflow import cuts
 from autohaptics.errors import ParameterError
 from autohaptics.pipeline import Analysis, VideoAnalysis
+from autohaptics.shots import blend
 
 W, H = 48, 27
 
@@ -87,6 +88,35 @@ def test_a_cross_dissolve_is_one_boundary_at_its_middle():
     got = shots.detect(cut=flags(seq), signature=packed(seq))
     assert shots.KINDS[got.kind[0]] == "dissolve" and got.tick.size == 1
     assert abs(int(got.tick[0]) - 16.5) <= 1  # the 50/50 picture sits between ticks 16 and 17
+
+
+def test_a_dissolve_through_a_haze_is_placed_between_the_shots_halves():
+    """The first shot fades into a bright haze before the second shows (ticks 12-22 out, 18-28
+    in): neither dominates in between, so the boundary is midway between where the first is half
+    gone (row 17) and where the second is half there (row 23), as for a fade through a flat picture
+    (the blend weight toward the second alone placed it at tick 14)."""
+    a, b = frame(1, (60, 90, 160)).astype(float), frame(2, (170, 120, 60)).astype(float)
+    haze = np.full_like(a, 215.0)
+    out, into = np.clip((np.arange(40) - 12) / 10, 0, 1), np.clip((np.arange(40) - 18) / 10, 0, 1)
+    seq = [np.rint((1 - o) * a + i * b + (o - i) * haze).astype(np.uint8) for o, i in zip(out, into)]
+    got = shots.detect(cut=flags(seq), signature=packed(seq))
+    assert [shots.KINDS[k] for k in got.kind] == ["dissolve"], got.tick
+    assert abs(int(got.tick[0]) - 20.5) <= 1, got.tick  # the row-20 picture is half-way: tick 20 or 21
+    s0, s1 = got.span[0]
+    assert s0 <= 13 and s1 >= 28, got.span  # the span covers both halves
+
+
+def test_a_dissolve_found_by_its_end_is_widened_to_its_contrast_dip():
+    """Only the end of a dissolve read as linear (rows 22-26): its span grows to the last steady row
+    before the contrast falls toward the dip (row 9) and the first after it rises out (row 27), not
+    into the steady shots, and stops at a row that is not usable (a cut)."""
+    level = np.concatenate([np.full(10, 50.0), np.linspace(50, 20, 11)[1:], np.linspace(20, 35, 9)[1:],
+                            np.full(10, 35.0)]) + 0.05 * np.sin(np.arange(38))  # steady shots: noise only
+    usable = np.ones(level.size, bool)
+    assert blend.widened(level, usable, 22, 27, 30) == (9, 28)
+    usable[14] = False
+    assert blend.widened(level, usable, 22, 27, 30) == (15, 28)
+    assert blend.widened(level, usable, 22, 27, 3) == (16, 27)  # at most max_ramp rows a side
 
 
 def test_ticks_without_a_frame_of_their_own_hold_and_boundaries_land_between():

@@ -13,8 +13,8 @@
 - **Dissolves**: a tick c whose thumbnail, in 3 x 4 blocks, is the mean of those w ticks before
   and after (residual below ``linear_max`` of their difference) where those two are in different
   shots by the cut rule, for at least two w in ``widths``, with no cut or fade between; runs whose
-  spans overlap are one. The boundary is where each tick's blend weight (projected on the line between
-  the span's outer ticks, 3 x 4 blocks) crosses 0.5.
+  spans overlap are one. The span is widened to the contrast dip it sits in and the boundary is
+  where the blend is half-way (:mod:`.blend`).
 
 A slow pan keeps its palette (the cut rule's colour test) and fast action within a shot does not
 blend linearly, so neither makes a boundary. Without signatures (caches written before they were
@@ -29,6 +29,7 @@ import numpy as np
 
 from autohaptics.airflow import cuts
 from autohaptics.errors import ParameterError
+from autohaptics.shots import blend
 
 KINDS = ("start", "cut", "fade", "dissolve")  # how a shot begins; codes are indices
 CUT, FADE, DISSOLVE = 1, 2, 3
@@ -47,10 +48,12 @@ class ShotParams:
         still_corr (0.9): a change 4x what either shot moves in a tick (action moves on).
     dark_level : mean luma (grey levels) below which a tick is flat without signatures (16).
     min_ramp : ticks of gradual change into or out of a flat run that make it a fade (2).
-    max_ramp : longest ramp followed outward from a flat run, ticks (30).
+    max_ramp : longest ramp followed outward from a flat run or a dissolve's contrast dip, ticks (30).
     widths : half-widths (ticks) of the windows a dissolve is looked for in.
     linear_max : largest residual of a dissolve's middle against its ends' mean, as a share of
         the ends' difference (0.2; a hard cut gives 0.5).
+    haze_weight : a dissolve whose two shots' fitted weights sum below this somewhere passes
+        through a third picture (a haze) and is placed like a fade (0.5; :mod:`.blend`).
     min_shot : shortest shot, ticks; a boundary closer to the previous one is dropped (2).
     flash_ticks : longest flash, ticks: cut flags this close that leave the shot as it was are a flash (5).
     """
@@ -65,6 +68,7 @@ class ShotParams:
     max_ramp: int = 30
     widths: tuple[int, ...] = (2, 3, 4, 6, 8, 12)
     linear_max: float = 0.2
+    haze_weight: float = 0.5
     min_shot: int = 2
     flash_ticks: int = 5
     cut_params: cuts.CutParams = cuts.CutParams()
@@ -140,7 +144,7 @@ def _detect(cut: np.ndarray, signature, mean_rgb, params: ShotParams) -> list[tu
     for _, kind, s0, _ in found:
         if kind == CUT:
             busy[s0] = True
-    for s0, s1, pos in _dissolves(sigs, valid, flat | busy, params):
+    for s0, s1, pos in _dissolves(sigs, valid, level, flat | busy, params):
         found.append((pos, DISSOLVE, s0, s1))
     return found
 
@@ -319,22 +323,15 @@ def _cuts(cut: np.ndarray, sigs, valid, mean_rgb, params):
         i += 1
 
 
-def _coarse(sigs: np.ndarray) -> np.ndarray:
-    """The thumbnails as 3 x 4 block means, float64 [shape=(n, 12)]: a blend of two shots is a
-    blend at any scale, while the shots' own motion moves little at this one."""
-    th = cuts.thumbnails(sigs).reshape(-1, 3, 3, 4, 4)
-    return th.mean(axis=(2, 4), dtype=np.float64).reshape(-1, 12)
-
-
 _CHUNK = 4096  # rows of signatures compared at once (float64 copies: 6 MB a side)
 
 
-def _dissolves(sigs, valid, blocked, params):
+def _dissolves(sigs, valid, level, blocked, params):
     """(s0, s1, tick) of each cross-dissolve (module docstring)."""
     if sigs is None:
         return
     n = valid.size
-    coarse = _coarse(sigs)
+    blocks = blend.coarse(sigs)
     usable = valid & ~blocked
     bad = np.concatenate([[0], np.cumsum(~usable)])  # prefix count of unusable ticks: a window in O(1)
     best_r = np.full(n, np.inf)
@@ -345,8 +342,8 @@ def _dissolves(sigs, valid, blocked, params):
             break
         c = np.arange(w, n - w)
         c = c[bad[c + w + 1] - bad[c - w] == 0]
-        ends = coarse[c + w] - coarse[c - w]
-        mid = coarse[c] - 0.5 * (coarse[c - w] + coarse[c + w])
+        ends = blocks[c + w] - blocks[c - w]
+        mid = blocks[c] - 0.5 * (blocks[c - w] + blocks[c + w])
         r = np.sqrt((mid * mid).sum(axis=1) / np.maximum((ends * ends).sum(axis=1), 1e-9))
         c, r = c[r <= params.linear_max], r[r <= params.linear_max]  # the cheap test first
         apart = np.zeros(c.size, bool)
@@ -369,34 +366,8 @@ def _dissolves(sigs, valid, blocked, params):
             s0, k = p0, (pk if best_r[pk] <= best_r[k] else k)
         spans.append((s0, s1, k))
     for s0, s1, k in spans:
-        yield s0, s1, _half_way(coarse, s0, s1 - 1, k, _between(best_r, k))
-
-
-def _between(best_r: np.ndarray, k: int) -> float:
-    """Where the picture is half one shot and half the other, in rows, near row ``k``: the
-    residual is V-shaped around the dissolve's middle, so its vertex between the neighbours
-    places the middle between rows."""
-    r0 = best_r[k]
-    rl = best_r[k - 1] if k > 0 else np.inf
-    rr = best_r[k + 1] if k + 1 < best_r.size else np.inf
-    offset = 0.0
-    if np.isfinite(rl) and np.isfinite(rr) and max(rl, rr) - r0 > 1e-9:
-        offset = 0.5 * (rl - rr) / (max(rl, rr) - r0)
-    return k + offset
-
-
-def _half_way(coarse: np.ndarray, pa: int, pb: int, k: int, fallback: float) -> float:
-    """Where the blend weight crosses 0.5 (rows), nearest row ``k``: each row from ``pa`` to ``pb``
-    projected on the line between those two (the transition's outer ticks, in 3 x 4 blocks),
-    the crossing interpolated between rows; ``fallback`` where the weight never crosses."""
-    t = np.arange(pa, pb + 1)
-    d = coarse[pb] - coarse[pa]
-    w = (coarse[t] - coarse[pa]) @ d / max(float(d @ d), 1e-9)
-    up = np.flatnonzero((w[:-1] < 0.5) & (w[1:] >= 0.5))
-    if not up.size:
-        return fallback
-    j = int(up[np.argmin(np.abs(t[up] - k))])
-    return float(t[j] + (0.5 - w[j]) / (w[j + 1] - w[j]))
+        s0, s1 = blend.widened(level, usable, s0, s1, params.max_ramp)
+        yield s0, s1, blend.half_way(blocks, s0, s1 - 1, k, blend.between(best_r, k), params.haze_weight)
 
 
 def _spaced(found, n: int, min_shot: int):
