@@ -2,11 +2,14 @@
 memory: a cold open asks for sixty of them at once), and the page
 naming every module of ``src/`` up front (``<link rel="modulepreload">``), so a cold open fetches
 them all at once instead of discovering them one import level after another (seven levels deep).
+The links are added by a script at the page's ``<!-- modulepreload -->`` mark (else before
+``</head>``): links in the markup are requested by Chromium's preload scanner before any inline
+script runs, and the early data requests above the mark waited for all the modules.
 """
 
 from __future__ import annotations
 
-import html
+import json
 import os
 from mimetypes import guess_type
 from pathlib import Path
@@ -16,7 +19,7 @@ from starlette.staticfiles import StaticFiles
 
 NO_CACHE_SUFFIXES = (".html", ".js", ".mjs", ".css", ".json")
 MODULES_DIR = "src"
-_MARK = b"</head>"
+_MARKS = (b"<!-- modulepreload", b"</head>")
 
 
 class FrontendFiles(StaticFiles):
@@ -44,16 +47,17 @@ class FrontendFiles(StaticFiles):
         return Response(body[1], status_code=status_code, media_type=media_type, headers={"Cache-Control": "no-cache"})
 
     def page(self, path: Path) -> bytes:
-        """``index.html`` with a preload link for every module under ``src/`` before ``</head>``,
-        kept while the page and the module files are the same."""
+        """``index.html`` with a script adding a preload link for every module under ``src/`` at
+        its mark, kept while the page and the module files are the same."""
         modules = sorted(p for p in (self._root / MODULES_DIR).rglob("*.js") if p.is_file())
         key = (path.stat().st_mtime_ns, tuple((str(p), p.stat().st_mtime_ns) for p in modules))
         if self._page is not None and self._page[0] == key:
             return self._page[1]
         text = path.read_bytes()
-        links = "".join(f'  <link rel="modulepreload" href="{html.escape(p.relative_to(self._root).as_posix())}">\n'
-                        for p in modules).encode()
-        at = text.find(_MARK)
+        names = json.dumps([p.relative_to(self._root).as_posix() for p in modules]).replace("</", "<\\/")
+        links = (f'<script>{names}.forEach(function (href) {{ var link = document.createElement("link"); '
+                 f'link.rel = "modulepreload"; link.href = href; document.head.appendChild(link); }});</script>\n  ').encode()
+        at = next((i for i in (text.find(mark) for mark in _MARKS) if i >= 0), -1)
         page = text if at < 0 else text[:at] + links + text[at:]
         self._page = (key, page)
         return page
