@@ -77,3 +77,47 @@ def test_the_thesis_rule_pairs_the_next_frame_even_when_it_repeats(repeated_pan)
     motion = tl.features["motion_fw_per_s"][1:-1]
     assert (motion < 0.01).any(), motion  # a tick whose next decoded frame is a repeat reads still
     assert tl.stats["video"]["flow"]["repeats_skipped"] == 0
+
+
+@pytest.fixture(scope="module")
+def fluttering_pan(tmp_path_factory):
+    """A fine texture panning 2 px a frame (0.15 frame widths/s at 320 px, 24 fps) that also shakes
+    3 px sideways on every other frame, H.264 with one non-reference B-frame between reference frames:
+    the balanced decode skips the B-frames (pairs two frames apart), a full decode reads every frame."""
+    import av
+
+    path = tmp_path_factory.mktemp("flutter") / "flutter.mp4"
+    w, h, fps = 320, 180, 24
+    rng = np.random.default_rng(3)
+    tex = np.repeat(np.repeat((rng.random((h // 2 + 8, w // 2 + 64)) * 255).astype(np.uint8), 2, 0), 2, 1)
+    with av.open(str(path), "w") as out:
+        vs = out.add_stream("libx264", rate=fps)
+        vs.width, vs.height, vs.pix_fmt = w, h, "yuv420p"
+        vs.options = {"crf": "16", "preset": "veryfast",
+                      "x264-params": "bframes=1:b-adapt=0:b-pyramid=none:scenecut=0"}
+        for i in range(48):
+            x = 2 * i + (3 if i % 2 else 0)
+            frame = av.VideoFrame.from_ndarray(np.stack([tex[8:8 + h, x:x + w]] * 3, -1), format="rgb24")
+            for packet in vs.encode(frame):
+                out.mux(packet)
+        for packet in vs.encode():
+            out.mux(packet)
+    return path
+
+
+def _mean_motion(path, **overrides) -> float:
+    params, _ = resolve_params("balanced", overrides)
+    return float(pipeline.generate(path, params=params).features["motion_fw_per_s"][1:-1].mean())
+
+
+def test_a_least_span_reads_the_same_motion_whether_the_decoder_skips_frames_or_not(fluttering_pan):
+    # with flow.min_span_frames=1.5 a pair spans two frames whichever frames are decoded, so the
+    # flutter between two frames counts alike (docs/BENCHMARKS.md, "Screener encodes", fourth stop)
+    full, nonref = (_mean_motion(fluttering_pan, **{"video.decode": d, "flow.min_span_frames": 1.5})
+                    for d in ("full", "nonref"))
+    assert abs(full / nonref - 1) < 0.15, (full, nonref)
+    assert abs(nonref / 0.15 - 1) < 0.25, nonref  # the pan itself: 2 px a frame
+    # the default (the thesis's next decoded frame): consecutive frames read the shake as well
+    full0, nonref0 = (_mean_motion(fluttering_pan, **{"video.decode": d, "flow.min_span_frames": 0.0})
+                      for d in ("full", "nonref"))
+    assert full0 > 1.3 * nonref0, (full0, nonref0)

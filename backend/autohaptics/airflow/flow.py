@@ -45,6 +45,12 @@ class FlowParams:
         this after the first frame, s, 0..1 (default 0.1, one tick: frame-rate conversion by repeated
         frames, 3:2 pulldown to 60 fps, animation on twos, also where the decoder skips the
         non-reference frames between; 0 = always the next frame, the thesis).
+    min_span_frames : a flow pair's successor is the first decoded frame at least this many frame
+        intervals (the stream's nominal rate) after its first frame, 0..10 (an analysed frame always
+        ends the pair before it). 0 (default, the thesis) = the next decoded frame; 1.5 pairs frames
+        two apart whether or not the decoder skips the non-reference frames (quick flutter reads
+        differently over one and two frames), but two frames of a 25 -> 30 fps conversion by repeats
+        hold one or two pictures' steps: docs/BENCHMARKS.md, "Screener encodes", fourth stop.
     """
 
     STAGE: ClassVar[str] = ANALYSIS
@@ -54,6 +60,7 @@ class FlowParams:
     dis_preset: str = "medium"
     proxy_fraction: float = 0.125
     repeat_wait_s: float = 0.1
+    min_span_frames: float = 0.0
 
     def __post_init__(self):
         if self.method not in FLOW_METHODS:
@@ -65,6 +72,8 @@ class FlowParams:
         for name in ("proxy_fraction", "repeat_wait_s"):
             if not (0.0 <= float(getattr(self, name)) <= 1.0):  # NaN fails too
                 raise ParameterError(f"flow.{name} must lie in 0..1, got {getattr(self, name)!r}")
+        if not (0.0 <= float(self.min_span_frames) <= 10.0):
+            raise ParameterError(f"flow.min_span_frames must lie in 0..10, got {self.min_span_frames!r}")
 
     def width_for(self, picture_width: int) -> int:
         """The gray proxy's width for a picture ``picture_width`` px wide as shown, px:

@@ -178,6 +178,8 @@ class _Pass:
         self.luma_sigs: list = []  # (gray proxy, its cut signature) of the last two
         self.last_time = 0.0
         self.repeats = 0  # successor frames passed over as repeats of their pair's first frame
+        fps = float(info.video.fps) if info.video is not None and info.video.fps else 0.0
+        self.min_span_s = float(flow_params.min_span_frames) / fps if fps > 0 else 0.0  # a pair's least span, s
 
     def prepare(self, frame: media.Frame) -> None:
         """Make a frame's gray, RGB and saliency luma planes ahead, in the decoding thread (the same
@@ -198,7 +200,8 @@ class _Pass:
         self.last_time = frame.time_s
         k = min(int(tick_of_time(frame.time_s)), self.n - 1)
         analyse_this = k >= 0 and (centre_tick is not None or self.every)
-        is_successor = self.pending is not None
+        # a successor closer than the pair's least span (flow.min_span_frames) is passed over unread
+        is_successor = self.pending is not None and (analyse_this or frame.time_s - self.pending[4] >= self.min_span_s)
         if not (analyse_this or is_successor):
             return
         if centre_tick is not None:
