@@ -266,22 +266,26 @@ def params_from_args(args):
 
 def analysis_key(doc: dict) -> dict:
     """The part of a ``generator.params``-style dict (:func:`~autohaptics.overrides.params_to_dict`)
-    that the analysis depends on: compare two to know whether a cached analysis can serve."""
+    that the analysis depends on: compare two to know whether a cached analysis can serve. A field
+    the document lacks counts at its default: a document written before the field existed was
+    analysed as that default does (a new field's default keeps what the analysis did before)."""
     return _analysis_part(_DEFAULT, doc, "")
 
 
 def _analysis_part(record: Any, doc: dict, prefix: str) -> dict:
     key = {}
+    defaults = params_to_dict(record)
     for f in dataclasses.fields(record):
         value = getattr(record, f.name)
         if dataclasses.is_dataclass(value):
             stages = {stage_of(value, g.name) for g in dataclasses.fields(value)}
             if stages == {ANALYSIS}:  # a group the analysis reads whole
-                key[prefix + f.name] = doc.get(f.name)
+                given = doc.get(f.name)
+                key[prefix + f.name] = {**defaults[f.name], **given} if isinstance(given, dict) else given
             elif ANALYSIS in stages:  # a derive-time group with some analysis-time fields
                 key.update(_analysis_part(value, doc.get(f.name) or {}, prefix + f.name + "."))
         elif stage_of(record, f.name) == ANALYSIS:
-            key[prefix + f.name] = doc.get(f.name)
+            key[prefix + f.name] = doc.get(f.name, defaults[f.name])
     return key
 
 

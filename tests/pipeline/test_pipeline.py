@@ -1,5 +1,7 @@
 """The pipeline's composition: modes, tracks, skipping, the feature cache, missing streams."""
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -85,6 +87,16 @@ def test_lower_thresholds_borrow_saliency_and_ask_for_a_new_analysis(av_analysis
 def test_analysis_parameters_change_compatibility(av_analysis):
     params = apply_overrides(GenerateParams(), {"flow.method": "farneback"})
     assert not analysis_compatible(av_analysis, params)
+
+
+def test_an_analysis_from_before_a_field_existed_serves_that_field_at_its_default(av_analysis):
+    """A cache written before an analysis-time field was added lacks it: it was analysed as the
+    field's default does, so it still serves the default, and not another value."""
+    old = copy.deepcopy(av_analysis)
+    del old.params["flow"]["min_span_frames"], old.params["video"]["decode"]
+    assert analysis_compatible(old, GenerateParams())
+    assert not analysis_compatible(old, apply_overrides(GenerateParams(), {"flow.min_span_frames": 1.5}))
+    assert not analysis_compatible(old, apply_overrides(GenerateParams(), {"video.decode": "full"}))
 
 
 def test_feature_cache_round_trip_gives_the_same_timeline(av_analysis, tmp_path):
