@@ -131,7 +131,8 @@ def normalise(x: np.ndarray, *, method: str = "max", percentile: float = 99.5) -
         raise ParameterError(f"normaliser must be one of {NORMALISERS}, got {method!r}")
     if ref <= 0.0 or not math.isfinite(ref):
         return np.zeros_like(x)
-    return np.minimum(x / ref, 1.0)
+    with np.errstate(over="ignore"):  # x / a denormal percentile may overflow to inf: it is clipped to 1
+        return np.minimum(x / ref, 1.0)
 
 
 def normalise_features(features: dict[str, np.ndarray], *, params: IntensityParams) -> dict[str, np.ndarray]:
