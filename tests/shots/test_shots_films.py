@@ -151,17 +151,9 @@ def test_title_cards_known_answers(tmp_path, fps, size):
 
 @pytest.mark.parametrize("fps", [24, 25, 30, 60])
 @pytest.mark.parametrize("size", [(160, 90), (320, 180), (640, 360)])
-def test_panning_dissolves_known_answers(tmp_path, fps, size):
-    b = film_boundaries(tmp_path, fps, size, PANS)
-    hits, extra = matched(b.tick, sorted(PANS_TRUTH))
-    assert hits == len(PANS_TRUTH) and not extra, (b.tick.tolist(), extra)
-    assert [shots.KINDS[k] for k in b.kind] == ["dissolve", "dissolve"]
-
-
-@pytest.mark.parametrize("fps", [24, 25, 30, 60])
-@pytest.mark.parametrize("size", [(160, 90), (320, 180), (640, 360)])
-def test_dissolves_with_a_hazy_shot_known_answers(tmp_path, fps, size):
-    b = film_boundaries(tmp_path, fps, size, HAZE)
-    hits, extra = matched(b.tick, sorted(HAZE_TRUTH))
-    assert hits == len(HAZE_TRUTH) and not extra, (b.tick.tolist(), extra)
+@pytest.mark.parametrize("film, truth", [(PANS, PANS_TRUTH), (HAZE, HAZE_TRUTH)], ids=["panning", "hazy_shot"])
+def test_dissolves_between_moving_or_hazy_shots_known_answers(tmp_path, fps, size, film, truth):
+    b = film_boundaries(tmp_path, fps, size, film)
+    hits, extra = matched(b.tick, sorted(truth))
+    assert hits == len(truth) and not extra, (b.tick.tolist(), extra)
     assert [shots.KINDS[k] for k in b.kind] == ["dissolve", "dissolve"]
