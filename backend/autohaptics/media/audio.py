@@ -44,33 +44,73 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
         stream.thread_type = "AUTO"
         mapping = None
         interleave = _Interleaver()
+        held = None
         for frame in decode_tolerant(c, stream, report, info.path):
             frame_time = frame.time  # before _samples: interleaving clears the frame's pts
-            x = _to_float(_samples(frame, interleave))
+            x = _samples(frame, interleave)
             if mapping is None:
                 mapping = _channel_roles(frame.layout, x.shape[0])
                 report.main_channels, report.lfe_channel = mapping
-            mono = _downmix(x, mapping, lfe_gain, report)
+                held = _Held(max(1, int(_DOWNMIX_S * sr_in)), mapping, lfe_gain, report)
             if frame_time is not None:  # align to the container clock: zero-fill gaps, drop overlaps
                 gap = float(frame_time) - info.start_s - next_t_in
                 if gap > 1.0 / sr_in * 2:
+                    out.emit(held.downmix())
                     out.emit(np.zeros(int(round(gap * sr_in)), np.float32))
                     next_t_in += round(gap * sr_in) / sr_in
                 elif gap < -1.0 / sr_in * 2:
-                    mono = mono[min(mono.size, int(round(-gap * sr_in))):]
-            next_t_in += mono.size / sr_in
-            out.emit(mono)
-            yield from out.drain(False)
+                    x = x[:, min(x.shape[1], int(round(-gap * sr_in))):]
+            next_t_in += x.shape[1] / sr_in
+            if held.add(x):
+                out.emit(held.downmix())
+                yield from out.drain(False)
+        if held is not None:
+            out.emit(held.downmix())
         yield from out.finish()
     if report.samples_out == 0:
         reason = f" ({report.first_error})" if report.first_error else ""
         raise MediaError(f"{info.path}: the audio stream holds no decodable samples{reason}")
 
 
+# Decoded frames are downmixed together, up to this many seconds at a time: an AAC frame holds
+# 21 ms, and the per-call cost of the conversions outweighs their work on so few samples.
+_DOWNMIX_S = 0.25
+
+
+class _Held:
+    """Decoded samples waiting for the downmix: [shape=(channels, n)] arrays, downmixed together
+    per run of one sample format and channel count."""
+
+    def __init__(self, limit: int, mapping: tuple[list[int], int | None], lfe_gain: float, report: AudioReport):
+        self.limit, self.mapping, self.lfe_gain, self.report = limit, mapping, lfe_gain, report
+        self.parts: list[np.ndarray] = []
+        self.mono: list[np.ndarray] = []  # runs already downmixed (the format changed after them)
+        self.n = 0
+
+    def add(self, x: np.ndarray) -> bool:
+        """Hold ``x``; True once the held samples should be downmixed."""
+        if self.parts and (x.dtype, x.shape[0]) != (self.parts[0].dtype, self.parts[0].shape[0]):
+            self.mono.append(self._run())
+        self.parts.append(x)
+        self.n += x.shape[1]
+        return self.n >= self.limit
+
+    def _run(self) -> np.ndarray:
+        x = self.parts[0] if len(self.parts) == 1 else np.concatenate(self.parts, axis=1)
+        self.parts = []
+        return _downmix(x if x.dtype.kind == "f" else _to_float(x), self.mapping, self.lfe_gain, self.report)
+
+    def downmix(self) -> np.ndarray:
+        """The mono signal of every held sample, in order (empty when none are held)."""
+        out = self.mono + ([self._run()] if self.parts else [])
+        self.mono, self.n = [], 0
+        return np.concatenate(out) if len(out) > 1 else (out[0] if out else np.zeros(0, np.float32))
+
+
 def _downmix(x: np.ndarray, mapping: tuple[list[int], int | None], lfe_gain: float,
              report: AudioReport) -> np.ndarray:
-    """The mono analysis signal of one frame's samples [shape=(channels, n)] (module docstring);
-    non-finite samples become 0 and are counted in ``report``."""
+    """The mono analysis signal of float samples [shape=(channels, n)] in digital full scale (module
+    docstring), summed in float64; non-finite samples become 0 and are counted in ``report``."""
     bad = ~np.isfinite(x)
     if bad.any():
         report.nonfinite_samples += int(bad.sum())
@@ -78,7 +118,7 @@ def _downmix(x: np.ndarray, mapping: tuple[list[int], int | None], lfe_gain: flo
     main, lfe = mapping
     mono = x[main].sum(axis=0, dtype=np.float64)
     if lfe is not None:
-        mono += lfe_gain * x[lfe]
+        mono += lfe_gain * x[lfe].astype(np.float64)
     return (mono / max(1, len(main))).astype(np.float32)
 
 
