@@ -19,10 +19,10 @@ from autohaptics.testing import Scene, Segment, Shape, Texture
 RNG = np.random.default_rng(7)
 
 
-def _luma(size, rect, level=120, noise=3.0) -> np.ndarray:
-    """A full-range luma frame ``size`` (w, h): textured picture in ``rect``, noisy black around."""
+def _luma(size, rect, level=120, noise=3.0, bar=0.0) -> np.ndarray:
+    """A full-range luma frame ``size`` (w, h): textured picture in ``rect``, noisy bars at ``bar`` around."""
     w, h = size
-    out = np.clip(RNG.normal(0.0, noise, (h, w)), 0, 255)
+    out = np.clip(bar + RNG.normal(0.0, noise, (h, w)), 0, 255)
     x, y, pw, ph = rect
     out[y:y + ph, x:x + pw] = np.clip(level + 40 * RNG.standard_normal((ph, pw)), 0, 255)
     return out.astype(np.uint8)
@@ -58,6 +58,32 @@ def test_subtitles_noise_and_a_ragged_edge_in_a_bar():
         samples.append(f)
     x, y, w, h = active_area(samples)
     assert (x, w) == (0, 320) and abs(y - 30) <= 2 and abs(y + h - 210) <= 2
+
+
+@pytest.mark.parametrize("bar, noise", [(16, 3.0), (24, 3.0), (30, 2.0), (20, 6.0)])
+def test_bars_that_are_not_pure_black(bar, noise):
+    """Bars at full-range 16-30 (video-range black read as full range, a lifted master) with
+    grain: still bars, found by their own flat level, in every kind of box."""
+    for size, rect in [((320, 240), (0, 30, 320, 180)), ((320, 180), (40, 0, 240, 180)),
+                       ((320, 240), (32, 24, 256, 192))]:
+        assert active_area([_luma(size, rect, bar=bar, noise=noise) for _ in range(3)]) == rect, (bar, rect)
+
+
+@pytest.mark.parametrize("boxed", [False, True])
+def test_a_subtitle_inside_the_lower_bar_is_not_picture(boxed):
+    """Bold burnt-in subtitles (solid strokes over 70 % of the width, or white text on a grey box)
+    in the lower bar of some samples, apart from the picture by a few black rows."""
+    size, rect = (320, 240), (0, 30, 320, 180)
+    samples = []
+    for i in range(5):
+        f = _luma(size, rect)
+        if i % 2:
+            if boxed:
+                f[216:232, 30:290] = 70
+            f[219:229, 40:280] = 235
+            f[219:229, 40:280:9] = 70 if boxed else 0  # the gaps between letters
+        samples.append(f)
+    assert active_area(samples) == rect
 
 
 @pytest.mark.parametrize("bars", [(40, 0), (40, 10), (2, 2)])
@@ -138,6 +164,14 @@ def test_the_active_area_of_an_encoded_scene_is_its_picture(tmp_path, scene, box
     assert len(sample_lumas(info)) >= 4  # the keyframes at 0, 2, 4, 6 s (and at a cut)
     got = find_active_area(info)
     assert max(abs(a - b) for a, b in zip(got, rect)) <= 2, (got, rect)
+
+
+def test_grey_bars_of_an_encoded_scene(tmp_path):
+    """Bars at RGB 20 (luma 20 full range, 33 as coded), letterbox: the picture inside them."""
+    path = synth.write_scene(tmp_path / "grey.mp4", LIT, width=320, height=240, fps=24, audio=False,
+                             picture=(0, 30, 320, 180), bar_rgb=(20, 20, 20))
+    got = find_active_area(media.probe(path))
+    assert max(abs(a - b) for a, b in zip(got, (0, 30, 320, 180))) <= 2, got
 
 
 def test_a_black_film_is_read_whole(tmp_path):

@@ -20,14 +20,17 @@ MOTION = synth.three_motions_scene()
 # picture (w, h), frame (w, h), picture's place (x, y, w, h) in the frame
 BOXES = {"letterbox": ((640, 360), (640, 480), (0, 60, 640, 360)),
          "pillarbox": ((480, 360), (640, 360), (80, 0, 480, 360)),
-         "windowbox": ((480, 270), (640, 360), (80, 44, 480, 270))}
+         "windowbox": ((480, 270), (640, 360), (80, 44, 480, 270)),
+         # bars at RGB 22 (a lifted master; video-range black read as full range is 16)
+         "grey letterbox": ((640, 360), (640, 480), (0, 60, 640, 360))}
 
 
 @pytest.mark.parametrize("box", list(BOXES))
 def test_a_film_in_bars_gives_the_tracks_of_the_bare_film(tmp_path, box):
     (pw, ph), (fw, fh), rect = BOXES[box]
     bare = synth.write_scene(tmp_path / "bare.mp4", MOTION, width=pw, height=ph, fps=24)
-    boxed = synth.write_scene(tmp_path / "boxed.mp4", MOTION, width=fw, height=fh, fps=24, picture=rect)
+    boxed = synth.write_scene(tmp_path / "boxed.mp4", MOTION, width=fw, height=fh, fps=24, picture=rect,
+                              bar_rgb=(22, 22, 22) if box.startswith("grey") else (0, 0, 0))
     ref, test = pipeline.generate(bare), pipeline.generate(boxed)
     assert ref.stats["video"]["active_area"]["rect"] == [0, 0, pw, ph]
     found = test.stats["video"]["active_area"]

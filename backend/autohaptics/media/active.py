@@ -5,10 +5,13 @@ a pillarbox or both, a windowbox), so every stage reads the picture and never th
 reads those frames (keyframes spread over the film, each a seek and one decoded frame);
 :func:`find_active_area` is both. A row (column) belongs to the picture when, in at least one
 sample, a good share of its pixels are brighter than black: the maximum over the samples sees
-through dark scenes, night shots and fades to black (a bar is black in every sample), and burnt-in
-subtitles in a bar light too small a share of its rows to count. Bars are accepted on an axis only
-when they are clearly bars (both sides at least ``MIN_BAR`` of the size and roughly equal);
-otherwise that axis keeps the full frame, as a film without bars does.
+through dark scenes, night shots and fades to black (a bar is black in every sample). Black is
+the bars' own level: a frame edge that is flat and dark in every sample (video-range black read
+as full range, a lifted master: 16-30) lifts it. Burnt-in subtitles in a bar light too small a
+share of its rows to count, or, bold or boxed, a short stretch of rows apart from the picture by
+black ones. Bars are accepted on an axis only when they are clearly bars (both sides at least
+``MIN_BAR`` of the size and roughly equal); otherwise that axis keeps the full frame, as a film
+without bars does.
 """
 
 from __future__ import annotations
@@ -30,6 +33,11 @@ BLACK_LEVEL = 12  # full-range luma 0..255: brighter than this is lit (a bar: ab
 COVER_SHARE = 0.5  # a row or column is picture when its largest lit share reaches this share of the best one's
 MIN_BAR = 0.015  # a bar covers at least this fraction of the size (1.85:1 in 16:9 leaves 1.9 % per side)
 BAR_BALANCE = 0.5  # the smaller bar of an axis is at least this fraction of the larger
+EDGE = 2  # the outermost rows (columns) on each side that tell a bar's own level, px
+BAR_MAX_LEVEL = 48  # full-range luma: a flat edge darker than this may be a bar
+BAR_SPREAD = 16  # a flat edge: 90 % of its pixels (all samples) lie within this of its median
+GAP_COVER = 0.1  # a row (column) lit less than this share of the best one's parts picture from a bar's subtitle
+STRAY = 0.25  # an outer lit stretch shorter than this share of the longest is not picture (a subtitle)
 
 
 def active_area(lumas: Sequence[np.ndarray], *, black_level: float = BLACK_LEVEL, cover_share: float = COVER_SHARE,
@@ -37,26 +45,45 @@ def active_area(lumas: Sequence[np.ndarray], *, black_level: float = BLACK_LEVEL
     """The picture inside black bars of frames whose full-range luma ``lumas`` holds (each uint8
     [shape=(height, width)], 0..255, display orientation, all one size).
 
-    Per sample, each row's (column's) share of pixels above ``black_level``; its largest over the
-    samples is its cover. The bar on each side is the run of outer rows (columns) whose cover is
-    below ``cover_share`` x the largest cover of the axis, rounded up to even px (the crop errs
-    into the picture). An axis keeps its full size unless both bars are at least ``min_bar`` of
-    it and the smaller is at least ``balance`` x the larger.
+    Per sample, each row's (column's) share of pixels above ``black_level`` plus the bars' level
+    on that axis (:func:`bar_level`); its largest over the samples is its cover. The picture is
+    what lies between the outermost rows (columns) whose cover reaches ``cover_share`` x the
+    axis's largest, leaving out an outer stretch shorter than ``STRAY`` x the longest that black
+    rows (cover below ``GAP_COVER`` x the largest) part from the rest; the bars are the rest,
+    rounded up to even px (the crop errs into the picture). An axis keeps its full size unless
+    both bars are at least ``min_bar`` of it and the smaller is at least ``balance`` x the larger.
     Returns (x, y, width, height) px; (0, 0, width, height) when there are no bars or no sample.
     """
     if not lumas:
         raise ValueError("active_area needs at least one sampled frame")
     h, w = lumas[0].shape[:2]
+    if any(luma.shape[:2] != (h, w) for luma in lumas):
+        raise ValueError(f"sampled frames differ in size: {[lu.shape[:2] for lu in lumas]}")
     rows, cols = np.zeros(h), np.zeros(w)
+    row_black, col_black = black_level + bar_level(lumas, 0), black_level + bar_level(lumas, 1)
     for luma in lumas:
-        if luma.shape[:2] != (h, w):
-            raise ValueError(f"sampled frames differ in size: {luma.shape[:2]} and {(h, w)}")
-        lit = (luma > black_level).view(np.uint8)
+        lit = (luma > row_black).view(np.uint8)
         np.maximum(rows, cv2.reduce(lit, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F)[:, 0], out=rows)
+        if col_black != row_black:
+            lit = (luma > col_black).view(np.uint8)
         np.maximum(cols, cv2.reduce(lit, 0, cv2.REDUCE_AVG, dtype=cv2.CV_32F)[0], out=cols)
     y, hh = _axis(rows, cover_share, min_bar, balance)
     x, ww = _axis(cols, cover_share, min_bar, balance)
     return x, y, ww, hh
+
+
+def bar_level(lumas: Sequence[np.ndarray], axis: int) -> float:
+    """The level (full-range luma, 0..``BAR_MAX_LEVEL``) of the bars at both ends of ``axis`` (0:
+    top and bottom, 1: left and right): the larger median of the two ``EDGE``-px edges over all
+    samples when both are flat (``BAR_SPREAD``) and dark; 0 otherwise (no bars there, or black)."""
+    level = 0.0
+    for side in (slice(0, EDGE), slice(-EDGE, None)):
+        edge = np.concatenate([(lu[side] if axis == 0 else lu[:, side].T).ravel() for lu in lumas])
+        lo, mid, hi = np.percentile(edge, (5, 50, 95))
+        if mid > BAR_MAX_LEVEL or mid - lo > BAR_SPREAD or hi - mid > BAR_SPREAD:
+            return 0.0
+        level = max(level, float(mid))
+    return level
 
 
 def _axis(cover: np.ndarray, share: float, min_bar: float, balance: float) -> tuple[int, int]:
@@ -66,11 +93,30 @@ def _axis(cover: np.ndarray, share: float, min_bar: float, balance: float) -> tu
     if best <= 0.0:
         return 0, n
     picture = np.flatnonzero(cover >= share * best)
-    lead, trail = int(picture[0]), int(n - 1 - picture[-1])
+    # stretches of rows apart from each other by black ones, each as (first, last) picture row
+    cut = np.flatnonzero(np.diff(picture) > 1)
+    runs = [(int(a), int(b)) for a, b in zip(picture[np.r_[0, cut + 1]], picture[np.r_[cut, -1]])]
+    if len(runs) > 1:
+        runs = _merged(runs, cover, GAP_COVER * best)
+        longest = max(b - a + 1 for a, b in runs)
+        kept = [i for i, (a, b) in enumerate(runs) if b - a + 1 >= STRAY * longest]
+        runs = runs[kept[0]:kept[-1] + 1]
+    lead, trail = runs[0][0], n - 1 - runs[-1][1]
     lead, trail = lead + lead % 2, trail + trail % 2
     if min(lead, trail) < max(2, min_bar * n) or min(lead, trail) < balance * max(lead, trail):
         return 0, n
     return lead, n - lead - trail
+
+
+def _merged(runs: list[tuple[int, int]], cover: np.ndarray, black: float) -> list[tuple[int, int]]:
+    """``runs`` with each two neighbours joined unless some row between them is lit below ``black``."""
+    out = [runs[0]]
+    for a, b in runs[1:]:
+        if cover[out[-1][1] + 1:a].min() < black:
+            out.append((a, b))
+        else:
+            out[-1] = (out[-1][0], b)
+    return out
 
 
 def sample_lumas(info: MediaInfo, samples: int = SAMPLES) -> list[np.ndarray]:

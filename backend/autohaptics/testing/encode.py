@@ -40,7 +40,8 @@ def write_scene(path: str | os.PathLike, scene: Scene, *, width: int = 320, heig
                 audio_codec: str | None = None, sample_rate: int = 48000, channels: int = 2,
                 channel_layout: str | None = "auto", video: bool = True, audio: bool = True,
                 long: bool = False, quality: str = "high",
-                picture: tuple[int, int, int, int] | None = None) -> Path:
+                picture: tuple[int, int, int, int] | None = None,
+                bar_rgb: tuple[int, int, int] = (0, 0, 0)) -> Path:
     """Encode ``scene`` to ``path`` and return the path.
 
     The container comes from the suffix (.mp4 .mov .mkv .webm .avi; audio-only .wav .m4a).
@@ -53,7 +54,8 @@ def write_scene(path: str | os.PathLike, scene: Scene, *, width: int = 320, heig
     quality : "high" (near-lossless, for analysis tests) or "low" (small files, quicker to write:
         x264 at crf 28, AAC with FFmpeg's fast coder at 32 kbit/s per channel).
     picture : (x, y, w, h) px: the scene is rendered w x h and placed there in the width x height
-        frame, the rest black (RGB 0: letterbox, pillarbox or windowbox bars); default the whole frame.
+        frame, the rest ``bar_rgb`` (letterbox, pillarbox or windowbox bars; default RGB 0, black);
+        default the whole frame.
 
     Raises ParameterError for impossible combinations (odd sizes with 4:2:0 codecs, Opus at a rate
     other than 8/12/16/24/48 kHz, AAC without a channel layout, no stream at all).
@@ -92,7 +94,7 @@ def write_scene(path: str | os.PathLike, scene: Scene, *, width: int = 320, heig
             # about a third of that (0.44 instead of 1.22 s per minute of stereo)
             as_.codec_context.options = {"aac_coder": "fast"}
             as_.bit_rate = 32_000 * channels
-        _encode(out, scene, vs, as_, width, height, rate, sample_rate, channels, layout, picture)
+        _encode(out, scene, vs, as_, width, height, rate, sample_rate, channels, layout, picture, bar_rgb)
     return path
 
 
@@ -139,7 +141,8 @@ def _add_video_stream(out, codec: str, width: int, height: int, rate: Fraction, 
 
 
 def _encode(out, scene: Scene, vs, as_, width, height, rate: Fraction, sample_rate: int, channels: int,
-            layout: str | None, picture: tuple[int, int, int, int] | None = None) -> None:
+            layout: str | None, picture: tuple[int, int, int, int] | None = None,
+            bar_rgb: tuple[int, int, int] = (0, 0, 0)) -> None:
     """Interleave video frames and audio chunks in time order (the muxer's buffers stay small);
     ``picture`` as :func:`write_scene`."""
     arend = AudioRenderer(scene, sample_rate, channels) if as_ is not None else None
@@ -162,7 +165,8 @@ def _encode(out, scene: Scene, vs, as_, width, height, rate: Fraction, sample_ra
 
     if vs is not None:
         px, py, pw, ph = picture if picture is not None else (0, 0, width, height)
-        canvas = np.zeros((height, width, 3), np.uint8)
+        canvas = np.empty((height, width, 3), np.uint8)
+        canvas[:] = np.asarray(bar_rgb, np.uint8)
         for i, (t, rgb) in enumerate(iter_frames(scene, width=pw, height=ph, fps=rate)):
             if arend is not None:
                 audio_until(t + 1.0)
