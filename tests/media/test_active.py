@@ -69,6 +69,15 @@ def test_bars_that_are_not_pure_black(bar, noise):
         assert active_area([_luma(size, rect, bar=bar, noise=noise) for _ in range(3)]) == rect, (bar, rect)
 
 
+def test_a_dark_sky_over_darker_ground_is_not_lifted_bars():
+    """No bars: a flat night sky (20) above a lit band and flat ground (8) below it in every sample.
+    Two flat dark edges at different levels are not bars; the frame is read whole, as before."""
+    f = np.full((240, 320), 20, np.uint8)
+    f[80:160] = np.clip(120 + 40 * RNG.standard_normal((80, 320)), 0, 255).astype(np.uint8)
+    f[160:] = 8
+    assert active_area([f, f.copy()]) == (0, 0, 320, 240)
+
+
 @pytest.mark.parametrize("boxed", [False, True])
 def test_a_subtitle_inside_the_lower_bar_is_not_picture(boxed):
     """Bold burnt-in subtitles (solid strokes over 70 % of the width, or white text on a grey box)

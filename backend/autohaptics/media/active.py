@@ -36,6 +36,7 @@ BAR_BALANCE = 0.5  # the smaller bar of an axis is at least this fraction of the
 EDGE = 2  # the outermost rows (columns) on each side that tell a bar's own level, px
 BAR_MAX_LEVEL = 48  # full-range luma: a flat edge darker than this may be a bar
 BAR_SPREAD = 16  # a flat edge: 90 % of its pixels (all samples) lie within this of its median
+BAR_MATCH = 4  # the two edges' medians differ by at most this (bars are one level; sky and ground are not)
 GAP_COVER = 0.1  # a row (column) lit less than this share of the best one's parts picture from a bar's subtitle
 STRAY = 0.25  # an outer lit stretch shorter than this share of the longest is not picture (a subtitle)
 
@@ -75,15 +76,16 @@ def active_area(lumas: Sequence[np.ndarray], *, black_level: float = BLACK_LEVEL
 def bar_level(lumas: Sequence[np.ndarray], axis: int) -> float:
     """The level (full-range luma, 0..``BAR_MAX_LEVEL``) of the bars at both ends of ``axis`` (0:
     top and bottom, 1: left and right): the larger median of the two ``EDGE``-px edges over all
-    samples when both are flat (``BAR_SPREAD``) and dark; 0 otherwise (no bars there, or black)."""
-    level = 0.0
+    samples when both are flat (``BAR_SPREAD``), dark and alike (``BAR_MATCH``); 0 otherwise (no
+    bars there, or black)."""
+    mids = []
     for side in (slice(0, EDGE), slice(-EDGE, None)):
         edge = np.concatenate([(lu[side] if axis == 0 else lu[:, side].T).ravel() for lu in lumas])
         lo, mid, hi = np.percentile(edge, (5, 50, 95))
         if mid > BAR_MAX_LEVEL or mid - lo > BAR_SPREAD or hi - mid > BAR_SPREAD:
             return 0.0
-        level = max(level, float(mid))
-    return level
+        mids.append(float(mid))
+    return max(mids) if abs(mids[0] - mids[1]) <= BAR_MATCH else 0.0
 
 
 def _axis(cover: np.ndarray, share: float, min_bar: float, balance: float) -> tuple[int, int]:
