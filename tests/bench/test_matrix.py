@@ -91,3 +91,26 @@ def test_digital_silence_gives_what_its_noise_floor_twin_gives(tmp_path):
     assert (a.vibration > 0).any()
     fig = row_figures(a, b, VARIANTS[0])
     assert fig["onset_f1"] >= 0.9 and fig["vibration_mae"] <= 0.01, fig
+
+
+# screeners harsher than the matrix's rows (codec, height px, crf, fps) -> why a row is not met yet
+# (docs/BENCHMARKS.md, "Screener encodes"): the pan's cells read near from the block noise's
+# divergence (with the near rule off every row is at 1.00 tolerant); strict, as NOT_MET
+HARSHER = (("vp9", 180, 40, 30), ("vp9", 240, 40, 25), ("h264", 360, 40, 25),
+           ("h264", 240, 40, 30), ("h264", 180, 40, 30), ("h264", 180, 38, 24))
+HARSHER_NOT_MET = {("h264", 240, 40, 30): "tolerant fan IoU 0.749", ("h264", 180, 40, 30): "tolerant fan IoU 0.741",
+                   ("h264", 180, 38, 24): "tolerant fan IoU 0.716"}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("row", [pytest.param(r, marks=pytest.mark.xfail(strict=True, reason=HARSHER_NOT_MET[r]))
+                                 if r in HARSHER_NOT_MET else r for r in HARSHER], ids=lambda r: "_".join(map(str, r)))
+def test_harsher_screeners_meet_the_targets(row, scene_file, clean, tmp_path_factory):
+    from autohaptics.testing.reencode import screener
+
+    codec, height, crf, fps = row
+    dst = tmp_path_factory.getbasetemp() / "harsher" / f"{codec}_{height}_{crf}_{fps}{'.webm' if codec == 'vp9' else '.mp4'}"
+    dst.parent.mkdir(exist_ok=True)
+    test = pipeline.generate(screener(scene_file, dst, codec=codec, height=height, crf=crf, fps=fps))
+    fig = row_figures(pipeline.derive(clean), test, VARIANTS[0])
+    assert misses(fig) == [], fig
