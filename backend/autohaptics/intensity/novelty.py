@@ -53,8 +53,10 @@ def feature_novelty(features: dict[str, np.ndarray], *, baseline_s: float = 3.0,
     bands a codec keeps."""
     sound = features.get("loudness")
     opening = opening_frames(np.asarray(sound, dtype=np.float64)) if sound is not None else None
+    lag = (median_n - 1) // 2 if median_n > 1 else 0
     out = {f: novelty(trailing_median(np.asarray(x, dtype=np.float64), median_n) if f in SMOOTHED else x,
-                      exponent=EXPONENTS[f], baseline_s=baseline_s, clip=False, opening_n=opening)
+                      exponent=EXPONENTS[f], baseline_s=baseline_s, clip=False, opening_n=opening,
+                      lag_n=lag if f in SMOOTHED else 0)
            for f, x in features.items()}
     if "sharpness" in out and "loudness" in out:
         out["sharpness"] = np.where(out["loudness"] > 0, out["sharpness"], 0.0)
@@ -62,13 +64,16 @@ def feature_novelty(features: dict[str, np.ndarray], *, baseline_s: float = 3.0,
 
 
 def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, clip: bool = True,
-            opening_n: int | None = None) -> np.ndarray:
+            opening_n: int | None = None, lag_n: int = 0) -> np.ndarray:
     """Novelty of one feature curve (module docstring).
 
     x : float [shape=(n,)], one value per 20 ms frame, >= 0 (non-finite values count as 0).
     baseline_s : length of the recent baseline, seconds (> 0).
     opening_n : the frames whose largest value the feature had before the file began, 0 for a
         file that opens on silence (:func:`opening_frames` of the loudness; default: of ``x``).
+    lag_n : frames by which ``x`` lags the level ``opening_n`` was taken from (a trailing median's
+        (n - 1) // 2): a curve under way from its first frame holds its first value that long, so
+        the level its opening check compares with spans ``lag_n`` frames more.
     Returns float64 [shape=(n,)], finite, >= 0 and (with ``clip``) <= 1; all zeros for silence.
     """
     v = np.asarray(x, dtype=np.float64)
@@ -84,7 +89,8 @@ def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, cl
     opening_n = opening_frames(v) if opening_n is None else min(int(opening_n), n)
     if opening_n > 0:  # a hit of this feature's own ends its opening, whatever the loudness does
         first = int(np.argmax(v[:opening_n] > FLOOR))  # its own sound begins (a codec's delay, the median's lag)
-        opening_n = first + _before_rise(v[first:opening_n], float(v[first:first + gap_n].max()))
+        early = v[first:max(first, int(lag_n)) + gap_n]  # its first GAP_S, as the loudness's own
+        opening_n = first + _before_rise(v[first:opening_n], float(early.max()))
     pre_n = env_n + gap_n + base_n if opening_n > 0 else 0  # history for every window before t = 0
     env = trailing_max(np.concatenate([np.full(pre_n, v[:opening_n].max() if pre_n else 0.0), v]), env_n)
     cum = np.concatenate([[0.0], np.cumsum(env)])
