@@ -160,3 +160,63 @@ def test_python_nonlinear_decay_flushes():
 def test_flush_floor_is_far_below_the_threshold_in_quiet_and_its_square_is_normal():
     assert kernels.FLUSH_FLOOR ** 2 > 1e100 * TINY  # a squared state above the floor stays normal
     assert kernels.FLUSH_FLOOR < 1e-60 * 2e-5  # 2e-5 Pa: 0 dB SPL
+
+
+# ------------------------------------------------------------------ decoded from files
+# Every decode path (codec, rate through the resampler, layout) into the public feature pass: a
+# codec's tail after a boom (Opus leaves float32 subnormal samples), a glide into the float32
+# subnormals, a float64 fade into the float64 subnormals (f64 PCM, downmixed in float64).
+def _write_f64_wav(path, x: np.ndarray, rate: int) -> None:
+    """Mono float64 samples ``x`` (digital full scale) as a pcm_f64le .wav, written by PyAV."""
+    import av
+
+    with av.open(str(path), "w", format="wav") as out:
+        stream = out.add_stream("pcm_f64le", rate=rate, layout="mono")
+        for i in range(0, x.size, 4096):
+            frame = av.AudioFrame.from_ndarray(np.ascontiguousarray(x[None, i:i + 4096]), format="dbl", layout="mono")
+            frame.sample_rate = rate
+            for packet in stream.encode(frame):
+                out.mux(packet)
+        for packet in stream.encode(None):
+            out.mux(packet)
+
+
+def _decoded_case(tmp_path, case: str):
+    """(the file, whether its decoded float32 samples hold subnormals) for one decode path."""
+    from autohaptics.testing import Tone, write_scene
+
+    boom = Scene(duration_s=8.0, audio=tuple(impact(0.1, level_dbfs=-6.0)))
+    if case == "opus_48k_stereo_boom":  # the decoder's tail after the boom: float32 subnormal samples
+        return write_scene(tmp_path / "boom.webm", boom, video=False, channels=2), True
+    if case == "aac_44k1_5.1_boom":
+        return write_scene(tmp_path / "boom.m4a", boom, video=False, sample_rate=44100, channels=6), False
+    if case == "f32_22k05_7.1_glide":  # -6 dBFS to -1000 dB by 6 s: float32 subnormal from ~4.6 s, 0 after ~5.4 s
+        glide = Scene(duration_s=8.0, audio=(Tone(0.1, 6.0, 440.0, level_dbfs=-6.0, level_end_dbfs=-1000.0),))
+        return write_scene(tmp_path / "glide.wav", glide, video=False, audio_codec="pcm_f32le", sample_rate=22050,
+                           channels=8), True
+    rate = 96000  # "f64_96k_mono_fade": noise x exp(-t / 12 ms): 1e-308 at 8.5 s, 0 after ~9 s
+    t = np.arange(10 * rate) / rate
+    x = np.random.default_rng(0).standard_normal(t.size) * 0.1 * np.exp(-t / 0.012)
+    assert np.count_nonzero((x != 0) & (np.abs(x) < TINY)) > 10_000  # the file holds float64 subnormals
+    _write_f64_wav(tmp_path / "fade.wav", x, rate)
+    return tmp_path / "fade.wav", True
+
+
+@pytest.mark.parametrize("case", ["opus_48k_stereo_boom", "aac_44k1_5.1_boom", "f32_22k05_7.1_glide",
+                                  "f64_96k_mono_fade"])
+def test_no_subnormal_state_from_any_decode_path(tmp_path, case):
+    from autohaptics.media import iter_audio
+
+    path, tiny_samples = _decoded_case(tmp_path, case)
+    state = F.init_state()
+    counts, in_samples = [], 0
+    for chunk in iter_audio(path, chunk_s=1.0):
+        assert chunk.dtype == np.float32 and np.isfinite(chunk).all()
+        in_samples += int(np.count_nonzero((chunk != 0) & (np.abs(chunk) < np.finfo(np.float32).tiny)))
+        part, state = F.process_chunk(chunk, state)
+        s = state.loudness
+        counts.append(subnormals(s.bank, s.smooth, s.stages, s.decay, s.weighting, state.low_energy.zi,
+                                 state.pending_spec, part.loudness, part.sharpness, part.booming, part.low_energy))
+    assert counts == [0] * len(counts)
+    assert (in_samples > 0) == tiny_samples  # the decoded samples reached the float32 subnormals
+    assert np.count_nonzero(state.loudness.bank[0]) == 0 and np.count_nonzero(state.low_energy.zi) == 0
