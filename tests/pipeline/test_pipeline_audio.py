@@ -109,3 +109,30 @@ def test_cli_generate_and_one_line_errors(tmp_path):
         assert r.returncode == 2
         assert msg in r.stderr and "Traceback" not in r.stderr
         assert len(r.stderr.strip().splitlines()) == 1
+
+
+# A score cut mid-way, and a boom out of silence, through each audio path: AAC without an edit list
+# (its priming decoded) and with one, Opus through the resampler, FLAC at 96 kHz, 16-bit PCM 7.1.
+AUDIO_PATHS = {"aac_mkv_22k05_stereo": ("mkv", dict(audio_codec="aac", sample_rate=22050, channels=2)),
+               "aac_m4a_44k1_mono": ("m4a", dict(sample_rate=44100, channels=1)),
+               "opus_mkv_24k_5.1": ("mkv", dict(audio_codec="libopus", sample_rate=24000, channels=6)),
+               "flac_mkv_96k_stereo": ("mkv", dict(audio_codec="flac", sample_rate=96000, channels=2)),
+               "s16_wav_32k_7.1": ("wav", dict(audio_codec="pcm_s16le", sample_rate=32000, channels=8))}
+
+
+@pytest.mark.parametrize("audio_path", sorted(AUDIO_PATHS))
+def test_a_cut_score_does_not_jolt_and_a_boom_after_silence_vibrates_through_every_audio_path(tmp_path, audio_path):
+    from autohaptics.testing import Scene, sounds, write_scene
+
+    suffix, kwargs = AUDIO_PATHS[audio_path]
+    params, _ = resolve_params("balanced", {"mode": "audio", "tracks": ["vibration"]})
+    film = Scene(duration_s=16.0, audio=tuple(sounds.music_bed(0.0, 16.0, level_dbfs=-20.0))
+                 + tuple(sounds.impact(6.5, seed=1)), name="score")
+    cut = write_scene(tmp_path / f"cut.{suffix}", sounds.cut_in(film, 5.23, 4.0), video=False, **kwargs)
+    chair = generate(cut, params).vibration.max(axis=1)
+    hit = slice(int(round((6.5 - 5.23 + 0.05) / 0.1)), int(round((6.5 - 5.23 + sounds.IMPACT_LENGTH_S - 0.05) / 0.1)))
+    assert chair[:5].max() <= 0.2 and chair[hit].min() >= 0.7 * chair.max() > 0.5, chair[:20]
+    boom = write_scene(tmp_path / f"boom.{suffix}", Scene(duration_s=3.0, audio=tuple(sounds.impact(0.3))),
+                       video=False, **kwargs)
+    chair = generate(boom, params).vibration.max(axis=1)
+    assert not chair[:3].any() and chair[3:3 + int(sounds.IMPACT_LENGTH_S / 0.1)].min() >= 0.7, chair[:12]
