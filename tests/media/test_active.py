@@ -76,6 +76,10 @@ def test_a_dark_sky_over_darker_ground_is_not_lifted_bars():
     f[80:160] = np.clip(120 + 40 * RNG.standard_normal((80, 320)), 0, 255).astype(np.uint8)
     f[160:] = 8
     assert active_area([f, f.copy()]) == (0, 0, 320, 240)
+    # flat dark walls at one level (40) on both sides of a lit middle: brighter than any lifted black
+    g = np.full((240, 320), 40, np.uint8)
+    g[:, 60:260] = np.clip(120 + 40 * RNG.standard_normal((240, 200)), 0, 255).astype(np.uint8)
+    assert active_area([g, g.copy()]) == (0, 0, 320, 240)
 
 
 @pytest.mark.parametrize("boxed", [False, True])
