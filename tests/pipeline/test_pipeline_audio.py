@@ -111,8 +111,8 @@ def test_cli_generate_and_one_line_errors(tmp_path):
         assert len(r.stderr.strip().splitlines()) == 1
 
 
-# A score cut mid-way, and a boom out of silence, through each audio path: AAC without an edit list
-# (its priming decoded) and with one, Opus through the resampler, FLAC at 96 kHz, 16-bit PCM 7.1.
+# A score cut mid-way, and a boom out of silence, through each audio path: AAC in Matroska and in
+# .m4a, Opus through the resampler, FLAC at 96 kHz, 16-bit PCM 7.1.
 AUDIO_PATHS = {"aac_mkv_22k05_stereo": ("mkv", dict(audio_codec="aac", sample_rate=22050, channels=2)),
                "aac_m4a_44k1_mono": ("m4a", dict(sample_rate=44100, channels=1)),
                "opus_mkv_24k_5.1": ("mkv", dict(audio_codec="libopus", sample_rate=24000, channels=6)),
