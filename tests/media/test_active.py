@@ -187,6 +187,18 @@ def test_grey_bars_of_an_encoded_scene(tmp_path):
     assert max(abs(a - b) for a, b in zip(got, (0, 30, 320, 180))) <= 2, got
 
 
+@pytest.mark.parametrize("opening", ["cut", "fade"])
+def test_a_short_film_whose_only_keyframe_is_black(tmp_path, opening):
+    """A 6 s letterboxed clip in one 10 s GOP (``long``: no keyframe at its cut or fade from black):
+    its one keyframe is black, so frames after it are sampled too."""
+    first = Segment(0, 1.0, (0, 0, 0)) if opening == "cut" else Segment(0, 1.0, (0, 0, 0), rgb_end=(150, 110, 90))
+    scene = Scene(6.0, background=(first, Segment(1.0, 6.0, (150, 110, 90), texture=_tex(5))), shapes=LIT.shapes)
+    path = synth.write_scene(tmp_path / "one_gop.mp4", scene, width=320, height=240, fps=24, audio=False,
+                             picture=(0, 30, 320, 180), long=True)
+    got = find_active_area(media.probe(path))
+    assert max(abs(a - b) for a, b in zip(got, (0, 30, 320, 180))) <= 2, got
+
+
 def test_a_black_film_is_read_whole(tmp_path):
     path = synth.write_scene(tmp_path / "black.mp4", Scene(4.0, background=(Segment(0, 4.0, (0, 0, 0)),)),
                              width=320, height=240, fps=24, audio=False, picture=(0, 30, 320, 180))

@@ -39,6 +39,8 @@ BAR_SPREAD = 12  # a flat edge: 90 % of its pixels (all samples) lie within this
 BAR_MATCH = 4  # the two edges' medians differ by at most this (bars are one level; sky and ground are not)
 GAP_COVER = 0.1  # a row (column) lit less than this share of the best one's parts picture from a bar's subtitle
 STRAY = 0.25  # an outer lit stretch shorter than this share of the longest is not picture (a subtitle)
+DARK_SHARE = 0.5  # keyframes lit on less than this share of their pixels, all of them: frames after are read too
+FORWARD_FRAMES = 300  # at most this many frames decoded from the start for them
 
 
 def active_area(lumas: Sequence[np.ndarray], *, black_level: float = BLACK_LEVEL, cover_share: float = COVER_SHARE,
@@ -127,7 +129,9 @@ def sample_lumas(info: MediaInfo, samples: int = SAMPLES) -> list[np.ndarray]:
     of the duration, the keyframe at or before it, or the first keyframe after it not sampled yet
     (before the next time). Only those keyframes are decoded (a seek, reading packets, one
     picture each), so a film with fewer keyframes than ``samples`` (a clip of a few seconds)
-    gives fewer samples; a keyframe that fails to decode is passed over."""
+    gives fewer samples; a keyframe that fails to decode is passed over. When there are fewer
+    and every one is dark (lit on under ``DARK_SHARE`` of its pixels: a clip whose one GOP
+    opens on black), the frames at those times within the first ``FORWARD_FRAMES`` are added."""
     if info.video is None:
         return []
     n = max(1, int(samples))
@@ -145,6 +149,31 @@ def sample_lumas(info: MediaInfo, samples: int = SAMPLES) -> list[np.ndarray]:
             if frame is not None:
                 rotation = norm_rotation(getattr(frame, "rotation", info.video.rotation))
                 out.append(Frame(frame, i, times[i], rotation).luma())
+    if len(out) < n and all(np.count_nonzero(lu > BLACK_LEVEL) < DARK_SHARE * lu.size for lu in out):
+        out += _forward_lumas(info, times[:n])
+    return out
+
+
+def _forward_lumas(info: MediaInfo, times: list[float]) -> list[np.ndarray]:
+    """The luma of the first frame decoded at or after each of ``times`` (s from the film's
+    start, ascending), reading from the start, within its first ``FORWARD_FRAMES`` frames."""
+    out: list[np.ndarray] = []
+    k = 0
+    with open_container(info.path) as c:
+        stream = stream_by_index(c, info.video.index)
+        stream.thread_type = "AUTO"
+        try:
+            for j, frame in enumerate(c.decode(stream)):
+                if j >= FORWARD_FRAMES or k >= len(times):
+                    break
+                t = (frame.time - info.start_s) if frame.time is not None else j / max(info.video.fps or 1.0, 1e-3)
+                if t >= times[k]:
+                    rotation = norm_rotation(getattr(frame, "rotation", info.video.rotation))
+                    out.append(Frame(frame, j, t, rotation).luma())
+                    while k < len(times) and times[k] <= t:
+                        k += 1
+        except av.error.FFmpegError:
+            pass
     return out
 
 
