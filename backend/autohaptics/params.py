@@ -131,6 +131,8 @@ THESIS_RULES: dict[str, Any] = {
     "intensity.loudness_gate": 0.05,  # the default gate, 0.2, is 23 phon below the film's loud level
     "intensity.normaliser": "max",  # the default divides by the 99.5th percentile: a robust film level
     "flow.repeat_wait_s": 0.0,  # the default waits for the next distinct frame (repeats give no motion)
+    "flow.min_span_frames": 0.0,  # the default pairs frames two apart, whichever frames are decoded
+    "flow.cadence_ratio": 0.0,  # the default times a pair by its picture steps under a repeat cadence
     "airflow.motion_sigma_ticks": 0.0,  # the default judges a tick on its shot's motion around it
     "airflow.near_sigma_ticks": 0.0,  # the default smooths nearness over neighbouring ticks of the shot
     "airflow.near_share": 0.0,  # the default counts the nearest 40 % of each tick's cells as near too
@@ -161,6 +163,9 @@ PRESETS: dict[str, dict[str, Any]] = {
         "flow.proxy_width": 128,
         "flow.proxy_fraction": 0.0625,
         "flow.dis_preset": "fast",
+        # pairs of the next decoded frame: at DIS "fast" on 128 px, pairs two frames apart read the Sintel
+        # trailer further from the reference (tolerant fan IoU 0.464 -> 0.367; docs/BENCHMARKS.md)
+        "flow.min_span_frames": 0.0,
     },
 }
 DEFAULT_PRESET = "balanced"
@@ -264,17 +269,26 @@ def params_from_args(args):
     return resolve_params(args.preset, overrides, thresholds)
 
 
+# Analysis-time fields whose default analyses otherwise than the analysis did before the field
+# existed: a document without the field was analysed with this value (dotted name -> value).
+ABSENT_AS = {"flow.min_span_frames": 0.0, "flow.cadence_ratio": 0.0}
+
+
 def analysis_key(doc: dict) -> dict:
     """The part of a ``generator.params``-style dict (:func:`~autohaptics.overrides.params_to_dict`)
     that the analysis depends on: compare two to know whether a cached analysis can serve. A field
-    the document lacks counts at its default: a document written before the field existed was
-    analysed as that default does (a new field's default keeps what the analysis did before)."""
+    the document lacks counts at what the analysis did before the field existed: its default, or
+    its value in ``ABSENT_AS``."""
     return _analysis_part(_DEFAULT, doc, "")
 
 
 def _analysis_part(record: Any, doc: dict, prefix: str) -> dict:
     key = {}
     defaults = params_to_dict(record)
+    for name, value in ABSENT_AS.items():  # each a field of a group of this record
+        group, _, field_name = name[len(prefix):].rpartition(".")
+        if name.startswith(prefix) and isinstance(defaults.get(group), dict):
+            defaults[group] = {**defaults[group], field_name: value}
     for f in dataclasses.fields(record):
         value = getattr(record, f.name)
         if dataclasses.is_dataclass(value):

@@ -199,3 +199,19 @@ def test_rgb_conversion_is_the_float32_formula_rounded_half_up(colorspace, color
                      yy + f32(2 * (1 - kb)) * cb], axis=-1)
     want = np.clip(want + f32(0.5), 0, 255).astype(np.uint8)
     np.testing.assert_array_equal(_yuv_to_rgb(y, u, v, frame), want)
+
+
+@pytest.mark.parametrize("pix_fmt", ["yuv420p", "yuv420p10le", "rgb24"])
+def test_luma_sample_is_a_grid_of_the_stored_luma_at_8_bit_scale(pix_fmt):
+    import av
+
+    y = np.tile(np.arange(16, 232, dtype=np.uint8)[None, :216], (120, 1))[:, :200]  # a ramp across
+    frame = av.VideoFrame.from_ndarray(np.stack([y] * 3, -1), format="rgb24")
+    frame = frame if pix_fmt == "rgb24" else frame.reformat(format=pix_fmt)
+    sample = media.Frame(frame, 0, 0.0, 0).luma_sample(64, 36)
+    if pix_fmt == "rgb24":
+        assert sample is None  # no planar luma to sample
+        return
+    assert sample.dtype == np.uint8 and sample.shape == (40, 67)  # every 3rd row and column of 120 x 200
+    want = frame.reformat(format="yuv420p").to_ndarray()[:120][1::3, 1::3]
+    assert int(np.abs(sample.astype(np.int16) - want).max()) <= 1

@@ -120,6 +120,35 @@ def test_a_child_sends_progress_and_its_value_back():
     assert pid != os.getpid() and got == [0.0, 0.25, 0.5, 0.75, 1.0]
 
 
+def test_the_child_never_finalises_the_parents_garbage(tmp_path):
+    """The parent's objects are frozen across the fork: a reference cycle that is garbage in the
+    parent (e.g. a decoded frame, whose FFmpeg threads live only in the parent) is finalised there,
+    never by a collection in the child."""
+    import gc
+
+    log = tmp_path / "finalised"
+
+    class Node:
+        def __del__(self):
+            with open(log, "a") as f:
+                f.write(f"{os.getpid()}\n")
+
+    enabled = gc.isenabled()
+    gc.disable()  # the cycle stays uncollected until the child has run
+    try:
+        a, b = Node(), Node()
+        a.other, b.other = b, a
+        del a, b
+        with Child(lambda report: gc.collect() >= 0 and os.getpid()) as child:
+            child_pid = child.result()
+        assert not log.exists() or str(child_pid) not in log.read_text().split()
+        gc.collect()
+    finally:
+        if enabled:
+            gc.enable()
+    assert log.read_text().split() == [str(os.getpid())] * 2
+
+
 def _decisions(need, stride: int, ticks: list[int], later_at: int | None, max_bytes: int | None):
     """The frames a queue computes, in order, the mask given up front or set after ``later_at`` frames."""
     computed = []

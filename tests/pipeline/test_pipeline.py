@@ -89,14 +89,18 @@ def test_analysis_parameters_change_compatibility(av_analysis):
     assert not analysis_compatible(av_analysis, params)
 
 
-def test_an_analysis_from_before_a_field_existed_serves_that_field_at_its_default(av_analysis):
+def test_an_analysis_from_before_a_field_existed_serves_what_it_was_analysed_with(av_analysis):
     """A cache written before an analysis-time field was added lacks it: it was analysed as the
-    field's default does, so it still serves the default, and not another value."""
+    field's default does, or where the default analyses otherwise, as ``ABSENT_AS`` says; it serves
+    that value and not another."""
     old = copy.deepcopy(av_analysis)
-    del old.params["flow"]["min_span_frames"], old.params["video"]["decode"]
+    del old.params["video"]["decode"]
     assert analysis_compatible(old, GenerateParams())
-    assert not analysis_compatible(old, apply_overrides(GenerateParams(), {"flow.min_span_frames": 1.5}))
     assert not analysis_compatible(old, apply_overrides(GenerateParams(), {"video.decode": "full"}))
+    del old.params["flow"]["min_span_frames"], old.params["flow"]["cadence_ratio"]
+    before = {"flow.min_span_frames": 0.0, "flow.cadence_ratio": 0.0}
+    assert analysis_compatible(old, apply_overrides(GenerateParams(), before))
+    assert not analysis_compatible(old, GenerateParams())  # pairs two frames apart, timed by the cadence
 
 
 def test_feature_cache_round_trip_gives_the_same_timeline(av_analysis, tmp_path):

@@ -62,8 +62,24 @@ def repeated_pan(tmp_path_factory):
     return reencode(src, d / "pan30.mp4", fps=30, conversion="repeat", video_options={"bf": "0"})
 
 
-def test_a_tick_whose_successor_frame_repeats_still_sees_the_motion(repeated_pan):
+def test_a_repeat_cadence_times_every_pair_by_its_picture_steps(repeated_pan):
     tl = pipeline.generate(repeated_pan)
+    motion = tl.features["motion_fw_per_s"][1:-1]
+    # each pair's time leaves out the intervals that end on a repeat: 1/24 s of the pan over 1/30 s,
+    # 1.25 x its 0.2 frame widths/s on every tick, whichever phase of the pattern the tick meets
+    assert np.all(np.abs(motion / (1.25 * 0.2) - 1) < 0.1), motion
+    assert tl.stats["video"]["flow"]["cadence_repeats"] > 0
+    # without the cadence, a pair two frames apart holds one or two steps of the pan
+    params, _ = resolve_params("balanced", {"flow.cadence_ratio": 0.0})
+    plain = pipeline.generate(repeated_pan, params=params).features["motion_fw_per_s"][1:-1]
+    assert plain.min() < 0.6 * 1.25 * 0.2, plain
+
+
+def test_a_tick_whose_successor_frame_repeats_still_sees_the_motion(repeated_pan):
+    # the pair of the next decoded frame (flow.min_span_frames=0) without the cadence: a successor
+    # that repeats the pair's first frame is passed over
+    params, _ = resolve_params("balanced", {"flow.min_span_frames": 0.0, "flow.cadence_ratio": 0.0})
+    tl = pipeline.generate(repeated_pan, params=params)
     motion = tl.features["motion_fw_per_s"][1:-1]
     # every pair spans one source frame (1/24 s of motion) over its real interval, 1/30 or 2/30 s
     assert motion.min() >= 0.5 * 0.2 and motion.max() <= 1.5 * 0.2, motion
@@ -117,7 +133,7 @@ def test_a_least_span_reads_the_same_motion_whether_the_decoder_skips_frames_or_
                     for d in ("full", "nonref"))
     assert abs(full / nonref - 1) < 0.15, (full, nonref)
     assert abs(nonref / 0.15 - 1) < 0.25, nonref  # the pan itself: 2 px a frame
-    # the default (the thesis's next decoded frame): consecutive frames read the shake as well
+    # the thesis's next decoded frame: consecutive frames read the shake as well
     full0, nonref0 = (_mean_motion(fluttering_pan, **{"video.decode": d, "flow.min_span_frames": 0.0})
                       for d in ("full", "nonref"))
     assert full0 > 1.3 * nonref0, (full0, nonref0)

@@ -47,10 +47,13 @@ class FlowParams:
         non-reference frames between; 0 = always the next frame, the thesis).
     min_span_frames : a flow pair's successor is the first decoded frame at least this many frame
         intervals (the stream's nominal rate) after its first frame, 0..10 (an analysed frame always
-        ends the pair before it). 0 (default, the thesis) = the next decoded frame; 1.5 pairs frames
-        two apart whether or not the decoder skips the non-reference frames (quick flutter reads
-        differently over one and two frames), but two frames of a 25 -> 30 fps conversion by repeats
-        hold one or two pictures' steps: docs/BENCHMARKS.md, "Screener encodes", fourth stop.
+        ends the pair before it). 0 = the next decoded frame (the thesis); 1.5 (default) pairs
+        frames two apart whether or not the decoder skips the non-reference frames (quick flutter
+        reads differently over one and two): docs/BENCHMARKS.md, "Screener encodes", 4th-5th stops.
+    cadence_ratio : a frame that differs from the frame before by under this share of what both its
+        neighbours differ is a repeat (a frame-rate conversion), and a flow pair's time leaves out
+        the intervals that end on one (:mod:`autohaptics.airflow.cadence`); 0..1 (default 0.35;
+        0 = the stream's time, the thesis).
     """
 
     STAGE: ClassVar[str] = ANALYSIS
@@ -60,7 +63,8 @@ class FlowParams:
     dis_preset: str = "medium"
     proxy_fraction: float = 0.125
     repeat_wait_s: float = 0.1
-    min_span_frames: float = 0.0
+    min_span_frames: float = 1.5
+    cadence_ratio: float = 0.35
 
     def __post_init__(self):
         if self.method not in FLOW_METHODS:
@@ -69,7 +73,7 @@ class FlowParams:
             raise ParameterError(f"flow.dis_preset must be one of {sorted(DIS_PRESETS)}, got {self.dis_preset!r}")
         if not (8 <= int(self.proxy_width) <= 7680):
             raise ParameterError(f"flow.proxy_width must lie in 8..7680 px, got {self.proxy_width!r}")
-        for name in ("proxy_fraction", "repeat_wait_s"):
+        for name in ("proxy_fraction", "repeat_wait_s", "cadence_ratio"):
             if not (0.0 <= float(getattr(self, name)) <= 1.0):  # NaN fails too
                 raise ParameterError(f"flow.{name} must lie in 0..1, got {getattr(self, name)!r}")
         if not (0.0 <= float(self.min_span_frames) <= 10.0):

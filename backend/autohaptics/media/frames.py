@@ -174,6 +174,22 @@ class Frame:
         k = self.rotation // 90
         return np.ascontiguousarray(np.rot90(arr, k=k)) if k else arr
 
+    def luma_sample(self, cols: int = 64, rows: int = 36) -> np.ndarray | None:
+        """About ``cols`` x ``rows`` luma samples taken on a grid of the decoded plane as stored, 8-bit
+        scale: uint8 (None for a pixel format without planar luma). Microseconds at any size: the
+        repeat test of :mod:`autohaptics.airflow.cadence`, which needs no scaling."""
+        f = self._frame
+        name = f.format.name
+        wide = name.endswith(("p10le", "p12le"))
+        if name not in _PLANAR_YUV8 and not (wide and name.startswith("yuv")):
+            return None
+        plane = f.planes[0]
+        dtype, size = (np.dtype("<u2"), 2) if wide else (np.dtype(np.uint8), 1)
+        arr = np.frombuffer(plane, dtype).reshape(-1, plane.line_size // size)[:plane.height, :plane.width]
+        sy, sx = max(1, plane.height // max(1, rows)), max(1, plane.width // max(1, cols))
+        grid = arr[sy // 2::sy, sx // 2::sx]
+        return (grid >> (2 if name.endswith("p10le") else 4)).astype(np.uint8) if wide else grid.copy()
+
     def full(self, *, fmt: str = "rgb24") -> np.ndarray:
         """Full-resolution copy in display orientation (the reference preset)."""
         return self.proxy(self.width, self.height, fmt=fmt)

@@ -9,6 +9,7 @@ memory pages and runs on the other core. POSIX only (:func:`can_fork`).
 from __future__ import annotations
 
 import ctypes
+import gc
 import os
 import pickle
 import signal
@@ -83,10 +84,21 @@ class Child:
 
     def __enter__(self) -> "Child":
         r, w = os.pipe()
+        # the parent's objects are frozen across the fork, so the child's garbage collector never
+        # finalises them: a decoded frame in a reference cycle would free FFmpeg's thread pools
+        # there, whose threads exist only in the parent (the child hung in pthread_cond_destroy)
+        enabled = gc.isenabled()
+        gc.disable()
+        gc.freeze()
         pid = os.fork()
         if pid == 0:  # the child: nothing of the parent runs here but fn
+            if enabled:
+                gc.enable()
             os.close(r)
             _run_child(self._fn, _Pipe(w))
+        gc.unfreeze()
+        if enabled:
+            gc.enable()
         os.close(w)
         self.pid = pid
         self._conn = _Pipe(r)

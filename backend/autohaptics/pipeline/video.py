@@ -32,6 +32,7 @@ import numpy as np
 
 from autohaptics import fusion, media
 from autohaptics.airflow import cuts, depth
+from autohaptics.airflow.cadence import Cadence
 from autohaptics.airflow.flow import is_static
 from autohaptics.airflow.pair import PairParams, pair_motion
 from autohaptics.fusion import saliency
@@ -180,6 +181,8 @@ class _Pass:
         self.repeats = 0  # successor frames passed over as repeats of their pair's first frame
         fps = float(info.video.fps) if info.video is not None and info.video.fps else 0.0
         self.min_span_s = float(flow_params.min_span_frames) / fps if fps > 0 else 0.0  # a pair's least span, s
+        self.held = None  # a flow pair waiting for the frame after its successor (cadence)
+        self.cadence = Cadence(1.0 / fps if fps > 0 else 0.0, flow_params.cadence_ratio if need_flow else 0.0)
 
     def prepare(self, frame: media.Frame) -> None:
         """Make a frame's gray, RGB and saliency luma planes ahead, in the decoding thread (the same
@@ -198,6 +201,11 @@ class _Pass:
     def frame(self, frame: media.Frame, centre_tick: int | None) -> None:
         """Take one decoded frame: the successor of the waiting flow pair, an analysed frame, both or neither."""
         self.last_time = frame.time_s
+        if self.cadence.ratio:
+            self.cadence.add(frame.time_s, frame.luma_sample())
+            if self.held is not None:  # the held pair's successor is judged now (a repeat or not)
+                held, self.held = self.held, None
+                self._motion(*held)
         k = min(int(tick_of_time(frame.time_s)), self.n - 1)
         analyse_this = k >= 0 and (centre_tick is not None or self.every)
         # a successor closer than the pair's least span (flow.min_span_frames) is passed over unread
@@ -232,20 +240,30 @@ class _Pass:
     def _pair(self, frame, gray, sig, analysed: bool) -> None:
         """The waiting flow pair's motion, now that its successor frame is here; or, when that frame
         repeats the pair's first one (a frame-rate conversion, pulldown), wait for the next frame
-        (``flow.repeat_wait_s``; an analysed frame starts a pair of its own, so it never waits)."""
-        (pk, pgray, prgb, psig, pt), st = self.pending, self.stages
+        (``flow.repeat_wait_s``; an analysed frame starts a pair of its own, so it never waits).
+        With ``flow.cadence_ratio`` the pair is held until the next frame tells whether its
+        successor is a repeat (:mod:`autohaptics.airflow.cadence`): its time depends on that."""
+        pgray, pt = self.pending[1], self.pending[4]
         if not analysed and frame.time_s - pt < self.flow_params.repeat_wait_s and \
-                st["static"].run(is_static, pgray, gray, params=self.params.airflow):
+                self.stages["static"].run(is_static, pgray, gray, params=self.params.airflow):
             self.repeats += 1
             return
-        self.pending = None
+        pair, self.pending = (self.pending, frame, gray, sig), None
+        if self.cadence.ratio:
+            self.held = pair
+        else:
+            self._motion(*pair)
+
+    def _motion(self, first, frame, gray, sig) -> None:
+        """A flow pair's motion and depth, added to its tick."""
+        (pk, pgray, prgb, psig, pt), st = first, self.stages
 
         def successor_sig():  # colour matters for the in-pair cut check (a green and a grey shot
             # can share their luma): read only when the pair moves enough to matter, from its gray plane
             return sig if sig is not None else self._signature(
                 st["proxy"].run(frame.rgb, self.rgb_width, self.flow_params.proxy_width))
 
-        res = pair_motion(pgray, gray, prgb, psig, successor_sig, max(frame.time_s - pt, 1e-3),
+        res = pair_motion(pgray, gray, prgb, psig, successor_sig, self.cadence.pair_time(pt, frame.time_s),
                           params=self.pair_params, depth_backend=self.depth_backend, luma_signature=self.luma_signature,
                           timer=lambda name, fn, *a, **kw: st[name].run(fn, *a, **kw))
         if res.cut:
@@ -310,6 +328,9 @@ class _Pass:
     def finish(self) -> VideoAnalysis:
         """The per-tick results with their stats (ticks held, skipped, computed per stage)."""
         out, n = self.out, self.n
+        if self.held is not None:
+            held, self.held = self.held, None  # no decoded frame outlives the pass
+            self._motion(*held)
         self.saliency.finish(n)
         self.acc.finish()
         if self.pending is not None and self.pending[0] > 0 and self.acc.motion_n[self.pending[0]] == 0:
@@ -331,6 +352,7 @@ class _Pass:
         out.stats["flow"]["proxy_width"] = int(self.flow_params.proxy_width)
         out.stats["static"]["ticks_static"] = int(out.static.sum())
         out.stats["flow"]["repeats_skipped"] = int(self.repeats)
+        out.stats["flow"]["cadence_repeats"] = int(self.cadence.found)
         out.stats["cuts"]["cuts"] = int(out.cut.sum())
         out.stats["frames"] = {"ticks_with_frame": int(out.frame_mask.sum()), "ticks": n,
                                "last_time_s": round(self.last_time, 6)}
