@@ -41,8 +41,8 @@ def test_a_25_to_30_conversion_is_a_cadence_and_every_pair_reads_its_picture_ste
         times.append(j / 30)
         if j >= 2 and cad.period():
             steps = pics[j] - pics[j - 2]  # pictures' steps in the pair of frames two apart
-            # the newest frame is judged by the cadence alone: its time is the steps' intervals
-            assert cad.pair_time(times[j - 2], times[j]) == pytest.approx(steps / 30), j
+            # the newest frame is placed by the cadence alone; each step lasts 1/25 s
+            assert cad.pair_time(times[j - 2], times[j]) == pytest.approx(steps / 25), j
     assert cad.period() == 6
     assert cad.found == sum(1 for a, b in zip(pics, pics[1:]) if a == b) - 1  # all but the last, unjudged
 
@@ -51,9 +51,18 @@ def test_a_held_pair_is_timed_by_its_successor_as_judged():
     pics = shown(24, 30, 14)  # repeats at frames 1 (no frame before it to judge by), 6 and 11
     cad = Cadence(1 / 30, 0.35)
     times = feed(cad, pics, 30)
-    assert cad.period() == 0 and cad.found == 2  # too few for a cadence
+    assert cad.period() == 0 and cad.found == 2  # too few for a cadence: steps over the stream's intervals
     assert cad.pair_time(times[4], times[6]) == pytest.approx(1 / 30)  # frame 6 repeats 5
     assert cad.pair_time(times[7], times[9]) == pytest.approx(2 / 30)
+
+
+def test_a_stretch_on_twos_reads_as_its_own_picture_rate():
+    pics = [j // 2 for j in range(40)]  # 24 fps, each picture shown twice: a 12 fps picture
+    cad = Cadence(1 / 24, 0.35)
+    times = feed(cad, pics, 24)
+    assert cad.period() == 2
+    for a in range(30, 36):  # pairs two frames apart hold one step, 1/12 s, whichever frame they start on
+        assert cad.pair_time(times[a], times[a + 2]) == pytest.approx(1 / 12)
 
 
 def test_a_still_a_slow_or_an_uneven_picture_keeps_the_streams_time():

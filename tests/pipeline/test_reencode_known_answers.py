@@ -65,9 +65,11 @@ def repeated_pan(tmp_path_factory):
 def test_a_repeat_cadence_times_every_pair_by_its_picture_steps(repeated_pan):
     tl = pipeline.generate(repeated_pan)
     motion = tl.features["motion_fw_per_s"][1:-1]
-    # each pair's time leaves out the intervals that end on a repeat: 1/24 s of the pan over 1/30 s,
-    # 1.25 x its 0.2 frame widths/s on every tick, whichever phase of the pattern the tick meets
-    assert np.all(np.abs(motion / (1.25 * 0.2) - 1) < 0.1), motion
+    # each pair's time leaves out the intervals that end on a repeat (1/24 s of the pan over 1/30 s,
+    # 1.25 x its 0.2 frame widths/s), and once three repeats make a cadence (every fifth frame, by
+    # 0.6 s) each step lasts 5/4 of an interval: the pan's own speed, whichever phase a tick meets
+    assert np.all(np.abs(motion[:4] / (1.25 * 0.2) - 1) < 0.1), motion
+    assert np.all(np.abs(motion[5:] / 0.2 - 1) < 0.1), motion
     assert tl.stats["video"]["flow"]["cadence_repeats"] > 0
     # without the cadence, a pair two frames apart holds one or two steps of the pan
     params, _ = resolve_params("balanced", {"flow.cadence_ratio": 0.0})

@@ -5,11 +5,15 @@ in 5; 25 -> 30: one in 6; 25 -> 50: one in 2). Two frames two apart then hold on
 two, and motion divided by the stream's time alternates 0.6 / 1.2 x. :class:`Cadence` finds the
 repeats from each decoded frame's difference to the frame before (a coarse luma sample): a frame
 that differs far less than both its neighbours do is a repeat. A pair's time leaves out the
-intervals that end on a repeat, so every pair of a 25 -> 30 fps conversion reads 40 ms of picture
-over 33 ms, a uniform 1.2 x that the relative fan threshold absorbs, as one-frame pairs always
-read. The newest frame of a pair has no successor to be judged by; three repeats at the same
-period (a cadence) place it. A still picture or a slow one differs from its neighbours too
-little, or too evenly, to be a repeat. docs/BENCHMARKS.md, "Screener encodes", fifth stop.
+intervals that end on a repeat, and three repeats at one period (a cadence) make each picture
+step last period / (period - 1) intervals: a pair of a 25 -> 30 fps conversion then reads its
+steps over 40 ms each, whether it takes in a repeat or not, and a stretch animated on twos reads
+as a 12 fps picture, as pairs of consecutive frames read it. Until three repeats are seen a pair
+reads its steps over the stream's intervals (1.2 x at 25 -> 30 fps, uniform too). A pair's last
+frame has no successor to be judged by yet: the video pass holds the pair one frame, and the
+cadence places a repeat where a frame cannot be judged. A still picture or a slow one differs
+from its neighbours too little, or too evenly, to be a repeat. docs/BENCHMARKS.md, "Screener
+encodes", fifth stop.
 """
 
 from __future__ import annotations
@@ -82,10 +86,14 @@ class Cadence:
     def pair_time(self, t0: float, t1: float) -> float:
         """A flow pair's time from a frame at ``t0`` to one at ``t1``, s: the intervals of the frames
         after the first that are not repeats (as judged, or where a frame could not be judged, as
-        the cadence places them); ``t1 - t0`` when none is left."""
+        the cadence places them), times period / (period - 1) while a cadence holds (each picture
+        step then lasts that many frame intervals); ``t1 - t0`` when none is left."""
         span = max(t1 - t0, 1e-3)
         if self.ratio <= 0:
             return span
         moving = sum(dt for i, t, dt, rep in self._frames
                      if t0 < t <= t1 and not (rep if rep is not None else self.predicted(i)))
-        return moving if moving > 1e-3 else span
+        if moving <= 1e-3:
+            return span
+        p = self.period()
+        return moving * p / (p - 1) if p else moving

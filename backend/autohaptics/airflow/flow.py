@@ -51,8 +51,8 @@ class FlowParams:
         frames two apart whether or not the decoder skips the non-reference frames (quick flutter
         reads differently over one and two): docs/BENCHMARKS.md, "Screener encodes", 4th-5th stops.
     cadence_ratio : a frame that differs from the frame before by under this share of what both its
-        neighbours differ is a repeat (a frame-rate conversion), and a flow pair's time leaves out
-        the intervals that end on one (:mod:`autohaptics.airflow.cadence`); 0..1 (default 0.35;
+        neighbours differ is a repeat (a frame-rate conversion): a flow pair's time counts the
+        picture's steps, not the repeats (:mod:`autohaptics.airflow.cadence`); 0..1 (default 0.35;
         0 = the stream's time, the thesis).
     """
 

@@ -50,6 +50,13 @@ class PairParams:
     skip: bool
 
 
+def _brightness_step(gray0: np.ndarray, gray1: np.ndarray, params: AirflowParams) -> bool:
+    """Two pictures with detail that differ only by brightness and contrast: a step of a fast fade
+    (two frames apart its luma signature can jump like a cut's), not a cut. A pair with a flat
+    picture (a cut into or out of black) is not such a step: it stays a cut."""
+    return min(float(gray0.std()), float(gray1.std())) >= params.flat_std and is_fade(gray0, gray1, params=params)
+
+
 def pair_motion(gray0: np.ndarray, gray1: np.ndarray, rgb0: np.ndarray, sig0: np.ndarray | None,
                 successor_sig: Callable[[], np.ndarray], dt_s: float, *, params: PairParams,
                 depth_backend=None, timer: Callable = run_directly,
@@ -63,7 +70,8 @@ def pair_motion(gray0: np.ndarray, gray1: np.ndarray, rgb0: np.ndarray, sig0: np
     luma_signature(gray) : a gray proxy's cut signature (a caller that pairs each frame twice keeps it).
     Cut checks: luma first (both proxies are there), then colour when the pair moves.
     """
-    if cuts.is_cut(luma_signature(gray0), luma_signature(gray1), params=params.cuts):
+    if cuts.is_cut(luma_signature(gray0), luma_signature(gray1), params=params.cuts) and \
+            not _brightness_step(gray0, gray1, params.airflow):
         return PairMotion(cut=True)
     if (params.skip and timer("static", is_static, gray0, gray1, params=params.airflow)) or \
             timer("static", is_fade, gray0, gray1, params=params.airflow):
