@@ -87,18 +87,19 @@ class Child:
         # the parent's objects are frozen across the fork, so the child's garbage collector never
         # finalises them: a decoded frame in a reference cycle would free FFmpeg's thread pools
         # there, whose threads exist only in the parent (the child hung in pthread_cond_destroy)
-        enabled = gc.isenabled()
+        pid, enabled = -1, gc.isenabled()
         gc.disable()
         gc.freeze()
-        pid = os.fork()
-        if pid == 0:  # the child: nothing of the parent runs here but fn
+        try:
+            pid = os.fork()
+        finally:
+            if pid != 0:  # the parent, or a fork that failed: its objects thaw again
+                gc.unfreeze()
             if enabled:
                 gc.enable()
+        if pid == 0:  # the child: nothing of the parent runs here but fn
             os.close(r)
             _run_child(self._fn, _Pipe(w))
-        gc.unfreeze()
-        if enabled:
-            gc.enable()
         os.close(w)
         self.pid = pid
         self._conn = _Pipe(r)
