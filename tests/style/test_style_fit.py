@@ -115,6 +115,20 @@ def test_a_zone_whose_levels_all_lie_below_the_floor_takes_the_pooled_floor():
     assert floors == pytest.approx(0.25, abs=0.01)
 
 
+def test_trigger_depths_bridge_a_pause_that_ends_near_the_films_end():
+    """A pause whose far side lies within the bridging reach of the film's end (found by the
+    property test below: the one-pass depths read frames past the end as silent)."""
+    spikes = np.zeros(40)
+    spikes[[25, 35]] = 1.0  # two low-energy hits, a 9-frame pause between, 5 frames before the end
+    feats = dict(zip(it.FEATURES, [np.zeros(40), np.zeros(40), spikes, np.ones(40)]))
+    params = it.IntensityParams(rule="events", loudness_gate=0.0, smoothing_s=0.3)
+    inputs = it.decision_inputs(feats, params=params)
+    depth = trigger_depths(*inputs, np.zeros((1, 4)), 8, params=params, value_features=LEVEL_FEATURES)
+    one = dataclasses.replace(params, thresholds=dict.fromkeys(it.FEATURES, 0.0))
+    on = it.audio_intensity(feats, 8, params=one, inputs=inputs)[0] > 0
+    assert on[5:].all() and np.array_equal(on, depth > 0), (on, depth)
+
+
 @settings(max_examples=60, deadline=None)
 @given(st.data(), st.sampled_from(it.RULES), st.sampled_from([0.0, 0.2, 0.5]), st.sampled_from([0.0, 0.04, 0.1, 0.3]))
 def test_trigger_depths_give_what_one_evaluation_per_threshold_set_gives(data, rule, gate, smoothing_s):

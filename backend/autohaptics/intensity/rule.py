@@ -208,6 +208,7 @@ def trigger_depths(normalised: dict[str, np.ndarray], curves: dict[str, np.ndarr
         bridged = depth.copy()
         after = np.zeros((longest + 1, n), np.int32)  # after[m][x]: the deepest of frames x+1..x+m
         for m in range(1, longest + 1):
+            after[m] = after[m - 1]  # frames past the film's end add nothing
             np.maximum(after[m - 1, :n - m], depth[m:], out=after[m, :n - m])
         for a in range(1, longest + 1):
             np.maximum(bridged[a:], np.minimum(depth[:-a], after[longest + 1 - a, a:]), out=bridged[a:])
