@@ -91,8 +91,12 @@ class Cadence:
         span = max(t1 - t0, 1e-3)
         if self.ratio <= 0:
             return span
-        moving = sum(dt for i, t, dt, rep in self._frames
-                     if t0 < t <= t1 and not (rep if rep is not None else self.predicted(i)))
+        moving = 0.0
+        for i, t, dt, rep in reversed(self._frames):  # newest first: a pair spans the last few frames
+            if t <= t0:
+                break
+            if t <= t1 and not (rep if rep is not None else self.predicted(i)):
+                moving += dt
         if moving <= 1e-3:
             return span
         p = self.period()

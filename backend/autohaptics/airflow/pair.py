@@ -70,9 +70,10 @@ def pair_motion(gray0: np.ndarray, gray1: np.ndarray, rgb0: np.ndarray, sig0: np
     luma_signature(gray) : a gray proxy's cut signature (a caller that pairs each frame twice keeps it).
     Cut checks: luma first (both proxies are there), then colour when the pair moves.
     """
-    if cuts.is_cut(luma_signature(gray0), luma_signature(gray1), params=params.cuts) and \
-            not _brightness_step(gray0, gray1, params.airflow):
-        return PairMotion(cut=True)
+    if cuts.is_cut(luma_signature(gray0), luma_signature(gray1), params=params.cuts):
+        if not _brightness_step(gray0, gray1, params.airflow):
+            return PairMotion(cut=True)
+        return PairMotion(static=True, cells=np.zeros((FAN_ROWS, FAN_COLS), np.float32))  # a fade's step
     if (params.skip and timer("static", is_static, gray0, gray1, params=params.airflow)) or \
             timer("static", is_fade, gray0, gray1, params=params.airflow):
         return PairMotion(static=True, cells=np.zeros((FAN_ROWS, FAN_COLS), np.float32))
