@@ -13,7 +13,7 @@ from autohaptics import intensity as it
 from autohaptics.errors import ParameterError
 from autohaptics.params import THESIS_RULES, resolve_params
 from autohaptics.pipeline.generate import generate
-from autohaptics.testing import Noise, Scene, sounds, write_scene
+from autohaptics.testing import Noise, Scene, Tone, sounds, write_scene
 from autohaptics.timebase import FRAMES_PER_TICK, TICK_S
 
 
@@ -110,6 +110,25 @@ def test_a_score_that_begins_a_moment_after_the_file_does_not_jolt_either(tmp_pa
     later = [t - 5.23 + delay_s for t in sounds.IMPACT_TIMES_S if 0.5 <= t - 5.23 <= cut.duration_s - 0.5]
     inside = [_ticks(t + 0.05, t + sounds.IMPACT_LENGTH_S - 0.05) for t in later]  # whole ticks in the impact
     assert later and all(chair[k].min() >= 0.7 * chair.max() for k in inside), chair
+
+
+@pytest.mark.parametrize("bed_hz, join_dbfs, hit", [(50.0, -21.0, False), (63.0, -21.0, False), (50.0, -18.0, True),
+                                                    (63.0, -18.0, True)])
+def test_a_low_score_under_way_is_judged_on_the_level_it_reached(tmp_path, bed_hz, join_dbfs, hit):
+    """A low score under way from the first frame reaches its level only after the loudness model's
+    attack (a 50 Hz tone: 0.56 of it over the first 0.1 s). A voice joining at 0.4 s that lifts it
+    under twice that level (1.8 x) is the score's own swell: no vibration (before: 0.95 from 0.4 s,
+    the rise read against the first 0.1 s); one that lifts it more is a hit and vibrates from the
+    tick it begins in, though its own attack ends after the opening."""
+    scene = Scene(duration_s=4.0, audio=(Tone(0.0, 4.0, bed_hz, level_dbfs=-24.0, ramp_s=0.0),
+                                         Tone(0.4, 4.0, bed_hz * 1.26, level_dbfs=join_dbfs, ramp_s=0.005)),
+                  name=f"low_score_{bed_hz:g}_{join_dbfs:g}")
+    _, chair, _ = _run(tmp_path, scene)
+    assert not chair[_ticks(0.0, 0.4)].any(), chair[:12]
+    if hit:
+        assert chair[_ticks(0.4, 1.0)].min() >= 0.7 * chair.max() and chair.max() > 0.5, chair[:12]
+    else:
+        assert chair.max() <= 0.2, chair[:12]
 
 
 @pytest.mark.parametrize("at_s", [0.3, 0.6, 1.5])

@@ -35,6 +35,7 @@ ENVELOPE_S = 1.0
 GAP_S = 0.1
 OPENING_S = 0.5
 OPENING_RISE = 2.0  # loudness doubles at +10 phon; the loudness model's attack rises less after GAP_S
+ATTACK_S = 0.2  # the loudness model reaches 0.9 of a low tone's level within it (0.16 s at 50 Hz)
 FULL_OCTAVES = 0.5
 EXPONENTS = {"sharpness": 1.0, "booming": 1.0, "low_energy": 0.3, "loudness": 1.0}
 FLOOR = 1e-2  # of the feature's maximum over the film, added to value and baseline: no 0/0
@@ -89,8 +90,8 @@ def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, cl
     opening_n = opening_frames(v) if opening_n is None else min(int(opening_n), n)
     if opening_n > 0:  # a hit of this feature's own ends its opening, whatever the loudness does
         first = int(np.argmax(v[:opening_n] > FLOOR))  # its own sound begins (a codec's delay, the median's lag)
-        early = v[first:max(first, int(lag_n)) + gap_n]  # its first GAP_S, as the loudness's own
-        opening_n = first + _before_rise(v[first:opening_n], float(early.max()))
+        early_n = max(first, int(lag_n)) + gap_n - first  # its first GAP_S, as the loudness's own
+        opening_n = first + _before_rise(v[first:], early_n, opening_n - first)
     pre_n = env_n + gap_n + base_n if opening_n > 0 else 0  # history for every window before t = 0
     env = trailing_max(np.concatenate([np.full(pre_n, v[:opening_n].max() if pre_n else 0.0), v]), env_n)
     cum = np.concatenate([[0.0], np.cumsum(env)])
@@ -104,10 +105,11 @@ def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, cl
 
 def opening_frames(x: np.ndarray) -> int:
     """The frames of a file's opening whose level its sound had before the file began (module
-    docstring): up to ``OPENING_S`` after the sound begins, ending early where it falls silent or
-    rises ``OPENING_RISE`` times above its level over its first ``GAP_S`` (a hit, not the loudness
-    model's attack; :func:`novelty` ends each feature's opening at its own such rise too); 0 where the file opens on at least ``GAP_S`` of silence (at most ``FLOOR`` of
-    the film's top).
+    docstring): up to ``OPENING_S`` after the sound begins (and through a climb still under way
+    there), ending early where it falls silent or where a hit begins, a rise ``OPENING_RISE`` times
+    above the level it had reached (:func:`_before_rise`; :func:`novelty` ends each feature's
+    opening at its own such hit too); 0 where the file opens on at least ``GAP_S`` of silence (at
+    most ``FLOOR`` of the film's top).
 
     x : [shape=(n,)] per 20 ms frame, >= 0 (non-finite values count as 0): the loudness, or any level.
     """
@@ -123,14 +125,36 @@ def opening_frames(x: np.ndarray) -> int:
     end = min(v.size, first + int(round(OPENING_S / FRAME_S)))
     quiet = np.flatnonzero(~sounding[first:end])
     end = first + int(quiet[0]) if quiet.size else end
-    return first + _before_rise(v[first:end] / top, float(v[first:first + gap_n].max()) / top)
+    return first + _before_rise(v[first:] / top, gap_n, end - first)
 
 
-def _before_rise(v: np.ndarray, early: float) -> int:
-    """How many leading frames of ``v`` (0..1 of the film's top) stay below ``OPENING_RISE`` times
-    ``early`` (both with ``FLOOR`` added, as the novelty compares them): the frames before a hit."""
-    rise = np.flatnonzero(v + FLOOR > OPENING_RISE * (early + FLOOR))
-    return int(rise[0]) if rise.size else int(v.size)
+def _before_rise(v: np.ndarray, early_n: int, n: int) -> int:
+    """How many of the first ``n`` frames of ``v`` (0..1 of the film's top) come before a hit: a
+    rise above ``OPENING_RISE`` times its level (both with ``FLOOR`` added, as the novelty compares
+    them). Until ``ATTACK_S`` after the first ``early_n`` frames, the level is theirs and the hit
+    starts where it passes twice it; from then on the level is the one reached by ``ATTACK_S``
+    before, and the hit starts where its rise begins, looked for up to ``ATTACK_S`` past frame
+    ``n``: the loudness model's attack for a low sound outlasts ``GAP_S`` (a 50 Hz tone reads 0.56
+    of its level over its first 0.1 s, 0.9 at 0.16 s), for the score's own level and for a hit's
+    rise alike. With no hit, a climb under way at frame ``n`` (the score's swell, under twice its
+    level) counts as opening too, so that its end is no event either."""
+    attack_n = int(round(ATTACK_S / FRAME_S))
+    early_n = max(int(early_n), 1)
+    w = v[:max(n, 0) + attack_n]
+    if n <= 0 or w.size == 0:
+        return 0
+    ref = np.maximum.accumulate(w)[np.clip(np.arange(w.size) - attack_n, early_n - 1, w.size - 1)]
+    rise = np.flatnonzero(w + FLOOR > OPENING_RISE * (ref + FLOOR))
+    if rise.size == 0:
+        end = n
+        while end < w.size and w[end] > w[end - 1]:
+            end += 1
+        return end
+    hit = int(rise[0])
+    if hit >= early_n + attack_n:
+        below = np.flatnonzero(w[:hit] <= ref[hit])
+        hit = int(below[-1]) + 1 if below.size else 0
+    return min(n, hit)
 
 
 def trailing_max(v: np.ndarray, n: int) -> np.ndarray:
