@@ -102,6 +102,25 @@ def test_a_cut_keeps_the_stretch_asked_for(src, tmp_path):
     assert onset == pytest.approx(1.0 - 0.6, abs=0.03)  # the tone at 1 s of the film, 0.4 s into the cut
 
 
+def test_a_cut_between_two_frames_keeps_the_picture_in_step_with_the_sound(tmp_path):
+    """A 24 fps film whose picture and sound change together at 1 s, cut at 0.61 s (between frames
+    14 and 15): the picture changes 0.39 s into the cut, as in the film (before: 27 ms late, laid on
+    a frame grid from 0, the frame on screen at the cut lasting a whole frame, which moved the
+    matrix's fans and colour against the film's own ticks). The sound comes 21 ms after it: the AAC
+    encoder's priming, which the re-encode leaves in (as a muxer that does not mark it would)."""
+    scene = Scene(2.0, background=(Segment(0, 1.0, (40, 40, 40)), Segment(1.0, 2.0, (220, 220, 220))),
+                  audio=(Tone(1.0, 2.0, 440.0, level_dbfs=-12.0, ramp_s=0.002),))
+    film = synth.write_scene(tmp_path / "film.mp4", scene, width=160, height=90, fps=24)
+    out = reencode(film, tmp_path / "cut.mp4", start_s=0.61, duration_s=1.0)
+    with av.open(str(out)) as c:
+        times = [(float(f.time), f.to_ndarray(format="gray").mean()) for f in c.decode(c.streams.video[0])]
+    assert times[0][0] == pytest.approx(0.0, abs=1e-3) and times[0][1] < 100  # the frame on screen at the cut
+    bright = next(t for t, level in times if level > 130)
+    sound = int(np.argmax(np.abs(read_audio(out)) > 0.05)) / 48000
+    assert bright == pytest.approx(0.39, abs=0.003) and sound == pytest.approx(0.39 + 1024 / 48000, abs=0.005), \
+        (bright, sound)
+
+
 def test_copy_keeps_the_picture_packets_and_mixes_the_sound_again(src, tmp_path):
     out = reencode(src, tmp_path / "six.mkv", video_codec="copy", audio_layout="5.1", audio_bit_rate=384_000)
     assert probe(out).audio.channels == 6

@@ -61,8 +61,11 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     fit : how the picture meets ``width`` x ``height``: "stretch" (scaled to it), "pad" (scaled to fit
     inside, centred on black: letterbox, pillarbox or windowbox) or "fill" (scaled to cover, the
     overhang cropped evenly). pix_fmt : "yuv420p" or "yuv420p10le" (10-bit).
-    start_s, duration_s : the stretch of ``src`` kept, s (a reel cut mid-film; default all of it).
-    The audio is decoded and encoded again (resampled to 48 kHz for Opus).
+    start_s, duration_s : the stretch of ``src`` kept, s (a reel cut mid-film; default all of it). A cut
+    at the source's rate keeps each frame at its film time from ``start_s`` (the frame on screen there
+    first), wherever the cut falls between two frames.
+    The audio is decoded and encoded again (resampled to 48 kHz for Opus), its encoder's priming left
+    in (AAC: 1024 samples, the sound that much later, as a muxer that does not mark it writes it).
     """
     info = probe(src)
     if info.video is None:
@@ -95,7 +98,8 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
         with av.open(str(src)) as inp, av.open(str(tmp), mode="w", format=fmt) as out:
             vs = out.add_stream(video_codec or v_default, rate=rate)
             vs.width, vs.height, vs.pix_fmt = w, h, pix_fmt
-            if conversion == "vfr":
+            as_shown = conversion == "vfr" or (float(start_s) > 0 and fps is None and conversion == "repeat")
+            if as_shown:  # every kept frame at its own time (a cut: the picture keeps the film's time)
                 vs.codec_context.time_base = _VFR_TIME_BASE
             if video_bit_rate:
                 vs.bit_rate = int(video_bit_rate)
@@ -103,8 +107,9 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
                 vs.options = dict(video_options)
             audio = _audio_stream(inp, out, audio_codec or a_default, audio_bit_rate, audio_layout) if info.audio else None
             frames = _source_frames(inp.streams.video[0], w, h, fit=fit, start_s=float(start_s), end_s=end_s)
-            if conversion == "vfr":
-                timed = (((int(round(t / _VFR_TIME_BASE)), _VFR_TIME_BASE), rgb) for t, rgb in _vfr(frames))
+            if as_shown:
+                kept = _vfr(frames) if conversion == "vfr" else frames
+                timed = (((int(round(t / _VFR_TIME_BASE)), _VFR_TIME_BASE), rgb) for t, rgb in kept)
             else:
                 shown = _pulldown(frames) if conversion == "pulldown" else _repeat(frames, rate)
                 timed = (((i, 1 / rate), rgb) for i, rgb in enumerate(shown))
