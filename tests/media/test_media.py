@@ -215,3 +215,23 @@ def test_luma_sample_is_a_grid_of_the_stored_luma_at_8_bit_scale(pix_fmt):
     assert sample.dtype == np.uint8 and sample.shape == (40, 67)  # every 3rd row and column of 120 x 200
     want = frame.reformat(format="yuv420p").to_ndarray()[:120][1::3, 1::3]
     assert int(np.abs(sample.astype(np.int16) - want).max()) <= 1
+
+
+def test_a_variable_rate_stream_is_told_and_decoded_whole(tmp_path):
+    """A stream that drops one source frame in one to three (a phone's, a converter's) is variable
+    rate: every frame decodes in the default mode, since skipping its non-reference frames too left
+    pairs 0.1-0.3 s apart (the matrix's Sintel row: tolerant fan IoU 0.595). The same frames at their
+    own rate are not, nor is a cut whose first frame is the one on screen at the cut (one short
+    interval, which FFmpeg's own rate guess reads as 48 fps)."""
+    from autohaptics.testing.reencode import reencode
+
+    rng = np.random.default_rng(5)
+    frames = [cv2.GaussianBlur(rng.integers(0, 256, (96, 128, 3), dtype=np.uint8), (7, 7), 2) for _ in range(72)]
+    src = write_streams(tmp_path / "src.mp4", frames=frames, fps=24)
+    vfr = reencode(src, tmp_path / "vfr.mp4", conversion="vfr")
+    cut = reencode(src, tmp_path / "cut.mp4", start_s=0.6)
+    assert media.probe(vfr).video.variable_rate
+    assert not media.probe(src).video.variable_rate and not media.probe(cut).video.variable_rate
+    whole = _decoded(vfr, "full")
+    assert len(_decoded(vfr, "nonref")) == len(whole) > 40
+    assert len(_decoded(src, "nonref")) < len(frames)  # a regular stream still skips its B-frames

@@ -22,6 +22,8 @@ from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
 # Declared vs decoded duration: beyond this shortfall the file is called truncated.
 TRUNCATION_TOLERANCE_S = 0.5
 TRUNCATION_TOLERANCE_FRAC = 0.02
+VARIABLE_RATE_SHARE = 0.9  # an average frame rate under this share of the stream's own: frames come irregularly
+RATE_PACKETS = 48  # the packets whose intervals tell a stream's own frame rate
 
 
 def source_block(info: dict, *, sha256: str | None = None, name: str | None = None) -> dict:
@@ -48,6 +50,9 @@ class VideoInfo:
     n_frames: int | None  # as declared by the container, None when unknown
     rotation: int  # display rotation in degrees (0, 90, 180, 270), counter-clockwise
     duration_s: float | None
+    # frames come irregularly: the average rate under VARIABLE_RATE_SHARE of the stream's own (a
+    # phone's or screen recorder's stream, a conversion that drops frames)
+    variable_rate: bool = False
 
     @property
     def display_size(self) -> tuple[int, int]:
@@ -145,7 +150,7 @@ def probe(path: str | os.PathLike) -> MediaInfo:
             raise MediaError(f"{p}: zero-length media (no decodable duration)")
         if video is not None:
             c.seek(0)
-            video = replace(video, rotation=_first_frame_rotation(c, vs))
+            video = replace(video, rotation=_first_frame_rotation(c, vs), variable_rate=_variable_rate(c, vs, video.fps))
         return MediaInfo(path=str(p), size_bytes=p.stat().st_size, container=c.format.name,
                          duration_s=float(duration), start_s=start_s, video=video, audio=audio)
 
@@ -236,6 +241,28 @@ def _first_frame_rotation(c, s) -> int:
     except av.error.FFmpegError:
         return 0
     return 0
+
+
+def _variable_rate(c, s, fps: float) -> bool:
+    """Whether the frames come irregularly: the average rate ``fps`` under ``VARIABLE_RATE_SHARE`` of
+    the rate of the stream's typical frame interval (the median over its first ``RATE_PACKETS``
+    packets; FFmpeg's own rate guess reads one odd interval, e.g. a cut's first frame, as a rate)."""
+    times = set()
+    try:
+        c.seek(0)
+        for packet in c.demux(s):
+            if packet.pts is not None and packet.time_base:
+                times.add(float(packet.pts * packet.time_base))
+            if len(times) >= RATE_PACKETS:
+                break
+    except av.error.FFmpegError:
+        return False
+    ordered = sorted(times)
+    steps = sorted(b - a for a, b in zip(ordered, ordered[1:]))
+    if len(steps) < 8:
+        return False
+    typical = steps[len(steps) // 2]
+    return typical > 0 and fps < VARIABLE_RATE_SHARE / typical
 
 
 def norm_rotation(deg) -> int:

@@ -35,6 +35,7 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
         above (H.264 B-pyramids; only I- and P-frames are decoded, about a quarter of the frames at
         60 fps): a P-frame that used a skipped B-frame as reference comes out approximate (mean 3,
         at most 5.6 grey levels off on the shared 1080p60 clip). Frames keep their true timestamps.
+        A variable-rate stream (``VideoInfo.variable_rate``) skips no frame in any mode.
     prefetch : when > 0, decode in a background thread up to this many frames ahead, so the
         decoder keeps working while the caller analyses a frame (PyAV releases the GIL while
         decoding); FFmpeg then gets its threads by :func:`decoder_threads`.
@@ -86,7 +87,9 @@ def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0, bes
     with open_container(info.path) as c:
         stream = stream_by_index(c, info.video.index)
         stream.thread_type = "AUTO"
-        if decode in ("nonref", "fast", "sparse"):
+        # a variable-rate stream's frames are already few and irregular: skipping some leaves gaps of 0.1-0.3 s
+        skips = decode in ("nonref", "fast", "sparse") and not info.video.variable_rate
+        if skips:
             sparse = decode == "sparse" and info.video.fps >= SPARSE_MIN_FPS
             stream.codec_context.skip_frame = "BIDIR" if sparse else "NONREF"
             if sparse:
@@ -94,7 +97,7 @@ def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0, bes
                 # before; measured: 2.49 s, one thread 2.42 s); slice threads do where the encoder
                 # cut frames into slices (1.52 s on the 30 s 1080p BBB loop) and cost nothing where not
                 stream.thread_type = "SLICE"
-        threads = decoder_threads(stream, decode, info.video.fps) if beside else 0
+        threads = decoder_threads(stream, decode if skips else "full", info.video.fps) if beside else 0
         if threads:
             stream.codec_context.thread_count = threads
         if decode in ("fast", "sparse"):

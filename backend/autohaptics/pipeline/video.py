@@ -180,7 +180,8 @@ class _Pass:
         self.last_time = 0.0
         self.repeats = 0  # successor frames passed over as repeats of their pair's first frame
         fps = float(info.video.fps) if info.video is not None and info.video.fps else 0.0
-        self.min_span_s = float(flow_params.min_span_frames) / fps if fps > 0 else 0.0  # a pair's least span, s
+        # a pair's least span, s; a variable-rate stream has no frame period to span: its next frame
+        self.min_span_s = float(flow_params.min_span_frames) / fps if fps > 0 and not info.video.variable_rate else 0.0
         self.held = None  # a flow pair waiting for the frame after its successor (cadence)
         self.cadence = Cadence(1.0 / fps if fps > 0 else 0.0, flow_params.cadence_ratio if need_flow else 0.0)
 
