@@ -107,13 +107,7 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
                 vs.options = dict(video_options)
             audio = _audio_stream(inp, out, audio_codec or a_default, audio_bit_rate, audio_layout) if info.audio else None
             frames = _source_frames(inp.streams.video[0], w, h, fit=fit, start_s=float(start_s), end_s=end_s)
-            if as_shown:
-                kept = _vfr(frames) if conversion == "vfr" else frames
-                timed = (((int(round(t / _VFR_TIME_BASE)), _VFR_TIME_BASE), rgb) for t, rgb in kept)
-            else:
-                shown = _pulldown(frames) if conversion == "pulldown" else _repeat(frames, rate)
-                timed = (((i, 1 / rate), rgb) for i, rgb in enumerate(shown))
-            for (pts, time_base), rgb in timed:
+            for (pts, time_base), rgb in _timed(frames, conversion, rate, as_shown):
                 frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
                 if pix_fmt != "yuv420p":
                     frame = frame.reformat(format=pix_fmt)
@@ -207,6 +201,16 @@ def _fitted(frame: av.VideoFrame, width: int, height: int, fit: str) -> np.ndarr
     src = rgb[max(0, -top):max(0, -top) + min(h, height), max(0, -left):max(0, -left) + min(w, width)]
     out[max(0, top):max(0, top) + src.shape[0], max(0, left):max(0, left) + src.shape[1]] = src
     return out
+
+
+def _timed(frames, conversion: str, rate: Fraction, as_shown: bool):
+    """((pts, time base), rgb) of each output frame: ``as_shown`` (a variable rate, or a cut at the
+    source's rate) at its own time, else on the grid of ``rate`` as ``conversion`` says."""
+    if as_shown:
+        kept = _vfr(frames) if conversion == "vfr" else frames
+        return (((int(round(t / _VFR_TIME_BASE)), _VFR_TIME_BASE), rgb) for t, rgb in kept)
+    shown = _pulldown(frames) if conversion == "pulldown" else _repeat(frames, rate)
+    return (((i, 1 / rate), rgb) for i, rgb in enumerate(shown))
 
 
 def _vfr(frames):
