@@ -102,7 +102,7 @@ def test_a_cut_keeps_the_stretch_asked_for(src, tmp_path):
     assert onset == pytest.approx(1.0 - 0.6, abs=0.03)  # the tone at 1 s of the film, 0.4 s into the cut
 
 
-def test_a_cut_between_two_frames_keeps_the_picture_in_step_with_the_sound(tmp_path):
+def test_a_cut_between_two_frames_keeps_the_picture_on_the_films_time(tmp_path):
     """A 24 fps film whose picture and sound change together at 1 s, cut at 0.61 s (between frames
     14 and 15): the picture changes 0.39 s into the cut, as in the film (before: 27 ms late, laid on
     a frame grid from 0, the frame on screen at the cut lasting a whole frame, which moved the
