@@ -82,9 +82,17 @@ def test_bridge_pauses_fills_short_pauses_between_runs_only():
 @settings(max_examples=60, deadline=None)
 def test_trailing_median_stays_within_its_window(v, n):
     out = trailing_median(v, n)
-    padded = np.concatenate([np.full(n - 1, v[0]), v])
+    padded = np.concatenate([np.full(n - 1, np.median(v[:n])), v])
     for t in range(v.size):
         window = padded[t:t + n]
         assert window.min() <= out[t] <= window.max()
     if n == 1:
         assert (out == v).all()
+
+
+def test_trailing_median_drops_a_peak_in_the_first_frames_too():
+    """A codec's start-up transient (one frame) goes as a peak later in the curve does."""
+    v = np.array([0.8, 0.45, 0.43, 0.43, 0.44, 0.43, 0.43, 2.0, 0.43, 0.43, 0.44, 0.43])
+    out = trailing_median(v, 5)
+    assert out.max() <= 0.45
+    assert np.allclose(trailing_median(np.full(8, 3.0), 5), 3.0)

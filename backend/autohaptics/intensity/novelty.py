@@ -73,7 +73,7 @@ def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, cl
     opening_n : the frames whose largest value the feature had before the file began, 0 for a
         file that opens on silence (:func:`opening_frames` of the loudness; default: of ``x``).
     lag_n : frames by which ``x`` lags the level ``opening_n`` was taken from (a trailing median's
-        (n - 1) // 2): a curve under way from its first frame holds its first value that long, so
+        (n - 1) // 2): a curve under way from its first frame holds its opening value that long, so
         the level its opening check compares with spans ``lag_n`` frames more.
     Returns float64 [shape=(n,)], finite, >= 0 and (with ``clip``) <= 1; all zeros for silence.
     """
@@ -170,10 +170,13 @@ def trailing_max(v: np.ndarray, n: int) -> np.ndarray:
 
 
 def trailing_median(v: np.ndarray, n: int) -> np.ndarray:
-    """Median of v[t - n + 1 .. t] at each t (the window padded with v[0] at the start), float64,
-    same shape; no smoothing for n <= 1. Non-finite values count as 0. A peak shorter than half
-    the window goes; a rise lasting longer passes, (n - 1) // 2 frames later."""
+    """Median of v[t - n + 1 .. t] at each t (the window padded with the median of the first n
+    values at the start), float64, same shape; no smoothing for n <= 1. Non-finite values count as
+    0. A peak shorter than half the window goes, in the first frames too (a codec's start-up
+    transient: padding with v[0] would hold it for (n - 1) // 2 frames more); a rise lasting
+    longer passes, (n - 1) // 2 frames later."""
     x = np.where(np.isfinite(v), v, 0.0).astype(np.float64)
     if x.size == 0 or n <= 1:
         return x
-    return np.median(sliding_window_view(np.concatenate([np.full(n - 1, x[0]), x]), n), axis=1)
+    pad = np.full(n - 1, np.median(x[:n]))
+    return np.median(sliding_window_view(np.concatenate([pad, x]), n), axis=1)

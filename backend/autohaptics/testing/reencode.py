@@ -64,8 +64,9 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     start_s, duration_s : the stretch of ``src`` kept, s (a reel cut mid-film; default all of it). A cut
     at the source's rate keeps each frame at its film time from ``start_s`` (the frame on screen there
     first), wherever the cut falls between two frames.
-    The audio is decoded and encoded again (resampled to 48 kHz for Opus), its encoder's priming left
-    in (AAC: 1024 samples, the sound that much later, as a muxer that does not mark it writes it).
+    The audio is decoded and encoded again (resampled to 48 kHz for Opus), its encoder's priming
+    marked in the container as FFmpeg's own tools write it (the decoded sound starts where the
+    source's did).
     """
     info = probe(src)
     if info.video is None:
@@ -268,6 +269,7 @@ def _copy_audio(a_in, out, a_out, resampler, *, start_s: float = 0.0, end_s: flo
     """Decode the audio stream ``a_in`` and encode its samples from ``start_s`` to ``end_s`` into
     ``a_out`` of ``out``."""
     origin = float(a_in.start_time * a_in.time_base) if a_in.start_time is not None else 0.0
+    n = 0
     for frame in a_in.container.decode(a_in):
         t0 = (float(frame.time) - origin) if frame.time is not None else 0.0
         rate = frame.sample_rate
@@ -280,14 +282,23 @@ def _copy_audio(a_in, out, a_out, resampler, *, start_s: float = 0.0, end_s: flo
         if first > 0 or last < frame.samples:
             frame = _trimmed(frame, first, last)
         frame.pts = None
-        for r in resampler.resample(frame):
-            for p in a_out.encode(r):
-                out.mux(p)
-    for r in resampler.resample(None):
-        for p in a_out.encode(r):
-            out.mux(p)
+        n = _encode_audio(resampler.resample(frame), out, a_out, n)
+    _encode_audio(resampler.resample(None), out, a_out, n)
     for p in a_out.encode(None):
         out.mux(p)
+
+
+def _encode_audio(frames, out, a_out, n: int) -> int:
+    """Encode ``frames`` from sample ``n`` of ``a_out`` on; the next sample's index. Each frame
+    carries its own time, so the encoder's priming goes before 0 (marked in the container: an edit
+    list, a codec delay) and the decoded sound starts where the source's did."""
+    rate = a_out.codec_context.sample_rate
+    for r in frames:
+        r.pts, r.time_base = n, Fraction(1, rate)
+        n += r.samples
+        for p in a_out.encode(r):
+            out.mux(p)
+    return n
 
 
 def _trimmed(frame: av.AudioFrame, first: int, last: int) -> av.AudioFrame:
