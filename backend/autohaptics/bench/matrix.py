@@ -52,7 +52,8 @@ class Variant:
     """One row of the matrix: how a source is written again (``testing.reencode``'s options).
 
     size : (source width, height) -> (width, height) of the variant's frame, or None (the source's).
-    screener : a codec of ``testing.reencode.screener`` ("vp9", "h264") instead of ``reencode``.
+    screener : a codec of ``testing.reencode.screener`` ("vp9", "h264") instead of ``reencode``
+        (``options`` then go to ``screener``: its height, frame rate).
     start_s : where a cut starts in the source, s (on the 100 ms grid); its ticks are compared with
         the clean film's from there.
     """
@@ -72,8 +73,8 @@ class Variant:
 
 
 def _sound(layout: str, bit_rate: int) -> dict:
-    """A sound row's options: the picture's packets as they are, the sound mixed to ``layout`` (Opus,
-    whose decoder drops its own priming: AAC's stays in Matroska and would delay the sound ~21 ms)."""
+    """A sound row's options: the picture's packets as they are, the sound mixed to ``layout`` as Opus
+    (a codec of its own, not the AAC of the picture rows)."""
     return {"video_codec": "copy", "audio_codec": "libopus", "audio_layout": layout, "audio_bit_rate": bit_rate}
 
 
@@ -91,6 +92,7 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("10-bit H.264", "depth", options={"pix_fmt": "yuv420p10le"}),
     Variant("screener VP9 240p crf 32 realtime, Opus", "screener", ".webm", screener="vp9", crf=32),
     Variant("screener H.264 360p crf 35", "screener", screener="h264", crf=35),
+    Variant("screener H.264 240p crf 32", "screener", screener="h264", crf=32, options={"height": 240}),
     Variant("sound mono", "sound", ".mkv", options=_sound("mono", 96_000)),
     Variant("sound stereo", "sound", ".mkv", options=_sound("stereo", 192_000)),
     Variant("sound 5.1", "sound", ".mkv", options=_sound("5.1", 384_000)),
@@ -123,7 +125,7 @@ def variant_file(src: Path, variant: Variant, out_dir: Path) -> Path:
         return dst
     out_dir.mkdir(parents=True, exist_ok=True)
     if variant.screener is not None:
-        return screener(src, dst, codec=variant.screener, crf=variant.crf)
+        return screener(src, dst, codec=variant.screener, crf=variant.crf, **variant.options)
     options = dict(variant.options)
     if options.get("video_codec", "libx264") == "libx264" and variant.suffix in (".mp4", ".mkv"):
         options.setdefault("video_options", dict(ENCODE))
