@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from autohaptics import media
+from autohaptics.media.video import REPEAT_MIN_FPS
 from shared_data import shared_clip
 from stress_inputs import write_streams
 
@@ -113,14 +114,16 @@ def _decoded(path, decode):
 
 def test_sparse_decoding_keeps_only_i_and_p_frames_from_40_fps():
     """The 1080p60 H.264 clip (B-pyramid: I/P, one reference B and two plain B per 4 frames):
-    "nonref" decodes half the frames exactly; "sparse" only the I- and P-frames (a quarter),
-    in order, with the true timestamps of the same frames, approximate (missing B references)
-    but close to the exact ones."""
+    "nonref" decodes every frame there, exactly (from ``REPEAT_MIN_FPS`` up a film's repeated
+    pictures are told frame by frame); "sparse" only the I- and P-frames (a quarter), in order,
+    with the true timestamps of the same frames, approximate (missing B references) but close to
+    the exact ones."""
     path = shared_clip("bbb_1080p60_2s_h264_aac6ch.mp4")
+    assert media.probe(path).video.fps >= REPEAT_MIN_FPS
     full = dict(_decoded(path, "full"))
     nonref = _decoded(path, "nonref")
     sparse = _decoded(path, "sparse")
-    assert len(full) == 120 and 55 <= len(nonref) <= 65 and 28 <= len(sparse) <= 36
+    assert len(full) == 120 and len(nonref) == 120 and 28 <= len(sparse) <= 36
     for t, g in nonref:
         np.testing.assert_array_equal(g, full[t])  # the frames it decodes are exact
     times = [t for t, _ in sparse]
@@ -134,7 +137,7 @@ def test_sparse_decoding_below_40_fps_skips_only_non_reference_frames():
     """At 24 fps every B-frame skipped would leave too few frames for the 10 Hz ticks: "sparse"
     decodes what "fast" does (the non-reference frames skipped)."""
     path = shared_clip("sintel_trailer_480x204_h264_aac.mp4")
-    assert media.probe(path).video.fps < media.SPARSE_MIN_FPS
+    assert media.probe(path).video.fps < REPEAT_MIN_FPS <= media.SPARSE_MIN_FPS
     fast = [t for t, _ in _decoded(path, "fast")]
     sparse = [t for t, _ in _decoded(path, "sparse")]
     assert sparse == fast
@@ -235,3 +238,22 @@ def test_a_variable_rate_stream_is_told_and_decoded_whole(tmp_path):
     whole = _decoded(vfr, "full")
     assert len(_decoded(vfr, "nonref")) == len(whole) > 40
     assert len(_decoded(src, "nonref")) < len(frames)  # a regular stream still skips its B-frames
+
+
+def test_a_stream_at_a_conversion_rate_decodes_every_frame(tmp_path):
+    """From ``REPEAT_MIN_FPS`` up a stream may show a film by repeated pictures (24 -> 30 fps: one in
+    five), which the cadence tells from each frame's difference to the one before: "nonref" and
+    "fast" skip no frame there (a skipped B-frame hid the repeats; the matrix's Sintel H.264 240p
+    screener read fan-tick F1 0.849), "sparse" still does; at 24 fps "nonref" skips its B-frames."""
+    from autohaptics.testing.reencode import reencode
+
+    rng = np.random.default_rng(7)
+    frames = [cv2.GaussianBlur(rng.integers(0, 256, (96, 128, 3), dtype=np.uint8), (7, 7), 2) for _ in range(48)]
+    src = write_streams(tmp_path / "src.mp4", frames=frames, fps=24)
+    thirty = reencode(src, tmp_path / "thirty.mp4", fps=30)
+    assert len(_decoded(src, "nonref")) < len(frames)
+    whole = _decoded(thirty, "full")
+    assert len(whole) == 60
+    for mode in ("nonref", "fast"):
+        assert [t for t, _ in _decoded(thirty, mode)] == [t for t, _ in whole]
+    assert len(_decoded(thirty, "sparse")) < len(whole)
