@@ -63,7 +63,7 @@ class VideoParams(Record):
         so P-frames that referenced one come out approximate; see :func:`media.iter_video`).
         With skipped frames the analysed frame is the decoded one nearest the tick's centre and a
         flow pair ends on a decoded frame (``flow.min_span_frames``), timed by its real interval.
-        A variable-rate stream skips none, nor do "nonref" and "fast" from 29 fps up (a film's repeats).
+        A variable-rate stream skips none, nor do "nonref" and "fast" at 29 to 40 fps (a film's repeats).
     stride : ticks per analysed frame, 1..10 (default 1; the fast preset: 3): in groups of s ticks,
         the frame nearest the group's centre is analysed (plus its successor for flow) and every tick
         of the group gets its values (at most s x 50 ms off its own centre). Only with ``analysis="tick"``.

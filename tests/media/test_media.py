@@ -114,16 +114,14 @@ def _decoded(path, decode):
 
 def test_sparse_decoding_keeps_only_i_and_p_frames_from_40_fps():
     """The 1080p60 H.264 clip (B-pyramid: I/P, one reference B and two plain B per 4 frames):
-    "nonref" decodes every frame there, exactly (from ``REPEAT_MIN_FPS`` up a film's repeated
-    pictures are told frame by frame); "sparse" only the I- and P-frames (a quarter), in order,
-    with the true timestamps of the same frames, approximate (missing B references) but close to
-    the exact ones."""
+    "nonref" decodes half the frames exactly; "sparse" only the I- and P-frames (a quarter),
+    in order, with the true timestamps of the same frames, approximate (missing B references)
+    but close to the exact ones."""
     path = shared_clip("bbb_1080p60_2s_h264_aac6ch.mp4")
-    assert media.probe(path).video.fps >= REPEAT_MIN_FPS
     full = dict(_decoded(path, "full"))
     nonref = _decoded(path, "nonref")
     sparse = _decoded(path, "sparse")
-    assert len(full) == 120 and len(nonref) == 120 and 28 <= len(sparse) <= 36
+    assert len(full) == 120 and 55 <= len(nonref) <= 65 and 28 <= len(sparse) <= 36
     for t, g in nonref:
         np.testing.assert_array_equal(g, full[t])  # the frames it decodes are exact
     times = [t for t, _ in sparse]
@@ -241,10 +239,11 @@ def test_a_variable_rate_stream_is_told_and_decoded_whole(tmp_path):
 
 
 def test_a_stream_at_a_conversion_rate_decodes_every_frame(tmp_path):
-    """From ``REPEAT_MIN_FPS`` up a stream may show a film by repeated pictures (24 -> 30 fps: one in
-    five), which the cadence tells from each frame's difference to the one before: "nonref" and
-    "fast" skip no frame there (a skipped B-frame hid the repeats; the matrix's Sintel H.264 240p
-    screener read fan-tick F1 0.849), "sparse" still does; at 24 fps "nonref" skips its B-frames."""
+    """From ``REPEAT_MIN_FPS`` to ``SPARSE_MIN_FPS`` a stream may show a film by repeated pictures
+    (24 -> 30 fps: one in five), which the cadence tells from each frame's difference to the one
+    before: "nonref" and "fast" skip no frame there (a skipped B-frame hid the repeats; the matrix's
+    Sintel H.264 240p screener read fan-tick F1 0.849), "sparse" still does; at 24 fps "nonref"
+    skips its B-frames."""
     from autohaptics.testing.reencode import reencode
 
     rng = np.random.default_rng(7)

@@ -19,9 +19,10 @@ DECODE_MODES = ("full", "nonref", "fast", "sparse")
 # usual 3 B-frames per reference frame the I/P-frames alone still come at 10 fps or more there,
 # one per 100 ms tick; below it "sparse" decodes like "fast".
 SPARSE_MIN_FPS = 40.0
-# from this rate up a stream may hold a film converted by repeated pictures (24 or 25 fps shown at 30,
-# 50 or 60): "nonref" and "fast" decode every frame there, since the repeats are told from each
-# frame's difference to the one before (airflow.cadence) and a skipped B-frame hides them
+# from this rate up to SPARSE_MIN_FPS a stream may hold a film shown by repeated pictures (24 or 25 fps
+# at 30): "nonref" and "fast" decode every frame there, since the repeats are told from each frame's
+# difference to the one before (airflow.cadence) and a skipped B-frame hides them. From 40 fps up
+# every frame would cost 29 % more on 1080p60 for 0.00-0.03 of tolerant fan IoU (docs/BENCHMARKS.md).
 REPEAT_MIN_FPS = 29.0
 
 
@@ -39,7 +40,7 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
         above (H.264 B-pyramids; only I- and P-frames are decoded, about a quarter of the frames at
         60 fps): a P-frame that used a skipped B-frame as reference comes out approximate (mean 3,
         at most 5.6 grey levels off on the shared 1080p60 clip). Frames keep their true timestamps. A
-        variable-rate stream skips no frame; nor, but in "sparse", does one at ``REPEAT_MIN_FPS`` or more.
+        variable-rate stream skips no frame; nor, but in "sparse", does one at 29 to 40 fps (a film's repeats).
     prefetch : when > 0, decode in a background thread up to this many frames ahead, so the
         decoder keeps working while the caller analyses a frame (PyAV releases the GIL while
         decoding); FFmpeg then gets its threads by :func:`decoder_threads`.
@@ -93,7 +94,7 @@ def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0, bes
         stream.thread_type = "AUTO"
         # a variable-rate stream's frames are already few and irregular: skipping some leaves gaps of 0.1-0.3 s
         skips = decode in ("nonref", "fast", "sparse") and not info.video.variable_rate \
-            and (decode == "sparse" or info.video.fps < REPEAT_MIN_FPS)
+            and (decode == "sparse" or not REPEAT_MIN_FPS <= info.video.fps < SPARSE_MIN_FPS)
         if skips:
             sparse = decode == "sparse" and info.video.fps >= SPARSE_MIN_FPS
             stream.codec_context.skip_frame = "BIDIR" if sparse else "NONREF"
