@@ -22,7 +22,7 @@ SPARSE_MIN_FPS = 40.0
 # from this rate up to SPARSE_MIN_FPS a stream may hold a film shown by repeated pictures (24 or 25 fps
 # at 30): "nonref" and "fast" decode every frame there, since the repeats are told from each frame's
 # difference to the one before (airflow.cadence) and a skipped B-frame hides them. From 40 fps up
-# every frame would cost 29 % more on 1080p60 for 0.00-0.03 of tolerant fan IoU (docs/BENCHMARKS.md).
+# decoding every frame costs more than it gains (docs/BENCHMARKS.md, "The material matrix").
 REPEAT_MIN_FPS = 29.0
 
 
