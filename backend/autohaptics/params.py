@@ -134,6 +134,7 @@ THESIS_RULES: dict[str, Any] = {
     "flow.repeat_wait_s": 0.0,  # the default waits for the next distinct frame (repeats give no motion)
     "flow.min_span_frames": 0.0,  # the default pairs frames two apart, whichever frames are decoded
     "flow.cadence_ratio": 0.0,  # the default times a pair by its picture steps under a repeat cadence
+    "depth.expansion_grain": 0.0,  # the default counts expansion only where it holds over more than a block
     "airflow.motion_sigma_ticks": 0.0,  # the default judges a tick on its shot's motion around it
     "airflow.near_sigma_ticks": 0.0,  # the default smooths nearness over neighbouring ticks of the shot
     "airflow.near_share": 0.0,  # the default counts the nearest 40 % of each tick's cells as near too
@@ -272,7 +273,7 @@ def params_from_args(args):
 
 # Analysis-time fields whose default analyses otherwise than the analysis did before the field
 # existed: a document without the field was analysed with this value (dotted name -> value).
-ABSENT_AS = {"flow.min_span_frames": 0.0, "flow.cadence_ratio": 0.0}
+ABSENT_AS = {"flow.min_span_frames": 0.0, "flow.cadence_ratio": 0.0, "depth.expansion_grain": 0.0}
 
 
 def analysis_key(doc: dict) -> dict:

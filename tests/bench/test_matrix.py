@@ -93,18 +93,15 @@ def test_digital_silence_gives_what_its_noise_floor_twin_gives(tmp_path):
     assert fig["onset_f1"] >= 0.9 and fig["vibration_mae"] <= 0.01, fig
 
 
-# screeners harsher than the matrix's rows (codec, height px, crf, fps) -> why a row is not met yet
-# (docs/BENCHMARKS.md, "Screener encodes"): the pan's cells read near from the block noise's
-# divergence (with the near rule off every row is at 1.00 tolerant); strict, as NOT_MET
+# screeners harsher than the matrix's rows (codec, height px, crf, fps): the pan's cells read near
+# from the block noise's divergence unless the expansion cue is opened by its grain (docs/BENCHMARKS.md,
+# "Screener encodes"; with depth.expansion_grain=0 the H.264 crf 35-40 rows read 0.72-0.79 tolerant)
 HARSHER = (("vp9", 180, 40, 30), ("vp9", 240, 40, 25), ("h264", 360, 40, 25), ("h264", 240, 40, 30),
-           ("h264", 240, 35, 25), ("h264", 180, 40, 30), ("h264", 180, 38, 24))
-HARSHER_NOT_MET = {("h264", 240, 35, 25): "tolerant fan IoU 0.761", ("h264", 180, 40, 30): "tolerant fan IoU 0.775",
-                   ("h264", 180, 38, 24): "tolerant fan IoU 0.720"}
+           ("h264", 240, 35, 25), ("h264", 240, 35, 24), ("h264", 180, 40, 30), ("h264", 180, 38, 24))
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("row", [pytest.param(r, marks=pytest.mark.xfail(strict=True, reason=HARSHER_NOT_MET[r]))
-                                 if r in HARSHER_NOT_MET else r for r in HARSHER], ids=lambda r: "_".join(map(str, r)))
+@pytest.mark.parametrize("row", HARSHER, ids=lambda r: "_".join(map(str, r)))
 def test_harsher_screeners_meet_the_targets(row, scene_file, clean, tmp_path_factory):
     from autohaptics.testing.reencode import screener
 
