@@ -1,6 +1,7 @@
 """The pipeline's composition: modes, tracks, skipping, the feature cache, missing streams."""
 
 import copy
+import json
 
 import numpy as np
 import pytest
@@ -101,6 +102,26 @@ def test_an_analysis_from_before_a_field_existed_serves_what_it_was_analysed_wit
     before = {"flow.min_span_frames": 0.0, "flow.cadence_ratio": 0.0}
     assert analysis_compatible(old, apply_overrides(GenerateParams(), before))
     assert not analysis_compatible(old, GenerateParams())  # pairs two frames apart, timed by the cadence
+    del old.params["depth"]["expansion_grain"]
+    before["depth.expansion_grain"] = 0.0
+    assert analysis_compatible(old, apply_overrides(GenerateParams(), before))
+    assert not analysis_compatible(old, apply_overrides(GenerateParams(), {**before, "depth.expansion_grain": 0.015}))
+
+
+def test_an_analysis_of_another_revision_is_analysed_again(av_analysis, tmp_path):
+    """A cache written before the analysis changed a rule without a parameter (no revision in its
+    header: 0) never serves, whatever its parameters; one of this revision does, after a round trip."""
+    av_analysis.save(tmp_path / "a.npz")
+    assert analysis_compatible(Analysis.load(tmp_path / "a.npz"), GenerateParams())
+    with np.load(tmp_path / "a.npz") as z:
+        arrays = {k: z[k] for k in z.files}
+    header = json.loads(bytes(arrays["header"]).decode())
+    del header["revision"]
+    arrays["header"] = np.frombuffer(json.dumps(header).encode(), dtype=np.uint8)
+    np.savez(tmp_path / "old.npz", **arrays)
+    old = Analysis.load(tmp_path / "old.npz")
+    assert old.revision == 0 and old.params == av_analysis.params
+    assert not analysis_compatible(old, GenerateParams())
 
 
 def test_feature_cache_round_trip_gives_the_same_timeline(av_analysis, tmp_path):

@@ -153,7 +153,7 @@ def cut_analysis(analysis, start_s: float, n_ticks: int):
         {k: v[k0:k0 + n].copy() for k, v in analysis.video.arrays().items()}, analysis.video.stats)
     info = {**analysis.info, "duration_s": n * TICK_S}
     return Analysis(info=info, sha256=analysis.sha256, n_ticks=n, params=analysis.params, audio=audio, video=video,
-                    stats=analysis.stats)
+                    stats=analysis.stats, revision=analysis.revision)
 
 
 def row_figures(clean, test, variant: Variant, film=None) -> dict:

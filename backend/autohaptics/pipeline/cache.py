@@ -17,6 +17,12 @@ from autohaptics.records import params_to_dict
 from autohaptics.shots import Boundaries, detect
 
 
+# Raised when the analysis computes otherwise for the same parameters (a rule changed without a
+# parameter of its own): a cache of another revision is analysed again. 1: every frame decoded at
+# 29-40 fps (``media.video.REPEAT_MIN_FPS``); caches before it carry none and count as 0.
+ANALYSIS_REVISION = 1
+
+
 @dataclass
 class Analysis:
     """The feature cache of one file: what :func:`derive` needs, nothing that depends on thresholds.
@@ -26,6 +32,7 @@ class Analysis:
     shots : the shot boundaries (:func:`autohaptics.shots.detect`), found from ``video`` on first
         use when not given (a cache written before they were stored gets them from its own arrays;
         a plain ``generate`` never needs them, so it never pays for them).
+    revision : the :data:`ANALYSIS_REVISION` it was computed under.
     """
 
     info: dict
@@ -36,6 +43,7 @@ class Analysis:
     video: VideoAnalysis | None = None
     stats: dict = field(default_factory=dict)
     found_shots: Boundaries | None = None
+    revision: int = ANALYSIS_REVISION
 
     @property
     def shots(self) -> Boundaries:
@@ -54,7 +62,7 @@ class Analysis:
         arrays.update({"shots_tick": self.shots.tick, "shots_kind": self.shots.kind, "shots_span": self.shots.span})
         header = {"info": self.info, "sha256": self.sha256, "n_ticks": self.n_ticks, "params": self.params,
                   "stats": self.stats, "has_audio": self.audio is not None, "has_video": self.video is not None,
-                  "version": __version__}
+                  "version": __version__, "revision": self.revision}
         buf = io.BytesIO()
         np.savez(buf, header=np.frombuffer(json.dumps(header).encode(), dtype=np.uint8), **arrays)
         Path(path).write_bytes(buf.getvalue())
@@ -70,11 +78,12 @@ class Analysis:
         return cls(info=header["info"], sha256=header["sha256"], n_ticks=int(header["n_ticks"]),
                    params=header["params"], audio=audio if header["has_audio"] else None,
                    video=VideoAnalysis.from_arrays(video) if header.get("has_video") else None,
-                   stats=header["stats"], found_shots=shots)
+                   stats=header["stats"], found_shots=shots, revision=int(header.get("revision", 0)))
 
 
 def reusable(analysis: Analysis, params: GenerateParams | dict) -> bool:
     """True when ``analysis`` was computed with the analysis-time parameters of ``params`` (a
-    record or its ``params_to_dict`` form): deriving from it then equals analysing again."""
+    record or its ``params_to_dict`` form) by this code's analysis (:data:`ANALYSIS_REVISION`):
+    deriving from it then equals analysing again."""
     doc = params if isinstance(params, dict) else params_to_dict(params)
-    return analysis_key(analysis.params) == analysis_key(doc)
+    return analysis.revision == ANALYSIS_REVISION and analysis_key(analysis.params) == analysis_key(doc)
