@@ -1,7 +1,8 @@
 """The material matrix (``bench matrix``): every row of :data:`VARIANTS` on a film-like scene the
 tests write (``testing.scenes.material_scene``) meets the issue-31 targets against the clean
 variant, the digital-silence pair agrees with its noise-floor twin, and the matrix's own rules
-(the cut's reference, what counts as a jolt) say what they should."""
+(the cut's reference, what counts as a jolt) say what they should. Screeners harsher than the matrix's
+rows: on that scene (all met) and on a shared film (three known misses, strict xfails)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from autohaptics.bench.matrix import (JOLT_MAX, TARGETS, VARIANTS, cut_analysis,
                                       silence_pair, variant_file)
 from autohaptics.media import probe
 from autohaptics.testing.scenes import material_scene
+from shared_data import shared_clip
 
 
 def test_misses_names_each_target_missed_and_a_jolt_only_where_the_film_is_still():
@@ -110,4 +112,32 @@ def test_harsher_screeners_meet_the_targets(row, scene_file, clean, tmp_path_fac
     dst.parent.mkdir(exist_ok=True)
     test = pipeline.generate(screener(scene_file, dst, codec=codec, height=height, crf=crf, fps=fps))
     fig = row_figures(pipeline.derive(clean), test, VARIANTS[0])
+    assert misses(fig) == [], fig
+
+
+# H.264 screeners of a real film harsher than the matrix's rows (height px, crf, fps) that miss: the
+# strong-motion bar (half the tick's strongest cell) passes other cells under the encode's blur, not
+# the nearness (docs/BENCHMARKS.md, "Harsher screeners on the shared clips"); strict, so a fix shows
+FILM_HARSHER_NOT_MET = {(240, 40, 30): "tolerant fan IoU 0.757", (360, 38, 25): "tolerant fan IoU 0.774",
+                        (360, 40, 25): "tolerant fan IoU 0.788"}
+
+
+@pytest.fixture(scope="module")
+def bbb_opening():
+    src = shared_clip("bbb_opening_30s_1280x720_vp8_vorbis.webm")
+    return src, pipeline.generate(src)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("row", [pytest.param(r, marks=pytest.mark.xfail(strict=True, raises=AssertionError, reason=why))
+                                 for r, why in FILM_HARSHER_NOT_MET.items()], ids=lambda r: "_".join(map(str, r)))
+def test_harsher_h264_screeners_of_a_film_meet_the_targets(row, bbb_opening, tmp_path_factory):
+    from autohaptics.testing.reencode import screener
+
+    height, crf, fps = row
+    src, original = bbb_opening
+    dst = tmp_path_factory.getbasetemp() / "film_harsher" / f"h264_{height}_{crf}_{fps}.mp4"
+    dst.parent.mkdir(exist_ok=True)
+    fig = row_figures(original, pipeline.generate(screener(src, dst, codec="h264", height=height, crf=crf, fps=fps)),
+                      VARIANTS[0])
     assert misses(fig) == [], fig
