@@ -135,6 +135,8 @@ THESIS_RULES: dict[str, Any] = {
     "flow.min_span_frames": 0.0,  # the default pairs frames two apart, whichever frames are decoded
     "flow.cadence_ratio": 0.0,  # the default times a pair by its picture steps under a repeat cadence
     "depth.expansion_grain": 0.0,  # the default counts expansion only where it holds over more than a block
+    "airflow.cell_rel": 0.5,  # the default's cell bar is 0.55 of the tick's strong motion, not 0.5 of its strongest cell
+    "airflow.peak_cells": 1,  # the default's strong motion is the mean of the five strongest cells
     "airflow.motion_sigma_ticks": 0.0,  # the default judges a tick on its shot's motion around it
     "airflow.near_sigma_ticks": 0.0,  # the default smooths nearness over neighbouring ticks of the shot
     "airflow.near_share": 0.0,  # the default counts the nearest 40 % of each tick's cells as near too

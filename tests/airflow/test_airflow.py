@@ -187,10 +187,46 @@ def test_fan_levels_by_hand():
     motion[4, 13], near[4, 13] = 1.2, 0.3  # strong (0.6) but far: off
     motion[4, 14], near[4, 14] = 0.8, 1.0  # near but weak (0.4 < 0.5): off
     motion[5, 12], near[5, 12] = 1.5, 0.5  # 0.75, near at the limit: on
-    levels = airflow.fan_levels(motion, near, params=airflow.AirflowParams(near_share=0.0))
+    thesis = airflow.AirflowParams(near_share=0.0, cell_rel=0.5, peak_cells=1)  # half the strongest cell
+    levels = airflow.fan_levels(motion, near, params=thesis)
     expected = np.zeros((FAN_ROWS, FAN_COLS), np.float32)
     expected[4, 12], expected[5, 12] = 1.0, 0.75
     np.testing.assert_array_equal(levels, expected)
+    # the default: the mean of the five strongest (2, 1.5, 1.2, 0.8, 0) is 1.1, 0.55 of the strongest;
+    # its bar, 0.55 x 1.1 = 0.605, takes in the weak cell at 0.4 of the strongest
+    expected[4, 14] = 0.4
+    np.testing.assert_array_equal(airflow.fan_levels(motion, near, params=airflow.AirflowParams(near_share=0.0)),
+                                  expected)
+
+
+def test_one_cells_spike_does_not_set_the_bar():
+    """A moving region's cells blow with or without one cell reading 2.5 x their motion (a screener's
+    blocks); measured against that cell alone (the thesis) the region goes off."""
+    motion = np.zeros((FAN_ROWS, FAN_COLS))
+    motion[2:6, 3:9] = np.linspace(0.8, 1.0, 24).reshape(4, 6)
+    near = np.ones((FAN_ROWS, FAN_COLS))
+    spiked = motion.copy()
+    spiked[3, 5] = 2.5
+    region = motion > 0
+    assert (airflow.fan_levels(motion, near) > 0)[region].all()
+    assert (airflow.fan_levels(spiked, near) > 0)[region].all()  # its bar 0.55 x 1.375 (the floor's) < 0.8
+    thesis = airflow.AirflowParams(cell_rel=0.5, peak_cells=1)
+    assert (airflow.fan_levels(motion, near, params=thesis) > 0)[region].all()
+    assert np.count_nonzero(airflow.fan_levels(spiked, near, params=thesis)) == 1
+
+
+def test_a_small_objects_cell_keeps_the_bar_above_the_motion_around_it():
+    """One fast cell over a frame drifting at 0.2 of its motion: only the object blows. The mean of
+    the five strongest cells alone (0.36) would put the bar under the drift; ``peak_floor`` holds it."""
+    motion = np.full((FAN_ROWS, FAN_COLS), 0.2)
+    motion[4, 8] = 1.0
+    near = np.ones((FAN_ROWS, FAN_COLS))
+    assert airflow.strong_motion(motion) == pytest.approx(0.55)
+    levels = airflow.fan_levels(motion, near)
+    assert levels[4, 8] == 1.0 and np.count_nonzero(levels) == 1
+    unfloored = airflow.AirflowParams(peak_floor=0.0)
+    assert airflow.strong_motion(motion, params=unfloored) == pytest.approx(0.36)
+    assert (airflow.fan_levels(motion, near, params=unfloored) > 0).all()
 
 
 def test_enclosed_still_centre_of_an_approaching_object_blows():
@@ -515,6 +551,8 @@ def test_the_flow_proxy_width_follows_the_picture(params, picture_width, expecte
     (airflow.FlowParams, {"proxy_fraction": 1.5}), (airflow.FlowParams, {"proxy_fraction": float("nan")}),
     (airflow.AirflowParams, {"threshold": -1.0}),
     (airflow.AirflowParams, {"cell_rel": 1.5}), (airflow.AirflowParams, {"floor": -0.1}),
+    (airflow.AirflowParams, {"peak_cells": 0}), (airflow.AirflowParams, {"peak_cells": 2.5}),
+    (airflow.AirflowParams, {"peak_cells": 154}), (airflow.AirflowParams, {"peak_floor": 1.5}),
     (airflow.AirflowParams, {"strong_rel": 1.5}), (airflow.AirflowParams, {"flat_std": -1.0}),
     (airflow.AirflowParams, {"fade_min_step": float("nan")}),
     (airflow.AirflowParams, {"cell_sigma_ticks": -1.0}), (airflow.AirflowParams, {"cell_sigma_cells": float("inf")}),

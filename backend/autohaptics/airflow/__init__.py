@@ -17,6 +17,7 @@ from autohaptics.airflow.fans import (
     smoothed_cell_motion,
     smoothed_motion,
     smoothed_nearness,
+    strong_motion,
     sustained_motion,
 )
 from autohaptics.airflow.flow import (
@@ -33,4 +34,4 @@ from autohaptics.airflow.flow import (
 __all__ = ["AirflowParams", "DIS_PRESETS", "FLOW_METHODS", "FlowParams", "cell_motion", "despiked_motion", "fan_levels", "fan_track",
            "grid_means", "is_fade", "is_static", "motion_magnitude", "motion_score", "motion_threshold", "near_cells",
            "optical_flow",
-           "smoothed_cell_motion", "smoothed_motion", "smoothed_nearness", "sustained_motion"]
+           "smoothed_cell_motion", "smoothed_motion", "smoothed_nearness", "strong_motion", "sustained_motion"]

@@ -5,9 +5,9 @@ own motion (``strong_rel`` x the 95th percentile of the ticks that move, one-tic
 the motion judged is averaged over the neighbouring ticks of the shot first, so a low-quality
 encode's uneven motion samples neither drop a run nor raise the threshold. In a blowing tick a cell
 blows where its motion, smoothed over the shot's neighbouring ticks and cells, reaches
-``cell_rel`` of the strongest cell AND it is near; a near cell enclosed by blowing cells blows
-too (an object coming at the camera has a still centre). docs/BENCHMARKS.md ("Fans") has the
-measurements behind each rule.
+``cell_rel`` of the tick's strong motion (its few strongest cells, :func:`strong_motion`) AND it is
+near; a near cell enclosed by blowing cells blows too (an object coming at the camera has a still
+centre). docs/BENCHMARKS.md ("Fans") has the measurements behind each rule.
 """
 
 from __future__ import annotations
@@ -35,19 +35,19 @@ class AirflowParams:
     threshold : motion threshold in frame widths per second; None = adaptive (module docstring).
     floor : motion below this never counts (frame widths/s, default 0.005); also the depth skip limit.
     strong_rel : adaptive threshold = strong_rel x the 95th percentile of the moving ticks' motion (0.3).
-    cell_rel : a cell is "strong motion" at this fraction of the tick's strongest cell or more.
+    cell_rel, peak_cells, peak_floor : a cell is "strong motion" at ``cell_rel`` (0.55) of the tick's strong
+        motion or more: the mean of its ``peak_cells`` (5) strongest cells, at least ``peak_floor`` (0.55) of
+        its strongest (:func:`strong_motion`; the thesis: 0.5 of the strongest cell, ``peak_cells`` 1).
     near_min : a cell is "near" at this nearness or more (0..1, 1 = nearest).
     near_share : the nearest ``near_share`` of a tick's cells are "near" too (0..1, default 0.4;
-        0 = ``near_min`` alone, the thesis; 0.25 before issue 31; :func:`near_cells`).
+        0 = ``near_min`` alone, the thesis; :func:`near_cells`).
     static_level, static_fraction : a pair is static when under ``static_fraction`` of the proxy's pixels
         changed by more than ``static_level`` grey levels (noise tolerant; a small moving object is seen).
     fill_enclosed : a near cell enclosed by "on" cells blows too (an approaching object's still centre).
     flat_std : a frame whose luma std is below this (grey levels) is flat; two flat frames: no motion (:func:`is_fade`).
-    fade_min_step : a pair whose mean brightness moved by at least this (grey levels) and that differs in
-        nothing else than a global brightness/contrast change is a fade: no motion (:func:`is_fade`).
-    cell_sigma_ticks : a blowing tick's cells are judged on their motion averaged over the ticks of its
-        shot around it, Gaussian weights of this std (ticks; 2; 0 = the tick alone; :func:`smoothed_cell_motion`).
-    cell_sigma_cells : that motion's blur over neighbouring cells (std in cells; 0.5; 0 = none).
+    fade_min_step : a pair only brightened/darkened by this or more (grey levels) is a fade (:func:`is_fade`).
+    cell_sigma_ticks, cell_sigma_cells : a tick's cells are judged on their motion averaged over the shot's
+        ticks and neighbouring cells, Gaussian stds (ticks 2, cells 0.5; 0 = none; :func:`smoothed_cell_motion`).
     near_sigma_ticks : a blowing tick's nearness is the Gaussian-weighted mean (this std, ticks) over the ticks
         of its shot around it where depth ran (default 2; 0 = its own, the thesis; :func:`smoothed_nearness`).
     motion_sigma_ticks : which ticks blow, and the adaptive threshold, judge each tick's motion smoothed as
@@ -61,7 +61,9 @@ class AirflowParams:
     threshold: float | None = None
     floor: float = field(default=0.005, metadata=stage(ANALYSIS))
     strong_rel: float = 0.3
-    cell_rel: float = 0.5
+    cell_rel: float = 0.55
+    peak_cells: int = 5
+    peak_floor: float = 0.55
     near_min: float = 0.5
     near_share: float = 0.4
     static_level: float = field(default=12.0, metadata=stage(ANALYSIS))
@@ -92,7 +94,10 @@ class AirflowParams:
             v = float(getattr(self, name))
             if not (math.isfinite(v) and 0.0 <= v <= top):
                 raise ParameterError(f"airflow.{name} must lie in 0..{top:g}, got {getattr(self, name)!r}")
-        for name in ("cell_rel", "near_min", "near_share", "static_fraction", "strong_rel"):
+        if not (isinstance(self.peak_cells, int) and 1 <= self.peak_cells <= FAN_ROWS * FAN_COLS):
+            raise ParameterError(f"airflow.peak_cells must be a whole number in 1..{FAN_ROWS * FAN_COLS}, "
+                                 f"got {self.peak_cells!r}")
+        for name in ("cell_rel", "peak_floor", "near_min", "near_share", "static_fraction", "strong_rel"):
             if not (0.0 <= float(getattr(self, name)) <= 1.0):
                 raise ParameterError(f"airflow.{name} must lie in 0..1, got {getattr(self, name)!r}")
 
@@ -277,13 +282,29 @@ def fan_levels(cell_motion_: np.ndarray, nearness: np.ndarray, *, params: Airflo
     with np.errstate(over="ignore"):  # a subnormal peak: the quotient overflows, then clips to 1
         rel = np.clip(m / peak, 0.0, 1.0).astype(np.float32)  # the output's precision decides "still"
     near_ok = near_cells(near, params=params)
-    on = (rel >= params.cell_rel) & (rel > 0) & near_ok  # a still cell is never "strong motion"
+    bar = np.float32(params.cell_rel * (strong_motion(m, params=params) / peak))  # of the strongest cell
+    on = (rel >= bar) & (rel > 0) & near_ok  # a still cell is never "strong motion"
     levels = np.where(on, rel, 0.0)
     if params.fill_enclosed and on.any():
         holes = _enclosed(on) & near_ok
         if holes.any():
             levels[holes] = float(levels[on].mean())
     return levels.astype(np.float32)
+
+
+def strong_motion(cell_motion_: np.ndarray, *, params: AirflowParams = AirflowParams()) -> float:
+    """A tick's strong motion, the reference of its cells' bar: the mean of its ``peak_cells``
+    strongest cells, at least ``peak_floor`` x its strongest (same units as the motion; >= 0).
+
+    The strongest cell alone is one sample of 153: which cell peaks, and by how much, changes with
+    an encode's blur and blocks, and with it which cells pass a share of it."""
+    m = np.asarray(cell_motion_, dtype=np.float64).ravel()
+    peak = float(m.max())
+    if params.peak_cells == 1:
+        return peak
+    with np.errstate(over="ignore"):  # cells near the float limit: their sum overflows, the peak serves
+        top = float(np.partition(m, m.size - params.peak_cells)[m.size - params.peak_cells:].mean())
+    return min(peak, max(top, params.peak_floor * peak))
 
 
 def near_cells(nearness: np.ndarray, *, params: AirflowParams = AirflowParams()) -> np.ndarray:
