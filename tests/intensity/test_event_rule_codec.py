@@ -24,12 +24,13 @@ PREVIOUS = {"intensity.normaliser": "max", "intensity.smoothing_s": 0.0}  # the 
 
 def hits_near_the_gate() -> Scene:
     """A quiet score, a hit every 1.2 s from -36 to -24 dBFS in 0.5 dB steps (some near the loudness
-    gate) and one 4 ms click at -12 dBFS at 12.5 s: the film's loudest frame, which a lossy codec
-    spreads and so moves."""
+    gate) and one 4 ms click at -6 dBFS at 12.5 s: the film's loudest frame, which a lossy codec
+    spreads and so moves (at -12 dBFS, under the loudest hits' frames, it moved the gate only
+    while the decoder spliced the Opus stream's rounded timestamps)."""
     audio = [Tone(0.0, DURATION_S, f, level_dbfs=-34.0, ramp_s=0.05) for f in (130.81, 261.63, 329.63, 392.0)]
     for j, t in enumerate(np.arange(1.0, DURATION_S - 1.0, 1.2)):
         audio += impact(float(t), level_dbfs=-36.0 + 0.5 * j, seed=j + 1)
-    audio.append(Noise(12.5, 12.504, level_dbfs=-12.0, colour="white", seed=99, ramp_s=0.0005))
+    audio.append(Noise(12.5, 12.504, level_dbfs=-6.0, colour="white", seed=99, ramp_s=0.0005))
     return Scene(DURATION_S, [Segment(0.0, DURATION_S, (90, 90, 90))], [], audio)
 
 

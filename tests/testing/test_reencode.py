@@ -132,6 +132,39 @@ def test_the_sound_starts_where_the_sources_did_in_every_container(src, tmp_path
     assert onset == pytest.approx(1.0, abs=0.004), onset
 
 
+def _late_sound(path, late_s: float):
+    """A 2 s grey picture whose sound's first frame lies ``late_s`` after the picture's (as a Vorbis
+    stream's first decoded frame does, 23 ms in): a tone from 1 s of the sound, 1 s + late_s of the film."""
+    rate, n = 48000, 1024
+    tone = np.where(np.arange(2 * rate) >= rate, 0.25 * np.sin(2 * np.pi * 440 * np.arange(2 * rate) / rate), 0.0)
+    with av.open(str(path), "w", format="matroska") as out:
+        vs = out.add_stream("mpeg4", rate=25)
+        vs.width, vs.height, vs.pix_fmt = 64, 48, "yuv420p"
+        a = out.add_stream("pcm_s16le", rate=rate, layout="mono")
+        for i in range(50):
+            frame = av.VideoFrame.from_ndarray(np.full((48, 64, 3), 128, np.uint8), format="rgb24")
+            frame.pts = i
+            out.mux(vs.encode(frame))
+        out.mux(vs.encode(None))
+        for k in range(0, 2 * rate, n):
+            frame = av.AudioFrame.from_ndarray((tone[None, k:k + n] * 32767).astype(np.int16), format="s16", layout="mono")
+            frame.sample_rate, frame.pts, frame.time_base = rate, int(round(late_s * rate)) + k, Fraction(1, rate)
+            out.mux(a.encode(frame))
+        out.mux(a.encode(None))
+    return path
+
+
+@pytest.mark.parametrize("name, copy", [("copy.mkv", "copy"), ("again.mp4", None)])
+def test_a_sound_that_starts_after_the_picture_keeps_its_time(tmp_path, name, copy):
+    """The source's sound starts 40 ms after its picture: the re-encode's does too (before: its first
+    sample was written at 0, the whole sound 40 ms early, 23 ms in every matrix row of a Vorbis film)."""
+    film = _late_sound(tmp_path / "late.mkv", 0.04)
+    assert int(np.argmax(np.abs(read_audio(film)) > 0.05)) / 48000 == pytest.approx(1.04, abs=0.002)
+    out = reencode(film, tmp_path / name, video_codec=copy, audio_codec="libopus" if copy else "aac", audio_layout="stereo")
+    onset = int(np.argmax(np.abs(read_audio(out)) > 0.05)) / 48000
+    assert onset == pytest.approx(1.04, abs=0.004), onset
+
+
 def test_copy_keeps_the_picture_packets_and_mixes_the_sound_again(src, tmp_path):
     out = reencode(src, tmp_path / "six.mkv", video_codec="copy", audio_layout="5.1", audio_bit_rate=384_000)
     assert probe(out).audio.channels == 6

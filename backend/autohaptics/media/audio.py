@@ -26,8 +26,9 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
                chunk_s: float = 2.0, report: AudioReport | None = None) -> Iterator[np.ndarray]:
     """Decode the first audio stream as float32 mono chunks at 48 kHz (digital full scale).
 
-    Time 0 is the container start (``info.start_s``): leading gaps are zero-filled so audio
-    stays aligned with the picture. ``chunk_s`` bounds the chunk length (seconds); memory is
+    Time 0 is the container start (``info.start_s``): gaps in the stream's timestamps are
+    zero-filled and overlaps dropped so audio stays aligned with the picture, where the next frame's
+    time confirms them (:class:`AudioClock`). ``chunk_s`` bounds the chunk length (seconds); memory is
     constant in the film length. Raises MediaError when there is no audio stream or nothing
     decodes; a decode error in the middle of a file is counted in ``report`` and skipped.
     """
@@ -37,14 +38,14 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
     report = report if report is not None else AudioReport()
     sr_in = info.audio.sample_rate
     out = _Chunks(max(1, int(chunk_s * ANALYSIS_SAMPLE_RATE)), report, sr_in)
-    next_t_in = 0.0  # seconds (relative to start) of the next expected input sample
     lfe_gain = 10.0 ** (lfe_gain_db / 20.0)
     with open_container(info.path) as c:
         stream = c.streams.audio[0]
         stream.thread_type = "AUTO"
+        clock = AudioClock(info.start_s, sr_in, timestamp_slack_s(stream.time_base, sr_in))
         mapping = None
         interleave = _Interleaver()
-        held = None
+        held = pending = None  # pending: (time, samples) of the frame placed when the next one's time is known
         for frame in decode_tolerant(c, stream, report, info.path):
             frame_time = frame.time  # before _samples: interleaving clears the frame's pts
             x = _samples(frame, interleave)
@@ -52,24 +53,66 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
                 mapping = _channel_roles(frame.layout, x.shape[0])
                 report.main_channels, report.lfe_channel = mapping
                 held = _Held(max(1, int(_DOWNMIX_S * sr_in)), mapping, lfe_gain, report)
-            if frame_time is not None:  # align to the container clock: zero-fill gaps, drop overlaps
-                gap = float(frame_time) - info.start_s - next_t_in
-                if gap > 1.0 / sr_in * 2:
-                    out.emit(held.downmix())
-                    out.emit(np.zeros(int(round(gap * sr_in)), np.float32))
-                    next_t_in += round(gap * sr_in) / sr_in
-                elif gap < -1.0 / sr_in * 2:
-                    x = x[:, min(x.shape[1], int(round(-gap * sr_in))):]
-            next_t_in += x.shape[1] / sr_in
-            if held.add(x):
-                out.emit(held.downmix())
+            if pending is not None and _place(clock, *pending, frame_time, held, out):
                 yield from out.drain(False)
+            pending = (frame_time, x)
+        if pending is not None:
+            _place(clock, *pending, None, held, out)
         if held is not None:
             out.emit(held.downmix())
         yield from out.finish()
     if report.samples_out == 0:
         reason = f" ({report.first_error})" if report.first_error else ""
         raise MediaError(f"{info.path}: the audio stream holds no decodable samples{reason}")
+
+
+def timestamp_slack_s(time_base, sample_rate: int) -> float:
+    """How far a decoded audio frame's time may lie from the end of the samples before it and still
+    be the same instant, s: one tick of the stream's ``time_base`` (a frame's time is rounded to it,
+    and so was the first frame's the samples count from) plus two samples. Matroska and WebM count
+    in milliseconds: a 44.1 kHz frame of 1024 samples (23.22 ms) reads 0.2-0.8 ms off its place,
+    which is no gap to fill with silence and no overlap to cut."""
+    tick = float(time_base) if time_base else 0.0
+    return tick + 2.0 / float(sample_rate)
+
+
+class AudioClock:
+    """Where the analysis signal has reached on the container's clock, s (``next_s``; 0 = ``start_s``),
+    and whether a frame lies off it. A frame's time more than ``slack`` s (:func:`timestamp_slack_s`)
+    from where the samples before it end is a gap (silence) or an overlap (cut) only when the frame
+    after it lies off by as much the same way: Vorbis timestamps at a block-size switch read up to
+    10 ms off for a frame or two and come back, the sound itself running on without a break."""
+
+    def __init__(self, start_s: float, rate: int, slack: float):
+        self.start_s, self.rate, self.slack = start_s, rate, slack
+        self.next_s = 0.0
+
+    def offset(self, t: float | None, n: int, t_next: float | None) -> int:
+        """Samples of silence (> 0) to put before a frame of ``n`` samples at time ``t``, or to cut
+        from its start (< 0), given the next frame's time ``t_next`` (None: unknown); advances."""
+        shift = 0
+        if t is not None:
+            gap = t - self.start_s - self.next_s
+            after = None if t_next is None else t_next - self.start_s - (self.next_s + n / self.rate)
+            if abs(gap) > self.slack and after is not None and abs(after) > self.slack and (gap > 0) == (after > 0):
+                shift = max(-n, int(round(gap * self.rate)))
+        self.next_s += (max(shift, 0) + n + min(shift, 0)) / self.rate
+        return shift
+
+
+def _place(clock: AudioClock, t: float | None, x: np.ndarray, t_next: float | None, held: "_Held",
+           out: "_Chunks") -> bool:
+    """Add one decoded frame's samples at their place (``clock``); True when ``out`` has chunks ready."""
+    shift = clock.offset(t, x.shape[1], t_next)
+    if shift > 0:
+        out.emit(held.downmix())
+        out.emit(np.zeros(shift, np.float32))
+    elif shift < 0:
+        x = x[:, -shift:]
+    if held.add(x):
+        out.emit(held.downmix())
+        return True
+    return False
 
 
 # Decoded frames are downmixed together, up to this many seconds at a time: an AAC frame holds

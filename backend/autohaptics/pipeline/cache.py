@@ -19,8 +19,9 @@ from autohaptics.shots import Boundaries, detect
 
 # Raised when the analysis computes otherwise for the same parameters (a rule changed without a
 # parameter of its own): a cache of another revision is analysed again. 1: every frame decoded at
-# 29-40 fps (``media.video.REPEAT_MIN_FPS``); caches before it carry none and count as 0.
-ANALYSIS_REVISION = 1
+# 29-40 fps (``media.video.REPEAT_MIN_FPS``); caches before it carry none and count as 0. 2: audio
+# frames placed on the container's clock without splices at rounded timestamps (``media.audio.AudioClock``).
+ANALYSIS_REVISION = 2
 
 
 @dataclass

@@ -24,6 +24,7 @@ import numpy as np
 
 from autohaptics.errors import ParameterError
 from autohaptics.media import probe
+from autohaptics.media.audio import AudioClock, timestamp_slack_s
 from autohaptics.testing.encode import CONTAINERS, media_output
 from autohaptics.testing.scenes import check_size, fps_fraction
 
@@ -107,7 +108,8 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
             if video_options:
                 vs.options = dict(video_options)
             audio = _audio_stream(inp, out, audio_codec or a_default, audio_bit_rate, audio_layout) if info.audio else None
-            frames = _source_frames(inp.streams.video[0], w, h, fit=fit, start_s=float(start_s), end_s=end_s)
+            frames = _source_frames(inp.streams.video[0], w, h, fit=fit, origin=info.start_s, start_s=float(start_s),
+                                    end_s=end_s)
             for (pts, time_base), rgb in _timed(frames, conversion, rate, as_shown):
                 frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
                 if pix_fmt != "yuv420p":
@@ -119,7 +121,8 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
                 out.mux(p)
             if audio is not None:
                 with av.open(str(src)) as again:
-                    _copy_audio(again.streams.audio[0], out, *audio, start_s=float(start_s), end_s=end_s)
+                    _copy_audio(again.streams.audio[0], out, *audio, origin=info.start_s, start_s=float(start_s),
+                                end_s=end_s)
     return dst
 
 
@@ -138,7 +141,7 @@ def _copy_video(src, dst: Path, fmt: str, audio_codec: str, audio_bit_rate: int 
                 out.mux(packet)
             if audio is not None:
                 with av.open(str(src)) as again:
-                    _copy_audio(again.streams.audio[0], out, *audio)
+                    _copy_audio(again.streams.audio[0], out, *audio, origin=info.start_s)
     return dst
 
 
@@ -168,13 +171,13 @@ def screener(src: str | os.PathLike, dst: str | os.PathLike, *, codec: str = "vp
                     video_options={**options, "crf": str(int(crf))}, audio_layout="stereo")
 
 
-def _source_frames(stream, width: int, height: int, *, fit: str = "stretch", start_s: float = 0.0,
-                   end_s: float | None = None):
+def _source_frames(stream, width: int, height: int, *, fit: str = "stretch", origin: float = 0.0,
+                   start_s: float = 0.0, end_s: float | None = None):
     """(time_s from ``start_s``, rgb uint8 [shape=(height, width, 3)]) of every decoded source frame
-    shown from ``start_s`` to ``end_s``, in order, fitted as :func:`reencode`'s ``fit`` says."""
+    shown from ``start_s`` to ``end_s``, in order, fitted as :func:`reencode`'s ``fit`` says. Times
+    count from ``origin``, the container's start (s), as the analysis counts them."""
     stream.thread_type = "AUTO"
     container = stream.container
-    origin = float(stream.start_time * stream.time_base) if stream.start_time is not None else 0.0
     held = None  # the last frame before start_s: on screen at the cut
     for frame in container.decode(stream):
         t = (float(frame.time) - origin if frame.time is not None else 0.0) - start_s
@@ -265,27 +268,45 @@ def _audio_stream(inp, out, codec: str, bit_rate: int | None, layout: str | None
     return a_out, av.AudioResampler(format=a_out.codec_context.format.name, layout=layout, rate=rate)
 
 
-def _copy_audio(a_in, out, a_out, resampler, *, start_s: float = 0.0, end_s: float | None = None) -> None:
+def _copy_audio(a_in, out, a_out, resampler, *, origin: float = 0.0, start_s: float = 0.0,
+                end_s: float | None = None) -> None:
     """Decode the audio stream ``a_in`` and encode its samples from ``start_s`` to ``end_s`` into
-    ``a_out`` of ``out``."""
-    origin = float(a_in.start_time * a_in.time_base) if a_in.start_time is not None else 0.0
-    n = 0
+    ``a_out`` of ``out``, each at the time the analysis reads it at (``media.audio.AudioClock`` from
+    ``origin``, the container's start, s): a gap before a frame, such as a Vorbis stream's first
+    sound 23 ms in, is silence in the output too."""
+    rate = a_in.codec_context.sample_rate
+    clock = AudioClock(origin, rate, timestamp_slack_s(a_in.time_base, rate))
+    n, pending = 0, None
     for frame in a_in.container.decode(a_in):
-        t0 = (float(frame.time) - origin) if frame.time is not None else 0.0
-        rate = frame.sample_rate
-        first = max(0, int(round((start_s - t0) * rate)))
-        last = frame.samples if end_s is None else min(frame.samples, int(round((end_s - t0) * rate)))
-        if last <= first:
-            if end_s is not None and t0 >= end_s:
-                break
-            continue
-        if first > 0 or last < frame.samples:
-            frame = _trimmed(frame, first, last)
-        frame.pts = None
-        n = _encode_audio(resampler.resample(frame), out, a_out, n)
+        if pending is not None:
+            n = _place_audio(clock, pending, frame.time, out, a_out, resampler, n, start_s, end_s)
+        pending = frame
+        if end_s is not None and frame.time is not None and frame.time - origin > end_s + 1.0:
+            break
+    if pending is not None:
+        n = _place_audio(clock, pending, None, out, a_out, resampler, n, start_s, end_s)
     _encode_audio(resampler.resample(None), out, a_out, n)
     for p in a_out.encode(None):
         out.mux(p)
+
+
+def _place_audio(clock: AudioClock, frame: av.AudioFrame, t_next: float | None, out, a_out, resampler, n: int,
+                 start_s: float, end_s: float | None) -> int:
+    """Encode ``frame`` where ``clock`` places it (after the silence of a gap, or cut by an overlap),
+    only its part from ``start_s`` to ``end_s``; the next output sample's index."""
+    pos = clock.next_s
+    shift = clock.offset(frame.time, frame.samples, t_next)
+    rate = frame.sample_rate
+    parts = [(pos, _silent(frame, shift))] if shift > 0 else []
+    parts.append((pos + max(shift, 0) / rate, _trimmed(frame, -shift, frame.samples) if shift < 0 else frame))
+    for at, part in parts:
+        first = max(0, int(round((start_s - at) * rate)))
+        last = part.samples if end_s is None else min(part.samples, int(round((end_s - at) * rate)))
+        if last > first:
+            part = _trimmed(part, first, last) if first > 0 or last < part.samples else part
+            part.pts = None
+            n = _encode_audio(resampler.resample(part), out, a_out, n)
+    return n
 
 
 def _encode_audio(frames, out, a_out, n: int) -> int:
@@ -299,6 +320,15 @@ def _encode_audio(frames, out, a_out, n: int) -> int:
         for p in a_out.encode(r):
             out.mux(p)
     return n
+
+
+def _silent(frame: av.AudioFrame, n: int) -> av.AudioFrame:
+    """``n`` samples of silence in ``frame``'s format, layout and rate."""
+    x = frame.to_ndarray()
+    shape = (x.shape[0], n) if frame.format.is_planar else (1, n * len(frame.layout.channels))
+    out = av.AudioFrame.from_ndarray(np.zeros(shape, x.dtype), format=frame.format.name, layout=frame.layout.name)
+    out.sample_rate = frame.sample_rate
+    return out
 
 
 def _trimmed(frame: av.AudioFrame, first: int, last: int) -> av.AudioFrame:
