@@ -108,8 +108,11 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
             if video_options:
                 vs.options = dict(video_options)
             audio = _audio_stream(inp, out, audio_codec or a_default, audio_bit_rate, audio_layout) if info.audio else None
-            frames = _source_frames(inp.streams.video[0], w, h, fit=fit, origin=info.start_s, start_s=float(start_s),
-                                    end_s=end_s)
+            v_in = inp.streams.video[0]
+            # the output's time 0 is the source's first picture, for the sound too (a stream's first
+            # frame a few ms after the container's start would otherwise lag every output frame)
+            origin = float(v_in.start_time * v_in.time_base) if v_in.start_time is not None else info.start_s
+            frames = _source_frames(v_in, w, h, fit=fit, origin=origin, start_s=float(start_s), end_s=end_s)
             for (pts, time_base), rgb in _timed(frames, conversion, rate, as_shown):
                 frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
                 if pix_fmt != "yuv420p":
@@ -121,8 +124,7 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
                 out.mux(p)
             if audio is not None:
                 with av.open(str(src)) as again:
-                    _copy_audio(again.streams.audio[0], out, *audio, origin=info.start_s, start_s=float(start_s),
-                                end_s=end_s)
+                    _copy_audio(again.streams.audio[0], out, *audio, origin=origin, start_s=float(start_s), end_s=end_s)
     return dst
 
 
@@ -175,7 +177,7 @@ def _source_frames(stream, width: int, height: int, *, fit: str = "stretch", ori
                    start_s: float = 0.0, end_s: float | None = None):
     """(time_s from ``start_s``, rgb uint8 [shape=(height, width, 3)]) of every decoded source frame
     shown from ``start_s`` to ``end_s``, in order, fitted as :func:`reencode`'s ``fit`` says. Times
-    count from ``origin``, the container's start (s), as the analysis counts them."""
+    count from ``origin`` (s)."""
     stream.thread_type = "AUTO"
     container = stream.container
     held = None  # the last frame before start_s: on screen at the cut
@@ -271,9 +273,9 @@ def _audio_stream(inp, out, codec: str, bit_rate: int | None, layout: str | None
 def _copy_audio(a_in, out, a_out, resampler, *, origin: float = 0.0, start_s: float = 0.0,
                 end_s: float | None = None) -> None:
     """Decode the audio stream ``a_in`` and encode its samples from ``start_s`` to ``end_s`` into
-    ``a_out`` of ``out``, each at the time the analysis reads it at (``media.audio.AudioClock`` from
-    ``origin``, the container's start, s): a gap before a frame, such as a Vorbis stream's first
-    sound 23 ms in, is silence in the output too."""
+    ``a_out`` of ``out``, each at the time the analysis reads it at (``media.audio.AudioClock``),
+    counted from ``origin`` (s): a gap before a frame, such as a Vorbis stream's first sound 23 ms
+    in, is silence in the output too."""
     rate = a_in.codec_context.sample_rate
     clock = AudioClock(origin, rate, timestamp_slack_s(a_in.time_base, rate))
     n, pending = 0, None
