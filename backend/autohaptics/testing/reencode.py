@@ -109,9 +109,10 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
                 vs.options = dict(video_options)
             audio = _audio_stream(inp, out, audio_codec or a_default, audio_bit_rate, audio_layout) if info.audio else None
             v_in = inp.streams.video[0]
-            # the output's time 0 is the source's first picture, for the sound too (a stream's first
-            # frame a few ms after the container's start would otherwise lag every output frame)
-            origin = float(v_in.start_time * v_in.time_base) if v_in.start_time is not None else info.start_s
+            # time 0: the container's start where frames keep their own times (a cut's film time, as
+            # ``cut_analysis`` reads it); on a frame grid the source's first picture, for the sound too
+            # (a picture starting a few ms after the container would lag every frame of the grid)
+            origin = info.start_s if as_shown or v_in.start_time is None else float(v_in.start_time * v_in.time_base)
             frames = _source_frames(v_in, w, h, fit=fit, origin=origin, start_s=float(start_s), end_s=end_s)
             for (pts, time_base), rgb in _timed(frames, conversion, rate, as_shown):
                 frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
