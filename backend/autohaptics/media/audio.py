@@ -80,8 +80,8 @@ class AudioClock:
     """Where the analysis signal has reached on the container's clock, s (``next_s``; 0 = ``start_s``),
     and whether a frame lies off it. A frame's time more than ``slack`` s (:func:`timestamp_slack_s`)
     from where the samples before it end is a gap (silence) or an overlap (cut) only when the frame
-    after it lies off by as much the same way: Vorbis timestamps at a block-size switch read up to
-    10 ms off for a frame or two and come back, the sound itself running on without a break."""
+    after it lies off the same way: Vorbis stamps the frame at a block-size switch up to 10 ms off
+    and the next one on its place again, the sound itself running on without a break."""
 
     def __init__(self, start_s: float, rate: int, slack: float):
         self.start_s, self.rate, self.slack = start_s, rate, slack
