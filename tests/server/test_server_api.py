@@ -50,8 +50,8 @@ def upload(client: LocalClient, path: Path, *, filename: str | None = None, **fi
     return resp.json()
 
 
-def ready_project(client: LocalClient) -> dict:
-    project = upload(client, shared_clip(CLIP))
+def ready_project(client: LocalClient, **fields) -> dict:
+    project = upload(client, shared_clip(CLIP), **fields)
     assert events_until_end(client, project["job"]["id"])[-1][0] == "done"
     return client.get(f"/api/projects/{project['id']}").json()
 
@@ -69,7 +69,8 @@ def client(data_dir):
 
 def test_upload_job_progress_timeline_and_binary(client, data_dir):
     clip = shared_clip(CLIP)
-    project = upload(client, clip, preset="balanced")
+    # the thesis's rule: the default finds no event in one second of a score under way (nothing vibrates)
+    project = upload(client, clip, preset="thesis")
     assert project["status"] == "running" and project["job"]["status"] in ("queued", "running")
     assert project["name"] == CLIP and project["n_ticks"] == 10 and project["media_type"] == "video/webm"
     assert project["source"]["video"]["width"] == 1280 and not project["has_timeline"]
@@ -93,7 +94,7 @@ def test_upload_job_progress_timeline_and_binary(client, data_dir):
     tl = Timeline.from_dict(doc)
     assert tl.n_ticks == 10 and doc["edits"] == [] and doc["markers"] == [] and doc["revision"] == 1
     assert doc["source"]["name"] == CLIP and doc["generator"]["params"]["thresholds"]["loudness"] == 0.85
-    assert float(tl.vibration.max()) > 0  # the clip has sound
+    assert float(tl.vibration.max()) > 0  # the clip's sound is loud throughout
 
     header, blocks = decode(client.get(f"/api/projects/{pid}/timeline.bin").content)
     assert header["n_ticks"] == 10 and header["revision"] == 1
@@ -131,7 +132,7 @@ def test_media_is_served_with_ranges(client):
 
 
 def test_edit_undo_redo_reload_and_regenerate_keep_edits(client, data_dir):
-    project = ready_project(client)
+    project = ready_project(client, preset="thesis")  # a generated layer that vibrates (above)
     pid, rev = project["id"], project["revision"]
     set_op = {"op": "set", "lanes": ["A4"], "t0": 2, "t1": 6, "value": 0.9}
     r = client.post(f"/api/projects/{pid}/edits", json={"base_revision": rev, "op": set_op})

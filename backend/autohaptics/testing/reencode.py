@@ -109,10 +109,7 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
                 vs.options = dict(video_options)
             audio = _audio_stream(inp, out, audio_codec or a_default, audio_bit_rate, audio_layout) if info.audio else None
             v_in = inp.streams.video[0]
-            # time 0: the container's start where frames keep their own times (a cut's film time, as
-            # ``cut_analysis`` reads it); on a frame grid the source's first picture, for the sound too
-            # (a picture starting a few ms after the container would lag every frame of the grid)
-            origin = info.start_s if as_shown or v_in.start_time is None else float(v_in.start_time * v_in.time_base)
+            origin = _origin(v_in, info, as_shown)
             frames = _source_frames(v_in, w, h, fit=fit, origin=origin, start_s=float(start_s), end_s=end_s)
             for (pts, time_base), rgb in _timed(frames, conversion, rate, as_shown):
                 frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
@@ -172,6 +169,16 @@ def screener(src: str | os.PathLike, dst: str | os.PathLike, *, codec: str = "vp
     w = int(h * sw / sh) // 2 * 2
     return reencode(src, dst, width=w, height=h, fps=fps, video_codec=vcodec, audio_codec=acodec,
                     video_options={**options, "crf": str(int(crf))}, audio_layout="stereo")
+
+
+def _origin(v_in, info, as_shown: bool) -> float:
+    """The source's time (s) that is the output's time 0, for picture and sound: the container's
+    start where frames keep their own times (a cut's film time, as ``bench.matrix.cut_analysis``
+    reads it), else the source's first picture (one starting a few ms after the container would
+    otherwise lag every frame of the output's grid by one)."""
+    if as_shown or v_in.start_time is None:
+        return info.start_s
+    return float(v_in.start_time * v_in.time_base)
 
 
 def _source_frames(stream, width: int, height: int, *, fit: str = "stretch", origin: float = 0.0,
