@@ -173,6 +173,18 @@ def test_a_sound_after_an_opening_silence_is_an_onset_and_one_under_way_is_not(s
         assert not out.any()
 
 
+def test_a_rise_far_below_the_films_top_counts_for_less():
+    """The same 1.4 x rise passes every default threshold near the film's level and none among values
+    at 2 % of its top, where a lossy codec's few-percent differences would decide it."""
+    from autohaptics.intensity.novelty import novelty
+
+    x = np.r_[np.full(300, 0.02), np.full(20, 0.028), np.full(300, 0.3), np.full(20, 0.42), np.full(60, 0.3),
+              np.full(10, 1.0)]
+    out = novelty(x, clip=False)
+    assert out[300:320].max() < min(it.rule.DEFAULT_THRESHOLDS.values()), out[300:320]
+    assert out[620:625].min() > max(it.rule.DEFAULT_THRESHOLDS.values()), out[620:625]
+
+
 @pytest.mark.parametrize("make", [sounds.speech, sounds.rising_rumble, sounds.music_with_impacts])
 def test_density_gives_about_that_share(tmp_path, make):
     scene = make()

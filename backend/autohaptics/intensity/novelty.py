@@ -15,9 +15,10 @@ Per 20 ms frame:
   to have had it before it began, at its level over its opening (:func:`opening_frames`), so its
   start is no event; after an opening silence, the file's own frames are the baseline, so a
   sound after the silence is an onset however early it comes;
-- novelty = log2(value / baseline) / ``FULL_OCTAVES``, at least 0: 0 at or below the baseline,
-  1 at a rise of 2^0.5 (+5 phon for loudness); :func:`novelty` clips it at 1 for display, the
-  rule compares the unclipped value (so that a density can rank ticks that all passed 1).
+- novelty = log2((value + ``FLOOR``) / (baseline + ``FLOOR``)) / ``FULL_OCTAVES`` (shares of the
+  film's top), at least 0: 0 at or below the baseline, 1 at a rise of 2^0.5 (+5 phon for loudness)
+  well above ``FLOOR``; less among values near it, where a codec's few-percent changes would decide.
+  :func:`novelty` clips it at 1 for display; the rule compares it unclipped (a density ranks by it).
 
 Sharpness describes a sound's colour, not its level: :func:`feature_novelty` keeps its novelty
 only where the loudness rises above its baseline too (a hiss or a consonant between louder vowels
@@ -38,7 +39,7 @@ OPENING_RISE = 2.0  # loudness doubles at +10 phon; the loudness model's attack 
 ATTACK_S = 0.2  # the loudness model reaches 0.9 of a low tone's level within it (0.16 s at 50 Hz)
 FULL_OCTAVES = 0.5
 EXPONENTS = {"sharpness": 1.0, "booming": 1.0, "low_energy": 0.3, "loudness": 1.0}
-FLOOR = 1e-2  # of the feature's maximum over the film, added to value and baseline: no 0/0
+FLOOR = 3e-2  # of the feature's maximum over the film, added to value and baseline (module docstring)
 SMOOTHED = ("loudness", "sharpness")  # the features whose single-frame peaks a lossy codec moves
 
 
