@@ -167,6 +167,20 @@ def lane_pixels(pg, lane: str, background: tuple[int, int, int] = (18, 21, 28)) 
     )
 
 
+def settled_lane_pixels(pg, lane: str, *, still_s: float = 0.3, timeout_s: float = 10.0) -> dict:
+    """:func:`lane_pixels` once the lane has not changed for ``still_s``: what arrives after the
+    editor is ready (the video's metadata, the shots) can still redraw it on a loaded machine."""
+    last, since, end = lane_pixels(pg, lane), time.monotonic(), time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        pg.wait_for_timeout(50)
+        now = lane_pixels(pg, lane)
+        if now != last:
+            last, since = now, time.monotonic()
+        elif time.monotonic() - since >= still_s:
+            return now
+    raise AssertionError(f"lane {lane!r} kept changing for {timeout_s} s")
+
+
 def lane_rect(pg, lane: str) -> dict:
     """Client rectangle of a lane's canvas, scrolled into view first (the timeline scrolls vertically)."""
     pg.evaluate("(id) => document.querySelector(`canvas[data-lane=\"${id}\"]`).scrollIntoView({block: 'nearest'})", lane)

@@ -10,7 +10,8 @@ import pytest
 
 from autohaptics.timeline import Timeline
 from browser_support import (
-    copy_to_docs, lane_pixels, lane_rect, next_frame, open_editor, screenshot, state, values_at, wait_revision_above,
+    copy_to_docs, lane_pixels, lane_rect, next_frame, open_editor, screenshot, settled_lane_pixels, state, values_at,
+    wait_revision_above,
 )
 
 pytestmark = pytest.mark.browser
@@ -62,8 +63,8 @@ def test_threshold_drag_previews_live_then_rederives_the_vibration(page, api, pr
     open_editor(page, pid)
     s0 = state(page)
     thr0 = s0["thresholds"]["loudness"]
-    vib_before = lane_pixels(page, "actuators")
-    feat_before = lane_pixels(page, "feature-loudness")
+    vib_before = settled_lane_pixels(page, "actuators")
+    feat_before = settled_lane_pixels(page, "feature-loudness")
     r = lane_rect(page, "feature-loudness")
     x = r["x"] + r["width"] * 0.3
     page.mouse.move(x, threshold_y(r, thr0))
