@@ -168,8 +168,8 @@ def lane_pixels(pg, lane: str, background: tuple[int, int, int] = (18, 21, 28)) 
 
 
 def settled_lane_pixels(pg, lane: str, *, still_s: float = 0.3, timeout_s: float = 10.0) -> dict:
-    """:func:`lane_pixels` once the lane has not changed for ``still_s``: what arrives after the
-    editor is ready (the video's metadata, the shots) can still redraw it on a loaded machine."""
+    """:func:`lane_pixels` once the lane has not changed for ``still_s``: on a loaded machine a lane
+    was seen to redraw a moment after the editor was ready, with no input."""
     last, since, end = lane_pixels(pg, lane), time.monotonic(), time.monotonic() + timeout_s
     while time.monotonic() < end:
         pg.wait_for_timeout(50)
