@@ -1,13 +1,11 @@
 """How far a feature stands above its own recent baseline: the "events" rule's measure
 (ALGORITHM.md section 2, decision 2026-11; docs/GUIDE.md "Vibration").
 
-A steady bed (music, dialogue, room tone) keeps every feature near the loud level it had over the
-last few seconds; an impact, an explosion, a booming hit or a rising rumble lifts it above that.
-Per 20 ms frame:
+A steady bed (music, dialogue, room tone) keeps every feature near its loud level of the last few
+seconds; an impact, an explosion, a booming hit or a rising rumble lifts it above that. Per 20 ms frame:
 
 - the feature goes to a scale on which equal ratios sound alike: loudness (sone), sharpness (acum)
-  and the booming index as they are; low-frequency energy (Pa^2) to the power 0.3, Stevens's
-  loudness exponent for energy;
+  and the booming index as they are; low-frequency energy (Pa^2) to the power 0.3 (Stevens's exponent);
 - its envelope is the maximum over the last ``ENVELOPE_S`` (1 s: the loud level of speech or music
   between its syllables and notes, so that they do not count as events one by one);
 - the baseline is the mean envelope over ``baseline_s`` seconds ending ``GAP_S`` (0.1 s) before
