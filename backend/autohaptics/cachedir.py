@@ -1,5 +1,5 @@
 """The per-user cache folder, for what is built once per machine and reused by every later process
-(the compiled loudness kernels, the designed filters, the virtual chair).
+(the compiled loudness and area kernels, the designed filters, the virtual chair).
 
 ``$AUTOHAPTICS_CACHE_DIR``, else ``$XDG_CACHE_HOME/autohaptics`` or ``~/.cache/autohaptics``; never
 inside the installed package, so a read-only install works. Where that folder cannot be created

@@ -95,19 +95,6 @@ def test_luma_grid_without_the_fast_path(tmp_path):
     assert np.all(np.diff(luma.astype(int), axis=1) > 0)  # the ramp survives, left to right
 
 
-@pytest.mark.parametrize("src, size", [((540, 960), (64, 64)), ((1080, 1920), (64, 64)), ((360, 640), (64, 64)),
-                                       ((540, 960), (160, 90)), ((90, 160), (64, 64)), ((30, 40), (64, 64))])
-def test_area_resize_matches_one_pass_area_averaging(src, size):
-    """One axis at a time (fast) gives the one-pass area average within a grey level."""
-    rng = np.random.default_rng(3)
-    arr = cv2.GaussianBlur(rng.integers(0, 256, src, dtype=np.uint8), (0, 0), 1.5)
-    got = media.frames.area_resize(arr, size)
-    assert got.shape == (size[1], size[0]) and got.dtype == np.uint8
-    one_pass = cv2.resize(arr, size, interpolation=cv2.INTER_AREA if size[0] <= src[1] and size[1] <= src[0]
-                          else cv2.INTER_LINEAR)
-    assert np.abs(got.astype(int) - one_pass.astype(int)).max() <= 1
-
-
 def _decoded(path, decode):
     return [(f.time_s, f.gray(64)) for f in media.iter_video(path, decode=decode)]
 

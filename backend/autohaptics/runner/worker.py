@@ -37,12 +37,14 @@ def init_worker(parent_pid: int, ignore_term: bool = False) -> None:
 
 
 def warm_up() -> None:
-    """Import the pipeline and load the compiled loudness kernels in a fresh worker (once per
-    process), so the first piece of work does not wait for them."""
+    """Import the pipeline and load the compiled loudness and area kernels in a fresh worker (once
+    per process), so the first piece of work does not wait for them."""
     import autohaptics.pipeline  # noqa: F401
     from autohaptics.intensity import compiled
+    from autohaptics.media import area
 
     compiled.load()
+    area.kernel()
 
 
 def queue_sender(q) -> Callable[[tuple], None]:
