@@ -62,14 +62,16 @@ def test_every_command_has_its_own_help(command):
 
 def test_generate_imports_only_what_it_uses(tmp_path):
     """A plain ``generate`` (audio child included) loads no multiprocessing machinery, no socket
-    module and no ``ctypes.util`` (whose library search runs ``ldconfig`` in a child process)."""
+    module, no ``ctypes.util`` (whose library search runs ``ldconfig`` in a child process) and no
+    ``numpy.ma`` (11 ms: numpy's median and percentile load it; :mod:`autohaptics.quantiles`)."""
     from shared_data import shared_clip
 
     out = tmp_path / "t.json"
     rc, modules, text = _run("generate", str(shared_clip("bbb_1s_1280x720_vp8_vorbis.webm")), "-o", str(out), "--quiet")
     assert rc == 0, text
     assert out.is_file()
-    assert [m for m in ("multiprocessing", "multiprocessing.connection", "socket", "ctypes.util") if m in modules] == []
+    assert [m for m in ("multiprocessing", "multiprocessing.connection", "socket", "ctypes.util", "numpy.ma")
+            if m in modules] == []
 
 
 def test_end_process_runs_the_exit_handlers_and_flushes_the_streams():

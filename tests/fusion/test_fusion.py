@@ -57,6 +57,20 @@ def test_triangle_map_covers_any_size(h, w):
     assert tri.shape == (h, w) and tri.min() >= 0 and tri.max() <= 13
 
 
+@pytest.mark.parametrize("h, w", [(1, 1), (2, 3), (9, 17), (27, 48), (72, 128), (90, 160), (144, 256), (203, 97)])
+def test_triangle_map_is_each_pixel_centres_first_triangle(h, w):
+    """The map, tested around each triangle's bounding box only, is the rule itself applied to every
+    pixel centre of the frame: the first triangle whose barycentric coordinates are all >= -1e-12."""
+    px, py = (np.arange(w) + 0.5)[None, :] / w, (np.arange(h) + 0.5)[:, None] / h
+    want = np.full((h, w), -1)
+    for i, ((x1, y1), (x2, y2), (x3, y3)) in enumerate(fusion.triangles.TRIANGLE_XY):
+        det = (y2 - y3) * (x1 - x3) + (x3 - x2) * (y1 - y3)
+        l1 = ((y2 - y3) * (px - x3) + (x3 - x2) * (py - y3)) / det
+        l2 = ((y3 - y1) * (px - x3) + (x1 - x3) * (py - y3)) / det
+        want[(l1 >= -1e-12) & (l2 >= -1e-12) & (1.0 - l1 - l2 >= -1e-12) & (want < 0)] = i
+    np.testing.assert_array_equal(fusion.triangle_index_map(h, w), want)
+
+
 # ---------------------------------------------------------------- weights of one triangle
 def test_weights_of_a_corner_centroid():
     """Centroid on the corner C00 of T1 (C00, A1, A3): the corner has no actuator; distances to

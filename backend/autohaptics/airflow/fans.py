@@ -23,6 +23,7 @@ from autohaptics.errors import ParameterError
 from autohaptics.records import ANALYSIS, DERIVE, stage
 from autohaptics.layout import FAN_COLS, FAN_ROWS
 from autohaptics.imaging import finite32
+from autohaptics.quantiles import median, percentile
 
 
 THRESHOLD_MOTIONS = ("despiked", "judged")
@@ -233,7 +234,7 @@ def despiked_motion(motion: np.ndarray, shot: np.ndarray) -> np.ndarray:
     same_right = np.concatenate([shot[:-1] == shot[1:], [False]])
     left = np.where(same_left, np.concatenate([[0.0], m[:-1]]), 0.0)
     right = np.where(same_right, np.concatenate([m[1:], [0.0]]), 0.0)
-    return np.median(np.stack([left, m, right]), axis=0)
+    return median(np.stack([left, m, right]), axis=0)
 
 
 def _gaussian(sigma: float) -> tuple[np.ndarray, np.ndarray]:
@@ -267,7 +268,7 @@ def motion_threshold(motion: np.ndarray, *, params: AirflowParams = AirflowParam
     m = m[np.isfinite(m) & (m > params.floor)]  # the statistics of the ticks that move
     if m.size == 0:
         return float(params.floor)
-    return float(max(params.floor, params.strong_rel * float(np.percentile(m, 95))))
+    return float(max(params.floor, params.strong_rel * float(percentile(m, 95))))
 
 
 def fan_levels(cell_motion_: np.ndarray, nearness: np.ndarray, *, params: AirflowParams = AirflowParams()) -> np.ndarray:
@@ -328,9 +329,8 @@ def _enclosed(on: np.ndarray) -> np.ndarray:
     """Cells that are off and cannot reach the grid border through off cells (4-connected)."""
     off = (~on).astype(np.uint8)
     n, labels = cv2.connectedComponents(off, connectivity=4)
-    border = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
     inside = np.ones(n, bool)
-    inside[border] = False
+    inside[np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])] = False  # the border's labels
     inside[0] = False  # label 0 is the "on" cells
     return inside[labels]
 

@@ -97,20 +97,27 @@ def triangle_index_map(h: int, w: int) -> np.ndarray:
     """
     if h < 1 or w < 1:
         raise ParameterError(f"frame size must be positive, got {h} x {w}")
-    ys, xs = np.mgrid[0:h, 0:w]
-    px = (xs + 0.5) / w
-    py = (ys + 0.5) / h
+    px = (np.arange(w) + 0.5) / w  # pixel centres, normalised
+    py = (np.arange(h) + 0.5)[:, None] / h
     out = np.full((h, w), -1, np.int8)
     for i in range(_N_TRI):
         (x1, y1), (x2, y2), (x3, y3) = TRIANGLE_XY[i]
+        # only the pixels around the triangle's bounding box are tested (the rest are outside it)
+        c0, c1 = _span(min(x1, x2, x3), max(x1, x2, x3), w)
+        r0, r1 = _span(min(y1, y2, y3), max(y1, y2, y3), h)
+        x, y, cell = px[c0:c1], py[r0:r1], out[r0:r1, c0:c1]
         det = (y2 - y3) * (x1 - x3) + (x3 - x2) * (y1 - y3)
-        l1 = ((y2 - y3) * (px - x3) + (x3 - x2) * (py - y3)) / det
-        l2 = ((y3 - y1) * (px - x3) + (x1 - x3) * (py - y3)) / det
+        l1 = ((y2 - y3) * (x - x3) + (x3 - x2) * (y - y3)) / det
+        l2 = ((y3 - y1) * (x - x3) + (x1 - x3) * (y - y3)) / det
         l3 = 1.0 - l1 - l2
-        inside = (l1 >= -1e-12) & (l2 >= -1e-12) & (l3 >= -1e-12) & (out < 0)
-        out[inside] = i
+        cell[(l1 >= -1e-12) & (l2 >= -1e-12) & (l3 >= -1e-12) & (cell < 0)] = i
     out.setflags(write=False)
     return out
+
+
+def _span(lo: float, hi: float, n: int) -> tuple[int, int]:
+    """The pixels (first, end) of ``n`` whose centres may lie in lo..hi (normalised), a pixel to spare."""
+    return max(0, int(np.floor(lo * n)) - 1), min(n, int(np.ceil(hi * n)) + 1)
 
 
 def triangle_weights(centroid: tuple[float, float], triangle: int) -> np.ndarray:

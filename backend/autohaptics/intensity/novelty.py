@@ -28,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
+from autohaptics.quantiles import median
 from autohaptics.timebase import FRAME_S
 
 ENVELOPE_S = 1.0
@@ -177,5 +178,5 @@ def trailing_median(v: np.ndarray, n: int) -> np.ndarray:
     x = np.where(np.isfinite(v), v, 0.0).astype(np.float64)
     if x.size == 0 or n <= 1:
         return x
-    pad = np.full(n - 1, np.median(x[:n]))
-    return np.median(sliding_window_view(np.concatenate([pad, x]), n), axis=1)
+    pad = np.full(n - 1, median(x[:n]))
+    return median(sliding_window_view(np.concatenate([pad, x]), n), axis=1)

@@ -29,6 +29,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from autohaptics import quantiles
 from autohaptics.errors import ParameterError
 from autohaptics.intensity.novelty import feature_novelty
 from autohaptics.records import DERIVE
@@ -124,7 +125,7 @@ def normalise(x: np.ndarray, *, method: str = "max", percentile: float = 99.5) -
     if method == "max":
         ref = float(x.max())
     elif method == "percentile":
-        ref = float(np.percentile(x, percentile))
+        ref = float(quantiles.percentile(x, percentile))
         if ref <= 0.0:  # a mostly silent clip: fall back to the maximum
             ref = float(x.max())
     else:

@@ -25,6 +25,7 @@ import numpy as np
 
 from autohaptics.media.frames import Frame
 from autohaptics.media.probe import MediaInfo, norm_rotation, open_container, stream_by_index
+from autohaptics.quantiles import percentile
 
 Rect = tuple[int, int, int, int]  # (x, y, width, height) px in display orientation
 
@@ -83,7 +84,7 @@ def bar_level(lumas: Sequence[np.ndarray], axis: int) -> float:
     mids = []
     for side in (slice(0, EDGE), slice(-EDGE, None)):
         edge = np.concatenate([(lu[side] if axis == 0 else lu[:, side].T).ravel() for lu in lumas])
-        lo, mid, hi = np.percentile(edge, (5, 50, 95))
+        lo, mid, hi = percentile(edge, (5, 50, 95))
         if mid > BAR_MAX_LEVEL or mid - lo > BAR_SPREAD or hi - mid > BAR_SPREAD:
             return 0.0
         mids.append(float(mid))

@@ -21,13 +21,15 @@ import math
 
 import numpy as np
 
+from autohaptics import quantiles
+
 
 def film_scales(w: np.ndarray, *, quantile: float, min_scale: float) -> tuple[float, float]:
     """(warm scale, cool scale) of a film's warmth values w [shape=(n,)] (module docstring)."""
     w = np.nan_to_num(np.asarray(w, dtype=np.float64))
     warm, cool = w[w > 0], -w[w < 0]
-    s_warm = float(np.quantile(warm, quantile)) if warm.size else 0.0
-    s_cool = float(np.quantile(cool, quantile)) if cool.size else 0.0
+    s_warm = float(quantiles.quantile(warm, quantile)) if warm.size else 0.0
+    s_cool = float(quantiles.quantile(cool, quantile)) if cool.size else 0.0
     return max(s_warm, float(min_scale)), max(s_cool, float(min_scale))
 
 
