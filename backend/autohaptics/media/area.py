@@ -3,7 +3,7 @@
 OpenCV's area resize has a fast path for whole ratios only. A fractional ratio (854 -> 160 px:
 5.34) walks a table of (source pixel, output pixel, weight) entries one pixel at a time, and on
 the proxies of a 480p film that was the video pass's largest cost after optical flow
-(docs/BENCHMARKS.md, "The 480p clip: area averaging"). :func:`area_rows` walks the same table,
+(docs/BENCHMARKS.md, "Full-frame 1080p", tenth stop). :func:`area_rows` walks the same table,
 with the same float32 products and sums in the same order, over whole rows at once (a compiled
 kernel, :mod:`.area_kernels`): five times faster on those planes. Where the kernel cannot be
 built, OpenCV computes it.
