@@ -1,9 +1,10 @@
 """A decoded picture and its proxies: small, colour-converted copies in display orientation, made
 only when a stage asks (converting every 1080p frame to RGB costs as much as decoding it).
 
-For 8-bit planar YUV the planes are area-averaged in place by OpenCV and converted on the small
-proxy (BT.709 for BT.709-tagged frames, BT.601 otherwise, as FFmpeg's scaler does), within about 2
-grey levels of FFmpeg's scaled conversion of the full frame and about 3x cheaper.
+For 8-bit planar YUV the planes are area-averaged in place (OpenCV's area averaging, :mod:`.area`)
+and converted on the small proxy (BT.709 for BT.709-tagged frames, BT.601 otherwise, as FFmpeg's
+scaler does), within about 2 grey levels of FFmpeg's scaled conversion of the full frame and about
+3x cheaper.
 
 A frame may be cropped to a rectangle (the active picture inside black bars,
 :mod:`autohaptics.media.active`): its size, proxies and copies are then those of the rectangle,
@@ -73,7 +74,7 @@ class Frame:
         fmt : "rgb24" -> uint8 [shape=(h, w, 3)]; "gray" -> uint8 [shape=(h, w)] (luma).
 
         For 8-bit planar YUV smaller than the frame (nearly every film) the planes are area-averaged
-        in place by OpenCV and converted on the small proxy (BT.709 matrix for BT.709-tagged
+        in place (:mod:`.area`) and converted on the small proxy (BT.709 matrix for BT.709-tagged
         frames, BT.601 otherwise, as FFmpeg's scaler does): about 3x cheaper than FFmpeg's
         scaled conversion of the full frame, within about 2 grey levels of it.
         """
