@@ -23,8 +23,7 @@ def area_rows(src, si, di, weight, out):
         d, s, w = di[k], si[k], weight[k]
         if d != cur:
             if cur >= 0:
-                for j in range(m):
-                    out[cur, j] = np.uint8(min(max(np.rint(acc[j]), np.float32(0.0)), np.float32(255.0)))
+                _store(acc, out, cur)
             for j in range(m):
                 acc[j] = np.float32(src[s, j]) * w
             cur = d
@@ -32,5 +31,11 @@ def area_rows(src, si, di, weight, out):
             for j in range(m):
                 acc[j] += np.float32(src[s, j]) * w
     if cur >= 0:
-        for j in range(m):
-            out[cur, j] = np.uint8(min(max(np.rint(acc[j]), np.float32(0.0)), np.float32(255.0)))
+        _store(acc, out, cur)
+
+
+@numba.njit(cache=True, nogil=True)
+def _store(acc, out, row):
+    """out[row] = acc rounded half to even, clamped to 0..255."""
+    for j in range(acc.shape[0]):
+        out[row, j] = np.uint8(min(max(np.rint(acc[j]), np.float32(0.0)), np.float32(255.0)))
