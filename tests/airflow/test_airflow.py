@@ -93,6 +93,29 @@ def test_flow_does_not_depend_on_earlier_calls(method):
     np.testing.assert_array_equal(airflow.optical_flow(a, b, params=params), first)
 
 
+def test_flows_computed_in_two_threads_at_once_are_those_of_one_thread():
+    """Each thread has its own DIS objects: two threads at one size never share one (a shared one
+    is overwritten mid-call), and a thread's first flow equals another's hundredth."""
+    import threading
+
+    scene = pan_scene(0.6)
+    pairs = [(gray(scene, t, 160, 90), gray(scene, t + 1 / 24, 160, 90)) for t in np.linspace(0.0, 1.5, 12)]
+    alone = [airflow.optical_flow(a, b) for a, b in pairs]
+    got: dict[int, list] = {}
+
+    def run(i):
+        got[i] = [airflow.optical_flow(a, b) for _ in range(4) for a, b in pairs]
+
+    threads = [threading.Thread(target=run, args=(i,)) for i in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for flows in got.values():
+        for k, flow in enumerate(flows):
+            np.testing.assert_array_equal(flow, alone[k % len(pairs)])
+
+
 def test_too_small_proxy_gives_zero_flow():
     a = np.random.default_rng(0).integers(0, 256, (15, 40), dtype=np.uint8)
     np.testing.assert_array_equal(airflow.optical_flow(a, np.roll(a, 2, axis=1)), np.zeros((15, 40, 2), np.float32))

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from autohaptics import media
+from autohaptics import testing as synth
 from autohaptics.media.video import REPEAT_MIN_FPS
 from shared_data import shared_clip
 from stress_inputs import write_streams
@@ -158,6 +159,20 @@ def test_decoder_threads_leave_the_analysis_a_core(tmp_path, monkeypatch):
     for (ta, ga), (tb, gb) in zip(ahead, in_turn):
         assert ta == tb
         np.testing.assert_array_equal(ga, gb)
+
+
+def test_a_frame_says_whether_the_decoder_was_ahead_when_it_was_taken(tmp_path):
+    """A slow caller finds the decoder's queue full (the caller is the slower side); without a
+    decoding thread no frame is ahead."""
+    import time
+
+    path = synth.write_scene(tmp_path / "s.mp4", synth.sample_scene(), width=160, height=90, fps=24, audio=False)
+    assert not any(f.ahead for f in media.iter_video(path))
+    slow = []
+    for f in media.iter_video(path, prefetch=8):
+        time.sleep(0.01)
+        slow.append(f.ahead)
+    assert sum(slow) > len(slow) // 2
 
 
 def test_rgb_proxy_is_close_to_ffmpegs_scaled_conversion():

@@ -11,9 +11,9 @@ choices.
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 from typing import ClassVar
-from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -86,13 +86,24 @@ class FlowParams:
         return int(min(max(int(self.proxy_width), scaled), 7680))
 
 
-@lru_cache(maxsize=16)
+_THREAD = threading.local()  # each thread's DIS objects
+
+
 def _dis(preset: str, h: int, w: int):
-    """One DIS object per preset AND frame size: OpenCV's DIS keeps buffers across calls, and a
-    call at another size changes later results (up to 0.06 px on a 160x68 pair; on the Sintel
-    trailer analysed after other sizes, per-tick motion moved by up to 0.19 frame widths/s).
-    Per size, results depend on the inputs only (tests/airflow/test_airflow.py)."""
-    return cv2.DISOpticalFlow_create(DIS_PRESETS[preset])
+    """One DIS object per preset AND frame size, per thread: OpenCV's DIS keeps buffers across
+    calls, and a call at another size changes later results (up to 0.06 px on a 160x68 pair; on
+    the Sintel trailer analysed after other sizes, per-tick motion moved by up to 0.19 frame
+    widths/s); two threads calling one object at once corrupt each other's. Per size, results
+    depend on the inputs only (tests/airflow/test_airflow.py), whichever thread computes them."""
+    held = getattr(_THREAD, "dis", None)
+    if held is None:
+        held = _THREAD.dis = {}
+    key = (preset, h, w)
+    if key not in held:
+        if len(held) >= 16:  # sizes of films analysed before
+            held.clear()
+        held[key] = cv2.DISOpticalFlow_create(DIS_PRESETS[preset])
+    return held[key]
 
 
 def optical_flow(prev_gray: np.ndarray, gray: np.ndarray, *, params: FlowParams = FlowParams()) -> np.ndarray:

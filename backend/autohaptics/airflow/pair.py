@@ -68,8 +68,21 @@ def pair_motion(gray0: np.ndarray, gray1: np.ndarray, rgb0: np.ndarray, sig0: np
     read only when the pair moves past the floor; dt_s : the pair's real interval, s.
     timer(stage, fn, *args, **kwargs) runs each stage ("static", "flow", "depth"), e.g. timed.
     luma_signature(gray) : a gray proxy's cut signature (a caller that pairs each frame twice keeps it).
-    Cut checks: luma first (both proxies are there), then colour when the pair moves.
+    The same as :func:`pair_verdict`, else :func:`motion_from_flow` of the pair's optical flow.
     """
+    verdict = pair_verdict(gray0, gray1, params=params, timer=timer, luma_signature=luma_signature)
+    if verdict is not None:
+        return verdict
+    flow = timer("flow", optical_flow, gray0, gray1, params=params.flow)
+    return motion_from_flow(flow, gray0, rgb0, sig0, successor_sig, dt_s, params=params, depth_backend=depth_backend,
+                            timer=timer)
+
+
+def pair_verdict(gray0: np.ndarray, gray1: np.ndarray, *, params: PairParams, timer: Callable = run_directly,
+                 luma_signature: Callable[[np.ndarray], np.ndarray] = cuts.frame_signature) -> PairMotion | None:
+    """What a pair is without its flow: a cut (luma signatures), a fade's step, or static (nothing
+    moved beyond noise, or only the brightness changed); None when its motion needs the flow
+    (arguments as :func:`pair_motion`)."""
     if cuts.is_cut(luma_signature(gray0), luma_signature(gray1), params=params.cuts):
         if not _brightness_step(gray0, gray1, params.airflow):
             return PairMotion(cut=True)
@@ -77,7 +90,15 @@ def pair_motion(gray0: np.ndarray, gray1: np.ndarray, rgb0: np.ndarray, sig0: np
     if (params.skip and timer("static", is_static, gray0, gray1, params=params.airflow)) or \
             timer("static", is_fade, gray0, gray1, params=params.airflow):
         return PairMotion(static=True, cells=np.zeros((FAN_ROWS, FAN_COLS), np.float32))
-    flow = timer("flow", optical_flow, gray0, gray1, params=params.flow)
+    return None
+
+
+def motion_from_flow(flow: np.ndarray, gray0: np.ndarray, rgb0: np.ndarray, sig0: np.ndarray | None,
+                     successor_sig: Callable[[], np.ndarray], dt_s: float, *, params: PairParams,
+                     depth_backend=None, timer: Callable = run_directly) -> PairMotion:
+    """A moving pair's motion per cell from its optical flow (``optical_flow(gray0, gray1)``), a cut
+    where the colour signatures say so, and depth where the motion passes the floor (arguments
+    as :func:`pair_motion`)."""
     mag = motion_magnitude(flow, dt_s=dt_s, width_px=gray0.shape[1])
     score = motion_score(mag)
     if score > params.floor:

@@ -25,7 +25,7 @@ _PLANAR_YUV8 = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj44
 class Frame:
     """One decoded picture. Valid only inside the iteration step that yielded it."""
 
-    __slots__ = ("_frame", "index", "time_s", "rotation", "width", "height", "_crop", "_ready", "_luma_kept")
+    __slots__ = ("_frame", "index", "time_s", "rotation", "width", "height", "_crop", "_ready", "_luma_kept", "ahead")
 
     def __init__(self, frame: av.VideoFrame, index: int, time_s: float, rotation: int,
                  crop: tuple[int, int, int, int] | None = None):
@@ -44,6 +44,9 @@ class Frame:
                 self.width, self.height = int(crop[2]), int(crop[3])
         self._ready: dict = {}  # planes made ahead by prepare(), each taken once
         self._luma_kept: tuple | None = None  # (w, h, luma plane as stored) of the last gray proxy read
+        # decoded ahead in a thread that still held half its queue when the caller took this frame:
+        # the caller's analysis, not the decoder, is the slower side then (media.video.iter_video)
+        self.ahead = False
 
     def prepare(self, gray_width: int, rgb_width: int, luma_size: tuple[int, int] | None = None) -> None:
         """Make ahead the small planes that ``gray(gray_width)`` and ``rgb_and_gray(rgb_width,

@@ -50,7 +50,7 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
     prepare : with ``prefetch``, called on each frame in the decoding thread while that thread is
         at least half the queue ahead of the caller (it has time to spare), e.g.
         :meth:`Frame.prepare`, so the work runs beside the caller's analysis; never when the
-        caller waits for frames.
+        caller waits for frames. ``Frame.ahead``: the queue was still half full when it was taken.
     crop : (x, y, width, height) px in display orientation, even: each frame is that rectangle of
         the picture (:class:`Frame`; e.g. the active picture of :func:`autohaptics.media.active.find_active_area`).
     Raises MediaError when there is no video stream or no frame decodes.
@@ -126,10 +126,11 @@ def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0, bes
 _END = object()
 
 
-def _prefetched(make_iter, depth: int, prepare: Callable | None = None) -> Iterator:
-    """Run an iterator in a daemon thread, ``depth`` items ahead; exceptions reach the consumer;
-    closing the consumer stops the producer. ``prepare(item)`` runs in that thread on the items
-    made while the queue is at least half full."""
+def _prefetched(make_iter, depth: int, prepare: Callable | None = None) -> Iterator[Frame]:
+    """Run an iterator of frames in a daemon thread, ``depth`` items ahead; exceptions reach the
+    consumer; closing the consumer stops the producer. ``prepare(item)`` runs in that thread on the
+    items made while the queue is at least half full; an item taken while it still is gets
+    ``ahead`` set."""
     q: queue.Queue = queue.Queue(maxsize=depth)
     stop = threading.Event()
 
@@ -159,6 +160,7 @@ def _prefetched(make_iter, depth: int, prepare: Callable | None = None) -> Itera
                 return
             if isinstance(item, BaseException):
                 raise item
+            item.ahead = 2 * q.qsize() >= depth
             yield item
     finally:
         stop.set()

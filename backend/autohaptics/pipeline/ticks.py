@@ -36,6 +36,22 @@ class TickSums:
         self.out.nearness[k] += near
         self.near_n[k] += 1
 
+    def add_pair(self, k, res) -> None:
+        """A flow pair's :class:`~autohaptics.airflow.pair.PairMotion` for tick ``k``: a cut, or its
+        motion (static or moving) and its nearness where depth ran."""
+        out = self.out
+        if res.cut:
+            out.cut[k] = True
+            return
+        if res.static:
+            out.static[k] = True  # nothing moved beyond noise, or only the brightness changed (a fade)
+        else:
+            out.flow_mask[k] = True
+        self.add_motion(k, res.score, res.cells)
+        if res.near is not None:
+            self.add_near(k, res.near)
+            out.depth_mask[k] = True
+
     def finish(self) -> None:
         out = self.out
 

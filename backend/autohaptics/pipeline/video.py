@@ -34,11 +34,12 @@ from autohaptics import fusion, media
 from autohaptics.airflow import cuts, depth
 from autohaptics.airflow.cadence import Cadence
 from autohaptics.airflow.flow import is_static
-from autohaptics.airflow.pair import PairParams, pair_motion
+from autohaptics.airflow.pair import PairParams
 from autohaptics.fusion import saliency
 from autohaptics.imaging import resized
 from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS
 from autohaptics.params import GenerateParams
+from autohaptics.pipeline.pairs import PairJudge
 from autohaptics.pipeline.saliency_queue import LaterMask, SaliencyQueue
 from autohaptics.pipeline.ticks import TickSums, hold_missing
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel
@@ -124,6 +125,7 @@ def video_pass(info: media.MediaInfo, n: int, *, params: GenerateParams, need_sa
     threads = cv2.getNumThreads()
     if info.video is not None and info.video.display_size[0] <= SMALL_PICTURE_PX:
         cv2.setNumThreads(1)  # each call is small: OpenCV's worker threads would cost more than they give
+    vp = None
     try:
         vp = _Pass(info, n, params, need_saliency, need_flow, need_colour, cancel=cancel)
         stream = media.iter_video(info.path, info=info, prefetch=params.video.prefetch, decode=params.video.decode,
@@ -137,6 +139,8 @@ def video_pass(info: media.MediaInfo, n: int, *, params: GenerateParams, need_sa
                     progress("video", min(1.0, frame.time_s / duration))
         return vp.finish()
     finally:
+        if vp is not None:
+            vp.pairs.close()
         cv2.setNumThreads(threads)
 
 
@@ -161,9 +165,8 @@ class _Pass:
         self.saliency = SaliencyQueue(need_saliency, self._add_weights, stride=self.stride, cancel=cancel)
         self.sal_backend = saliency.make_saliency_backend(params.saliency) if self.saliency.may_need() else None
         self.depth_backend = depth.make_depth_backend(params.depth) if need_flow else None
-        self.pair_params = PairParams(flow=flow_params, airflow=params.airflow, cuts=params.cuts, depth=params.depth,
-                                      floor=float(params.airflow.floor) if params.video.skip else -1.0,
-                                      skip=params.video.skip)
+        pair_params = PairParams(flow=flow_params, airflow=params.airflow, cuts=params.cuts, depth=params.depth,
+                                 floor=float(params.airflow.floor) if params.video.skip else -1.0, skip=params.video.skip)
         self.sal_luma_size = saliency.working_size(params.saliency)
         # a backend fed the full frame's luma (spectral) needs only the proxy's size for its map: its
         # RGB proxy is then not made wider than the luma it is resampled from
@@ -173,6 +176,9 @@ class _Pass:
         self.every = params.video.analysis == "every"
         self.out = VideoAnalysis.empty(n)
         self.acc = TickSums(self.out)
+        self.pairs = PairJudge(pair_params, self.acc.add_pair, depth_backend=self.depth_backend,
+                               timer=lambda name, fn, *a, **kw: self.stages[name].run(fn, *a, **kw),
+                               luma_signature=self.luma_signature, on_flow=self._flow_done)
         self.prev_sig = None  # signature of the previous analysed frame (cut detection)
         self.prev_sal_gray = None  # luma of the previous saliency proxy (the saliency motion cue)
         self.pending = None  # (tick, gray, rgb, sig, time) waiting for its successor frame (flow pair)
@@ -256,7 +262,7 @@ class _Pass:
             self._motion(*pair)
 
     def _motion(self, first, frame, gray, sig) -> None:
-        """A flow pair's motion and depth, added to its tick."""
+        """A flow pair's motion and depth, added to its tick (:mod:`.pairs`)."""
         (pk, pgray, prgb, psig, pt), st = first, self.stages
 
         def successor_sig():  # colour matters for the in-pair cut check (a green and a grey shot
@@ -264,20 +270,13 @@ class _Pass:
             return sig if sig is not None else self._signature(
                 st["proxy"].run(frame.rgb, self.rgb_width, self.flow_params.proxy_width))
 
-        res = pair_motion(pgray, gray, prgb, psig, successor_sig, self.cadence.pair_time(pt, frame.time_s),
-                          params=self.pair_params, depth_backend=self.depth_backend, luma_signature=self.luma_signature,
-                          timer=lambda name, fn, *a, **kw: st[name].run(fn, *a, **kw))
-        if res.cut:
-            self.out.cut[pk] = True
-            return
-        if res.static:
-            self.out.static[pk] = True  # nothing moved beyond noise, or only the brightness changed (a fade)
-        else:
-            self.out.flow_mask[pk] = True
-        self.acc.add_motion(pk, res.score, res.cells)
-        if res.near is not None:
-            self.acc.add_near(pk, res.near)
-            self.out.depth_mask[pk] = True
+        self.pairs.add(pk, pgray, gray, prgb, psig, successor_sig, self.cadence.pair_time(pt, frame.time_s),
+                       ahead=frame.ahead)
+
+    def _flow_done(self, seconds: float) -> None:
+        """A flow computed beside the pass (:mod:`.pairs`), counted with the pass's own."""
+        self.stages["flow"].seconds += seconds
+        self.stages["flow"].computed += 1
 
     def _analyse(self, frame, k: int, rgb, gray, luma, sig, *, centre: bool) -> None:
         """Colour, the cut against the previous analysed frame, saliency, and the flow pair to come."""
@@ -332,6 +331,7 @@ class _Pass:
         if self.held is not None:
             held, self.held = self.held, None  # no decoded frame outlives the pass
             self._motion(*held)
+        self.pairs.finish()
         self.saliency.finish(n)
         self.acc.finish()
         if self.pending is not None and self.pending[0] > 0 and self.acc.motion_n[self.pending[0]] == 0:
