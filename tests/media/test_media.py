@@ -175,6 +175,25 @@ def test_a_frame_says_whether_the_decoder_was_ahead_when_it_was_taken(tmp_path):
     assert sum(slow) > len(slow) // 2
 
 
+def test_the_switch_interval_is_short_while_a_decoding_thread_runs_and_restored_after(tmp_path):
+    """The decoding thread gets the interpreter lock back from a caller busy in Python within
+    ``SWITCH_INTERVAL_S``, not the default 5 ms; the caller's own setting comes back after."""
+    import sys
+
+    from autohaptics.media.video import SWITCH_INTERVAL_S
+
+    path = synth.write_scene(tmp_path / "s.mp4", synth.sample_scene(), width=160, height=90, fps=24, audio=False)
+    before = sys.getswitchinterval()
+    assert before > SWITCH_INTERVAL_S
+    seen = [sys.getswitchinterval() for _ in media.iter_video(path, prefetch=4)]
+    assert max(seen) <= SWITCH_INTERVAL_S and sys.getswitchinterval() == before
+    frames = media.iter_video(path, prefetch=4)
+    next(frames)
+    frames.close()  # a caller that stops early
+    assert sys.getswitchinterval() == before
+    assert [sys.getswitchinterval() for _ in media.iter_video(path)][-1] == before  # no decoding thread: untouched
+
+
 def test_rgb_proxy_is_close_to_ffmpegs_scaled_conversion():
     frame = list(_frames(shared_clip("sintel_trailer_480x204_h264_aac.mp4"), 120))[-1]  # a lit picture (mean 105)
     ours = frame.proxy(160).astype(np.int16)

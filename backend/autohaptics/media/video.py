@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import os
 import queue
+import sys
 import threading
 from collections.abc import Callable, Iterator
 
@@ -24,6 +25,11 @@ SPARSE_MIN_FPS = 40.0
 # difference to the one before (airflow.cadence) and a skipped B-frame hides them. From 40 fps up
 # decoding every frame costs more than it gains (docs/BENCHMARKS.md, "The material matrix").
 REPEAT_MIN_FPS = 29.0
+# the interpreter's switch interval while a decoding thread runs beside the caller, s: each return of
+# that thread from FFmpeg needs the interpreter lock, which a caller busy in Python otherwise keeps
+# for up to the default 5 ms (300 1080p frames decoded beside a Python loop: 5.9 s instead of 1.2 s
+# alone, 2.1 s at 1 ms); docs/BENCHMARKS.md, "Full-frame 1080p", eleventh stop
+SWITCH_INTERVAL_S = 0.001
 
 
 def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefetch: int = 0,
@@ -130,7 +136,7 @@ def _prefetched(make_iter, depth: int, prepare: Callable | None = None) -> Itera
     """Run an iterator of frames in a daemon thread, ``depth`` items ahead; exceptions reach the
     consumer; closing the consumer stops the producer. ``prepare(item)`` runs in that thread on the
     items made while the queue is at least half full; an item taken while it still is gets
-    ``ahead`` set."""
+    ``ahead`` set. Meanwhile the interpreter's switch interval is at most ``SWITCH_INTERVAL_S``."""
     q: queue.Queue = queue.Queue(maxsize=depth)
     stop = threading.Event()
 
@@ -153,6 +159,8 @@ def _prefetched(make_iter, depth: int, prepare: Callable | None = None) -> Itera
 
     worker = threading.Thread(target=produce, name="autohaptics-decode", daemon=True)
     worker.start()
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(min(switch, SWITCH_INTERVAL_S))
     try:
         while True:
             item = q.get()
@@ -170,4 +178,6 @@ def _prefetched(make_iter, depth: int, prepare: Callable | None = None) -> Itera
             except queue.Empty:
                 pass
         worker.join()
+        if sys.getswitchinterval() == min(switch, SWITCH_INTERVAL_S):  # not already restored by another pass
+            sys.setswitchinterval(switch)
 
