@@ -22,7 +22,7 @@ from collections.abc import Callable
 import numpy as np
 
 from autohaptics.airflow.flow import optical_flow
-from autohaptics.airflow.pair import PairMotion, PairParams, motion_from_flow, pair_verdict
+from autohaptics.airflow.pair import PairMotion, PairParams, motion_from_flow, pair_motion, pair_verdict
 
 # pairs waiting for their flow beyond this many: the pass waits for the oldest (its frames, and so
 # their decoded pictures, are held until it is judged)
@@ -66,14 +66,16 @@ class PairJudge:
             successor_sig: Callable[[], np.ndarray], dt_s: float, *, ahead: bool = False) -> None:
         """A pair of tick ``tick`` (arguments as ``pair_motion``); ``ahead``: the decoder is ahead of
         the pass at its second frame."""
-        verdict = pair_verdict(gray0, gray1, params=self.params, timer=self._timer, luma_signature=self._luma_signature)
-        rest = (gray0, rgb0, sig0, successor_sig, dt_s)
-        if verdict is None and (ahead if self.beside is None else self.beside):
-            self._order.append((tick, self._submit((gray0, gray1)), rest))
-        else:
-            if verdict is None:
-                verdict = self._finished(self._timer("flow", optical_flow, gray0, gray1, params=self.params.flow), *rest)
+        if not (ahead if self.beside is None else self.beside):
+            result = pair_motion(gray0, gray1, rgb0, sig0, successor_sig, dt_s, params=self.params,
+                                 depth_backend=self._depth_backend, timer=self._timer,
+                                 luma_signature=self._luma_signature)
+            self._order.append((tick, result, None))
+        elif (verdict := pair_verdict(gray0, gray1, params=self.params, timer=self._timer,
+                                      luma_signature=self._luma_signature)) is not None:
             self._order.append((tick, verdict, None))
+        else:
+            self._order.append((tick, self._submit((gray0, gray1)), (gray0, rgb0, sig0, successor_sig, dt_s)))
         self._take(wait=sum(isinstance(e[1], _Flow) for e in self._order) > MOST_WAITING)
 
     def finish(self) -> None:
@@ -93,10 +95,6 @@ class PairJudge:
             self._jobs = self._worker = None
         self._order.clear()
 
-    def _finished(self, flow, gray0, rgb0, sig0, successor_sig, dt_s) -> PairMotion:
-        return motion_from_flow(flow, gray0, rgb0, sig0, successor_sig, dt_s, params=self.params,
-                                depth_backend=self._depth_backend, timer=self._timer)
-
     def _take(self, *, wait: bool) -> None:
         """Store the pairs at the head of the order that are judged or whose flow is done; with
         ``wait``, wait for the first one's flow."""
@@ -109,7 +107,8 @@ class PairJudge:
                 if result.error is not None:
                     raise result.error
                 self._on_flow(result.seconds)
-                result = self._finished(result.value, *rest)
+                result = motion_from_flow(result.value, *rest, params=self.params, depth_backend=self._depth_backend,
+                                          timer=self._timer)
             self._order.popleft()
             self._store(tick, result)
             wait = False
