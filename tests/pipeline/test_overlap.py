@@ -4,6 +4,7 @@ holds the analysed frames until the audio says which ticks need saliency."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import signal
 import threading
@@ -54,14 +55,43 @@ def _same(a, b) -> None:
 
 @pytest.mark.parametrize("waiting_bytes", [None, 1])
 def test_the_passes_side_by_side_give_the_analysis_of_one_after_the_other(film, monkeypatch, waiting_bytes):
-    """With 1 byte of room every analysed frame waits for the audio's mask before the next one."""
+    """With 1 byte of room every analysed frame before the audio's mask is weighed at once."""
     side = analyse(film, GenerateParams())
     assert "audio" in side.stats and side.video.saliency_mask.any() and not side.video.saliency_mask.all()
     if waiting_bytes is not None:
         monkeypatch.setattr(saliency_queue, "MAX_WAITING_BYTES", waiting_bytes)
         side = analyse(film, GenerateParams())
-    monkeypatch.setattr(analyse_module, "OVERLAP_MAX_S", 0.0)
+    monkeypatch.setattr(analyse_module, "can_fork", lambda: False)
     _same(side, analyse(film, GenerateParams()))
+
+
+@pytest.mark.parametrize("motion_weight", [0.0, 0.4])
+def test_a_late_mask_gives_the_same_analysis(film, monkeypatch, motion_weight):
+    """The audio's mask comes after the video pass has analysed frames beyond the room for their
+    proxies (a long film's): without saliency's motion cue those frames are weighed at once, some
+    for nothing; with it (each frame's map depends on the one weighed before) the pass waits for
+    the mask. Either way the analysis is the one of the passes in turn."""
+    params = GenerateParams()
+    params = dataclasses.replace(params, saliency=dataclasses.replace(params.saliency, motion_weight=motion_weight))
+    parent, real = os.getpid(), analyse_module._audio_pass
+
+    def late_audio(*args, **kwargs):
+        if os.getpid() != parent:
+            time.sleep(1.5)  # the video pass of the 320 x 180 film runs ahead meanwhile
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(analyse_module, "_audio_pass", late_audio)
+    monkeypatch.setattr(saliency_queue, "MAX_WAITING_BYTES", 1)
+    side = analyse(film, params)
+    sal = side.video.stats["saliency"]
+    if motion_weight == 0.0:
+        assert sal["weighed_ahead"] > 0 and 0 < sal["unused"] < sal["weighed_ahead"]
+    else:
+        assert sal["weighed_ahead"] == 0 == sal["unused"]
+    monkeypatch.setattr(analyse_module, "can_fork", lambda: False)
+    alone = analyse(film, params)
+    assert alone.video.stats["saliency"]["weighed_ahead"] == 0
+    _same(side, alone)
 
 
 def test_an_audio_failure_stops_the_analysis_with_its_own_error(film, monkeypatch):
@@ -149,50 +179,85 @@ def test_the_child_never_finalises_the_parents_garbage(tmp_path):
     assert log.read_text().split() == [str(os.getpid())] * 2
 
 
-def _decisions(need, stride: int, ticks: list[int], later_at: int | None, max_bytes: int | None):
-    """The frames a queue computes, in order, the mask given up front or set after ``later_at`` frames."""
-    computed = []
+def _frame(k: int) -> np.ndarray:
+    return np.full((2, 2, 3), k % 256, np.uint8)
+
+
+def _decisions(need, stride: int, ticks: list[int], later_at: int | None, max_bytes: int | None,
+               ahead: bool = False):
+    """The frames a queue commits, in order, each with the weights of its own frame, the mask given
+    up front or set after ``later_at`` frames; and the queue."""
+    committed = []
     mask = LaterMask() if later_at is not None else need
-    queue = SaliencyQueue(mask, lambda k, w, rgb, luma: computed.append(k), stride=stride, max_bytes=max_bytes)
-    frame = np.zeros((2, 2, 3), np.uint8)
+    queue = SaliencyQueue(mask, lambda w, rgb, luma: int(rgb[0, 0, 0]), lambda k, weights: committed.append((k, weights)),
+                          stride=stride, max_bytes=max_bytes, ahead=ahead)
     for i, k in enumerate(ticks):
         if later_at is not None and i == later_at:
             mask.set(need)
-        queue.add(k, 2, frame, None)
+        queue.add(k, 2, _frame(k), None)
     if later_at is not None and later_at >= len(ticks):
         threading.Timer(0.05, mask.set, args=(need,)).start()  # set only while finish waits
     queue.finish(len(need))
-    return computed
+    return committed, queue
 
 
 @settings(max_examples=200, deadline=None)
 @given(data=st.data(), stride=st.integers(1, 4), n=st.integers(1, 60))
 def test_the_queue_decides_alike_whenever_the_mask_comes(data, stride, n):
-    """A frame is computed when a tick from it up to the next analysed frame needs saliency,
+    """A frame is committed when a tick from it up to the next analysed frame needs saliency,
     whether the mask is known up front, comes after some frames, or only at the end; and when the
-    waiting frames outgrow their room the queue waits for the mask instead (set by another thread)."""
+    waiting frames outgrow their room the queue waits for the mask instead (set by another thread),
+    or, ``ahead``, weighs them at once: the same frames get the same weights, in the same order."""
     need = np.array(data.draw(st.lists(st.booleans(), min_size=n, max_size=n)), bool)
     starts = list(range(0, n, stride))
     ticks = sorted(data.draw(st.sets(st.sampled_from(starts), min_size=1)))
-    up_front = _decisions(need, stride, ticks, None, None)
-    expected = [k for i, k in enumerate(ticks)
+    up_front, _ = _decisions(need, stride, ticks, None, None)
+    expected = [(k, k % 256) for i, k in enumerate(ticks)
                 if need[k:max(ticks[i + 1] if i + 1 < len(ticks) else n, k + stride)].any()]
     assert up_front == expected
     later_at = data.draw(st.integers(0, len(ticks)))
-    assert _decisions(need, stride, ticks, later_at, None) == expected
+    assert _decisions(need, stride, ticks, later_at, None)[0] == expected
+    committed, queue = _decisions(need, stride, ticks, later_at, 1, ahead=True)
+    assert committed == expected
+    # every frame that came before the mask was weighed then; those it did not need were spent
+    assert queue.weighed_ahead == min(later_at, len(ticks)) and queue.unused == queue.weighed_ahead - sum(
+        1 for k, _ in expected if ticks.index(k) < later_at)
     mask = LaterMask()
     threading.Timer(0.02, mask.set, args=(need,)).start()
-    computed = []
-    queue = SaliencyQueue(mask, lambda k, w, rgb, luma: computed.append(k), stride=stride, max_bytes=1)
+    committed = []
+    queue = SaliencyQueue(mask, lambda w, rgb, luma: int(rgb[0, 0, 0]), lambda k, weights: committed.append((k, weights)),
+                          stride=stride, max_bytes=1)
     for k in ticks:
-        queue.add(k, 2, np.zeros((2, 2, 3), np.uint8), None)
+        queue.add(k, 2, _frame(k), None)
     queue.finish(n)
-    assert computed == expected
+    assert committed == expected
+
+
+def test_a_queue_that_weighs_ahead_never_waits_for_the_mask():
+    """Frames beyond the room are weighed at once and the video pass goes on: the mask is set only
+    after every frame was added (a queue that waited would be cancelled instead)."""
+    mask, cancel = LaterMask(), threading.Event()
+    timer = threading.Timer(30.0, cancel.set)
+    timer.start()
+    try:
+        weighed = []
+        queue = SaliencyQueue(mask, lambda w, rgb, luma: weighed.append(int(rgb[0, 0, 0])) or len(weighed),
+                              lambda k, weights: None, max_bytes=3 * _frame(0).nbytes, ahead=True, cancel=cancel)
+        for k in range(100):
+            queue.add(k, 2, _frame(k), None)
+        assert mask.value is None and not cancel.is_set()
+        # at most the room's worth of frames waits with its proxies at any time
+        assert len(weighed) >= 100 - 4 and queue.weighed_ahead == len(weighed)
+        mask.set(np.zeros(100, bool))
+        queue.finish(100)
+        assert queue.unused == queue.weighed_ahead
+    finally:
+        timer.cancel()
 
 
 def test_a_mask_abandoned_by_a_failed_pass_stops_the_queue():
     mask = LaterMask()
-    queue = SaliencyQueue(mask, lambda *a: None, max_bytes=1)
+    queue = SaliencyQueue(mask, lambda *a: None, lambda *a: None, max_bytes=1)
     threading.Timer(0.05, mask.close).start()
     with pytest.raises(saliency_queue.AbandonedMask):
         queue.add(0, 2, np.zeros((2, 2, 3), np.uint8), None)

@@ -1,9 +1,11 @@
 """The analysis: decode each stream once and compute the feature cache, skipping what a scene does
 not need.
 
-The audio pass computes the four psychoacoustic features per 20 ms frame; the video pass runs after
-it, because which ticks need saliency follows from the audio intensity (saliency only where the
-chair vibrates, unless the mode needs every tick).
+The audio pass computes the four psychoacoustic features per 20 ms frame, in a forked child beside
+the video pass (one after the other where a process cannot fork). Which ticks need saliency follows
+from the audio intensity (saliency only where the chair vibrates, unless the mode needs every
+tick), so the video pass decides its analysed frames' saliency in order once the audio says
+(:mod:`.saliency_queue`).
 """
 
 from __future__ import annotations
@@ -33,10 +35,6 @@ from autohaptics.timebase import FRAMES_PER_TICK, n_ticks as ticks_for
 
 log = logging.getLogger(__name__)
 _AUDIO_SHARE = 0.15  # share of the progress bar given to the audio pass when there is video
-# Up to this length the audio pass runs in a child process beside the video pass (on 2 cores the
-# decoder leaves the analysis time to spare); a longer film's passes run one after the other, so
-# the two passes' memory is never held at once.
-OVERLAP_MAX_S = 1800.0
 
 
 def file_sha256(path: str | Path, *, chunk: int = 1 << 20) -> str:
@@ -77,7 +75,9 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
     if info.video is None and params.mode == "visual" and need_vib:
         raise MediaError(f"{info.path}: no video stream (mode 'visual' needs one)")
     needs = dict(need_vib=need_vib, need_colour=need_colour, need_flow=need_flow)
-    beside = info.audio is not None and (need_colour or need_flow) and info.duration_s <= OVERLAP_MAX_S and can_fork()
+    # the audio pass in a child process beside the video pass, at any length (on 2 cores the decoder
+    # leaves the analysis time to spare); one after the other where a process cannot fork
+    beside = info.audio is not None and (need_colour or need_flow) and can_fork()
     if beside:
         try:
             audio, video = _both_passes(info, params, n, stats, progress, cancel, **needs)

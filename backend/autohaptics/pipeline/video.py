@@ -162,8 +162,6 @@ class _Pass:
         self.need_flow, self.need_colour = need_flow, need_colour
         self.stages = {name: _Stage() for name in STAGES}
         self.stride = int(params.video.stride)
-        self.saliency = SaliencyQueue(need_saliency, self._add_weights, stride=self.stride, cancel=cancel)
-        self.sal_backend = saliency.make_saliency_backend(params.saliency) if self.saliency.may_need() else None
         self.depth_backend = depth.make_depth_backend(params.depth) if need_flow else None
         pair_params = PairParams(flow=flow_params, airflow=params.airflow, cuts=params.cuts, depth=params.depth,
                                  floor=float(params.airflow.floor) if params.video.skip else -1.0, skip=params.video.skip)
@@ -176,6 +174,11 @@ class _Pass:
         self.every = params.video.analysis == "every"
         self.out = VideoAnalysis.empty(n)
         self.acc = TickSums(self.out)
+        # without the motion cue a frame's weights depend on its own proxies alone: they may be
+        # computed before the audio says whether they are needed (a long film's mask comes late)
+        self.saliency = SaliencyQueue(need_saliency, self.weights, self.acc.add_beta, stride=self.stride,
+                                      ahead=float(params.saliency.motion_weight) == 0.0, cancel=cancel)
+        self.sal_backend = saliency.make_saliency_backend(params.saliency) if self.saliency.may_need() else None
         self.pairs = PairJudge(pair_params, self.acc.add_pair, depth_backend=self.depth_backend,
                                timer=lambda name, fn, *a, **kw: self.stages[name].run(fn, *a, **kw),
                                luma_signature=self.luma_signature, on_flow=self._flow_done)
@@ -309,9 +312,6 @@ class _Pass:
         self.luma_sigs = [self.luma_sigs[-1], (gray, sig)] if self.luma_sigs else [(gray, sig)]
         return sig
 
-    def _add_weights(self, k: int, width: int, rgb, luma) -> None:
-        self.acc.add_beta(k, self.weights(width, rgb, luma))
-
     def weights(self, width: int, rgb, luma) -> np.ndarray:
         """The actuator weights of a frame ``width`` px wide from its saliency map (``rgb``, ``luma``:
         its proxies)."""
@@ -350,6 +350,7 @@ class _Pass:
             # them, where that tick computed the stage; one that copied a tick which skipped it counts as skipped
             done, held = int(mask.sum()), int(mask[sources].sum())
             out.stats[name].update({"ticks_computed": done, "ticks_held": held, "ticks_skipped": int(n - done - held)})
+        out.stats["saliency"].update({"weighed_ahead": self.saliency.weighed_ahead, "unused": self.saliency.unused})
         out.stats["flow"]["proxy_width"] = int(self.flow_params.proxy_width)
         out.stats["static"]["ticks_static"] = int(out.static.sum())
         out.stats["flow"]["repeats_skipped"] = int(self.repeats)
