@@ -1,5 +1,6 @@
-"""The benchmarks' bare decode (every frame and sample, counted) and the full-frame film clip's
-picture (scaled to cover the frame and cropped: no bar left, unlike the letterboxed one)."""
+"""The benchmarks' bare decode (every frame and sample, counted), the films made of copies of a
+clip, and the full-frame film clip's picture (scaled to cover the frame and cropped: no bar left,
+unlike the letterboxed one)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import av
 import numpy as np
 import pytest
 
-from autohaptics.bench.clips import _picture, reencode
+from autohaptics.bench.clips import _picture, copied_clip, reencode
 from autohaptics.bench.decode import bare_decode
 from autohaptics.errors import ParameterError
 
@@ -57,3 +58,32 @@ def test_pad_fits_the_picture_inside_with_even_bars():
     y, u = pillar[:16], pillar[16:20].reshape(8, 16)
     assert (y[:, :12] == 16).all() and (y[:, -12:] == 16).all() and (y[:, 12:20] > 150).all()
     assert (u[:, :6] == 128).all() and (u[:, -6:] == 128).all()
+
+
+@pytest.mark.parametrize("name", ["sintel_trailer_480x204_h264_aac.mp4", "bbb_1s_1280x720_vp8_vorbis.webm"])
+def test_copies_play_the_clip_again_and_again_from_its_own_packets(tmp_path, media_dir, name):
+    """A film of three copies decodes to three times the clip's frames and its sound, at rising
+    times three times its length, and each copy's pictures are the clip's own (the packets are copied)."""
+    src = media_dir / name
+    film = copied_clip(src, 3, tmp_path)
+    assert film.suffix == src.suffix and copied_clip(src, 3, tmp_path) == film
+    one, three = bare_decode(src), bare_decode(film)
+    assert three["video_frames"] == 3 * one["video_frames"]
+    # an overlapped audio codec (Vorbis) may give up to a frame of sound more at each join
+    assert 0 <= three["audio_samples"] - 3 * one["audio_samples"] <= 3 * 2048
+    with av.open(str(src)) as c:
+        clip_s = float(c.duration) / av.time_base
+        clip_frames = [f.to_ndarray(format="gray") for f in c.decode(video=0)]
+    with av.open(str(film)) as c:
+        assert float(c.duration) / av.time_base == pytest.approx(3 * clip_s, abs=0.2)
+        times, pictures = [], []
+        for f in c.decode(video=0):
+            times.append(float(f.time))
+            if len(pictures) < 2 * len(clip_frames) + 3:
+                pictures.append(f.to_ndarray(format="gray"))
+    assert np.all(np.diff(times) > 0)
+    n = len(clip_frames)
+    for k in (0, 1, n // 2, n - 1):
+        np.testing.assert_array_equal(pictures[n + k], clip_frames[k])
+    with pytest.raises(ParameterError, match="copies"):
+        copied_clip(src, 0, tmp_path)

@@ -7,7 +7,8 @@ film-like clips of ``--films``: 1080p at 24 fps with stereo sound (the Sintel tr
 letterboxed as the 2.35:1 film it is, and filling the whole 16:9 frame as a 16:9 or 1.85:1 film
 does) and 854x480 at 25 fps with 5.1 sound (the Big Buck Bunny opening). ``fit="pad"`` fits the
 whole picture inside the frame with bars where it is narrower (a pillarbox) or wider (a letterbox).
-Files are written once and reused.
+:func:`copied_clip` plays a clip several times in a row by copying its packets (a feature-length
+film of the same encode). Files are written once and reused.
 """
 
 from __future__ import annotations
@@ -47,6 +48,52 @@ def looped_clip(src: str | Path, times: int, out_dir: Path) -> Path:
     """``src`` played ``times`` times in a row, at its own size, rate and channels."""
     src = Path(src)
     return reencode(src, out_dir / f"{src.stem}_x{times}.mp4", times=times)
+
+
+def copied_clip(src: str | Path, times: int, out_dir: Path) -> Path:
+    """``src`` played ``times`` times in a row by copying its packets: the same encode (codec, GOP,
+    bit rate) at any length, written in seconds where a re-encode of a feature-length film takes
+    hours; each copy's packets follow the copy before on each stream's own clock (an overlapped
+    audio codec such as Vorbis may give up to a frame of sound more at each join). Written once
+    into ``out_dir`` as ``<stem>_copies<times><suffix>`` and reused."""
+    import av
+
+    src = Path(src)
+    if int(times) < 1:
+        raise ParameterError(f"copies must be at least 1, got {times!r}")
+    out = out_dir / f"{src.stem}_copies{int(times)}{src.suffix}"
+    if out.exists():
+        return out
+    out_dir.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f"{out.stem}.part{out.suffix}")
+    with av.open(str(src)) as first, av.open(str(tmp), "w") as dst:
+        kept = [s for s in first.streams if s.type in ("video", "audio")]
+        if not kept:
+            raise ParameterError(f"{src}: no audio or video stream to copy")
+        streams = {s.index: dst.add_stream_from_template(s) for s in kept}
+        shift = dict.fromkeys(streams, None)  # input time-base units added to this copy's packets
+        end = dict.fromkeys(streams, 0)  # where each stream's previous copy ended, output timestamps
+        for copy in range(int(times)):
+            with av.open(str(src)) as inp:
+                last = dict.fromkeys(streams, None)
+                for pkt in inp.demux(*(inp.streams[i] for i in streams)):
+                    k = pkt.stream.index
+                    if pkt.dts is None:
+                        continue
+                    if shift[k] is None:
+                        shift[k] = end[k] - pkt.dts if copy else 0
+                    pkt.dts += shift[k]
+                    if pkt.pts is not None:
+                        pkt.pts += shift[k]
+                    if last[k] is not None and pkt.dts <= last[k]:
+                        continue  # a muxer takes only rising decoding times
+                    last[k] = pkt.dts
+                    end[k] = max(end[k], pkt.dts + max(int(pkt.duration or 0), 1))
+                    pkt.stream = streams[k]
+                    dst.mux(pkt)
+            shift = dict.fromkeys(streams, None)
+    os.replace(tmp, out)
+    return out
 
 
 def reencode(src: Path, out: Path, *, times: int = 1, size: tuple[int, int] | None = None, fps: int | None = None,
