@@ -209,6 +209,14 @@ def alive(pid: int) -> bool:
     return Path(f"/proc/{pid}").exists()
 
 
+def dead(pid: int) -> bool:
+    """The process is gone or a zombie (killed, not yet waited for)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
+    except FileNotFoundError:
+        return True
+
+
 def test_the_pictures_ahead_come_from_a_nice_process_that_stops_with_the_server(tmp_path_factory, film,
                                                                                  monkeypatch):
     made_here = []
@@ -269,6 +277,32 @@ def test_a_picture_process_that_dies_is_logged_and_started_again(tmp_path_factor
         assert pictures.wait_idle(60)
         assert pictures.maker.pid not in (None, child)
         assert len(list((folder / "filmstrip").glob("*.jpg"))) == 5 + 3 + 2 + 1
+
+
+def test_a_picture_process_that_died_between_pictures_is_reported_then_started_again(film, tmp_path):
+    """The maker alone: a child killed while no picture was on its way is reported by the next
+    picture (the planner logs it and drops that project's work, as for a death during a picture),
+    and the one after starts a new child."""
+    from autohaptics.server.ahead import AheadMaker, MakerGone
+
+    maker = AheadMaker()
+    source = posters.film(film, tmp_path / "no-analysis.npz")
+    (tmp_path / "posters").mkdir()
+    size = posters.poster_size(source)
+    try:
+        assert maker.make(tmp_path / "posters" / "3.jpg", source, [3], size) > 0
+        child = maker.pid
+        os.kill(child, signal.SIGKILL)
+        deadline = time.monotonic() + 10
+        while not dead(child) and time.monotonic() < deadline:
+            time.sleep(0.01)
+        with pytest.raises(MakerGone, match="between pictures"):
+            maker.make(tmp_path / "posters" / "4.jpg", source, [4], size)
+        assert maker.pid is None and not (tmp_path / "posters" / "4.jpg").exists()
+        assert maker.make(tmp_path / "posters" / "4.jpg", source, [4], size) > 0
+        assert maker.pid not in (None, child)
+    finally:
+        maker.close()
 
 
 def test_a_picture_process_that_does_not_stop_is_killed_on_close(film, tmp_path):

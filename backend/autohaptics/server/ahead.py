@@ -53,10 +53,15 @@ class AheadMaker:
     def make(self, path: Path, film: "Film", ticks: list[int], size: tuple[int, int]) -> int | None:
         """Make the frames of ``ticks`` at ``size`` (w, h px) side by side into ``path`` in the child:
         the bytes written; None when cancelled or the project's folder is gone. Raises
-        :class:`MakerGone` when the child dies, RuntimeError with its message when the picture fails."""
+        :class:`MakerGone` when the child dies, during this picture or since the one before (the
+        next call starts a new one), RuntimeError with its message when the picture fails."""
         with self._lock:
+            if self._proc is not None and not self._proc.is_alive():
+                code = self._proc.exitcode
+                self._drop()
+                raise MakerGone(f"the picture process stopped (exit code {code}, between pictures)")
             try:
-                if self._proc is None or not self._proc.is_alive():
+                if self._proc is None:
                     self._start()
                 self._conn.send((str(path), film, [int(t) for t in ticks], tuple(size), float(self.pause_s)))
                 kind, value = self._conn.recv()
