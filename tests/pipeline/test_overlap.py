@@ -1,6 +1,7 @@
 """The audio pass beside the video pass (a forked child, the saliency decisions in frame order):
-the same analysis as one pass after the other, its errors and cancellation, and the queue that
-holds the analysed frames until the audio says which ticks need saliency."""
+the same analysis as one pass after the other, its errors and cancellation, the queue that holds
+the analysed frames until the audio says which ticks need saliency, and the file's hash computed
+beside the passes."""
 
 from __future__ import annotations
 
@@ -262,3 +263,48 @@ def test_a_mask_abandoned_by_a_failed_pass_stops_the_queue():
     with pytest.raises(saliency_queue.AbandonedMask):
         queue.add(0, 2, np.zeros((2, 2, 3), np.uint8), None)
         queue.add(1, 2, np.zeros((2, 2, 3), np.uint8), None)
+
+
+def test_the_hash_of_the_file_runs_beside_the_passes(film, monkeypatch):
+    """The video pass starts while the file's SHA-256 is still being computed (a film of tens of GB
+    takes a minute to hash), and the analysis still carries the file's own hash."""
+    import hashlib
+
+    video_started, seen = threading.Event(), []
+    real_hash, real_pass = analyse_module.file_sha256, analyse_module._video_pass
+
+    def slow_hash(path, **kwargs):
+        seen.append(video_started.wait(20))  # True: the pass began before the hash ended
+        return real_hash(path, **kwargs)
+
+    def video_pass(*args, **kwargs):
+        video_started.set()
+        return real_pass(*args, **kwargs)
+
+    monkeypatch.setattr(analyse_module, "file_sha256", slow_hash)
+    monkeypatch.setattr(analyse_module, "_video_pass", video_pass)
+    result = analyse(film, GenerateParams())
+    assert seen == [True]
+    assert result.sha256 == hashlib.sha256(film.read_bytes()).hexdigest()
+    assert result.stats["hash"]["seconds"] >= 0
+
+
+def test_a_failed_analysis_stops_the_hash(film, monkeypatch):
+    """An analysis that fails leaves no hashing thread behind: it stops at its next chunk."""
+    chunks = []
+
+    def endless_hash(path, *, stop, **kwargs):
+        while not stop.wait(0.01):
+            chunks.append(1)
+        return ""
+
+    def broken(*args, **kwargs):
+        while not chunks:
+            time.sleep(0.01)
+        raise MediaError("the picture cannot be decoded")
+
+    monkeypatch.setattr(analyse_module, "file_sha256", endless_hash)
+    monkeypatch.setattr(analyse_module, "_passes", broken)
+    with pytest.raises(MediaError, match="cannot be decoded"):
+        analyse(film, GenerateParams())
+    assert not [t for t in threading.enumerate() if t.name == "autohaptics-hash"]

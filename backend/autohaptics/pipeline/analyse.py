@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import logging
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -37,16 +38,50 @@ log = logging.getLogger(__name__)
 _AUDIO_SHARE = 0.15  # share of the progress bar given to the audio pass when there is video
 
 
-def file_sha256(path: str | Path, *, chunk: int = 1 << 20) -> str:
-    """SHA-256 of a file, read in 1 MiB chunks."""
+def file_sha256(path: str | Path, *, chunk: int = 1 << 20, stop: threading.Event | None = None) -> str:
+    """SHA-256 of a file, read in 1 MiB chunks; "" when ``stop`` is set before the end."""
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         while True:
+            if stop is not None and stop.is_set():
+                return ""
             b = fh.read(chunk)
             if not b:
                 break
             h.update(b)
     return h.hexdigest()
+
+
+class _HashBeside:
+    """A file's SHA-256 computed in a thread while the passes run: reading and hashing let go of the
+    interpreter lock, and a film of tens of GB takes a minute to hash, which then no longer stands
+    before the passes. :meth:`result` waits for it; :meth:`abandon` stops it."""
+
+    def __init__(self, path: str | Path):
+        self._stop = threading.Event()
+        self._value: str | None = None
+        self._error: BaseException | None = None
+        self.seconds = 0.0
+        self._thread = threading.Thread(target=self._run, args=(path,), name="autohaptics-hash", daemon=True)
+        self._thread.start()
+
+    def _run(self, path: str | Path) -> None:
+        t0 = time.perf_counter()
+        try:
+            self._value = file_sha256(path, stop=self._stop)
+        except BaseException as exc:  # handed to the caller by result()
+            self._error = exc
+        self.seconds = time.perf_counter() - t0
+
+    def result(self) -> str:
+        self._thread.join()
+        if self._error is not None:
+            raise self._error
+        return self._value
+
+    def abandon(self) -> None:
+        self._stop.set()
+        self._thread.join()
 
 
 def analyse(path: str | Path, params: GenerateParams | None = None, *, progress: ProgressFn | None = None,
@@ -58,13 +93,24 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
     Raises MediaError for unusable input (missing, not media, truncated, no audio in audio mode).
     """
     params = params or GenerateParams()
-    progress = progress or null_progress
     info = info or media.probe(path)
     n = ticks_for(info.duration_s)
     stats: dict[str, Any] = {}
-    t0 = time.perf_counter()
-    sha = file_sha256(path)
-    stats["hash"] = {"seconds": time.perf_counter() - t0}
+    hashing = _HashBeside(path)
+    try:
+        audio, video = _passes(info, params, n, stats, progress or null_progress, cancel, between_passes)
+    except BaseException:
+        hashing.abandon()
+        raise
+    sha = hashing.result()
+    stats["hash"] = {"seconds": hashing.seconds}
+    return Analysis(info=info.to_dict(), sha256=sha, n_ticks=n, params=params_to_dict(params),
+                    audio=audio, video=video, stats=stats)
+
+
+def _passes(info: media.MediaInfo, params: GenerateParams, n: int, stats: dict, progress: ProgressFn,
+            cancel: CancelToken | None, between_passes: Callable[[], Any] | None):
+    """The passes of :func:`analyse`, each where it can run; the truncation check. Returns (audio, video)."""
     check_cancel(cancel)
 
     need_colour = "temperature" in params.tracks and info.video is not None
@@ -93,8 +139,7 @@ def analyse(path: str | Path, params: GenerateParams | None = None, *, progress:
                           video_end=(video.stats["frames"]["last_time_s"] + 1.0 / max(info.video.fps, 1.0))
                           if video is not None else None)
     progress("done", 1.0)
-    return Analysis(info=info.to_dict(), sha256=sha, n_ticks=n, params=params_to_dict(params),
-                    audio=audio, video=video, stats=stats)
+    return audio, video
 
 
 def _one_after_the_other(info: media.MediaInfo, params: GenerateParams, n: int, stats: dict, progress: ProgressFn,
