@@ -184,13 +184,18 @@ def _frame(k: int) -> np.ndarray:
     return np.full((2, 2, 3), k % 256, np.uint8)
 
 
+def _weigh(width: int, rgb: np.ndarray, luma) -> int:
+    """A frame's stand-in weights: its own value (the tick it was made for, mod 256)."""
+    return int(rgb[0, 0, 0])
+
+
 def _decisions(need, stride: int, ticks: list[int], later_at: int | None, max_bytes: int | None,
                ahead: bool = False):
     """The frames a queue commits, in order, each with the weights of its own frame, the mask given
     up front or set after ``later_at`` frames; and the queue."""
     committed = []
     mask = LaterMask() if later_at is not None else need
-    queue = SaliencyQueue(mask, lambda w, rgb, luma: int(rgb[0, 0, 0]), lambda k, weights: committed.append((k, weights)),
+    queue = SaliencyQueue(mask, _weigh, lambda k, weights: committed.append((k, weights)),
                           stride=stride, max_bytes=max_bytes, ahead=ahead)
     for i, k in enumerate(ticks):
         if later_at is not None and i == later_at:
@@ -226,8 +231,7 @@ def test_the_queue_decides_alike_whenever_the_mask_comes(data, stride, n):
     mask = LaterMask()
     threading.Timer(0.02, mask.set, args=(need,)).start()
     committed = []
-    queue = SaliencyQueue(mask, lambda w, rgb, luma: int(rgb[0, 0, 0]), lambda k, weights: committed.append((k, weights)),
-                          stride=stride, max_bytes=1)
+    queue = SaliencyQueue(mask, _weigh, lambda k, weights: committed.append((k, weights)), stride=stride, max_bytes=1)
     for k in ticks:
         queue.add(k, 2, _frame(k), None)
     queue.finish(n)

@@ -7,8 +7,8 @@ warmed up) and for whole processes (start to exit, imports and kernel loading in
 process that only decodes). ``--loop N`` first writes a longer clip by playing VIDEO N times in a
 row (re-encoded with x264 and AAC at the source resolution), for clips too short to measure;
 ``--copies N`` writes one that plays it N times by copying its packets (the same encode at feature
-length: 35 copies of a 53 s clip make 31 minutes); ``--films`` adds the film-like clips of :mod:`autohaptics.bench.clips` (1080p24 letterboxed and
-full-frame, 480p25 5.1).
+length: 35 copies of a 53 s clip make 31 minutes); ``--films`` adds the film-like clips of
+:mod:`autohaptics.bench.clips` (1080p24 letterboxed and full-frame, 480p25 5.1).
 """
 
 from __future__ import annotations
