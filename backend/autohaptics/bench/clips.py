@@ -71,11 +71,11 @@ def copied_clip(src: str | Path, times: int, out_dir: Path) -> Path:
         if not kept:
             raise ParameterError(f"{src}: no audio or video stream to copy")
         streams = {s.index: dst.add_stream_from_template(s) for s in kept}
-        shift = dict.fromkeys(streams, None)  # input time-base units added to this copy's packets
         end = dict.fromkeys(streams, 0)  # where each stream's previous copy ended, output timestamps
         for copy in range(int(times)):
+            shift = dict.fromkeys(streams, None)  # input time-base units added to this copy's packets
+            last = dict.fromkeys(streams, None)
             with av.open(str(src)) as inp:
-                last = dict.fromkeys(streams, None)
                 for pkt in inp.demux(*(inp.streams[i] for i in streams)):
                     k = pkt.stream.index
                     if pkt.dts is None:
@@ -91,7 +91,6 @@ def copied_clip(src: str | Path, times: int, out_dir: Path) -> Path:
                     end[k] = max(end[k], pkt.dts + max(int(pkt.duration or 0), 1))
                     pkt.stream = streams[k]
                     dst.mux(pkt)
-            shift = dict.fromkeys(streams, None)
     os.replace(tmp, out)
     return out
 
