@@ -185,6 +185,68 @@ def test_a_rise_far_below_the_films_top_counts_for_less():
     assert out[620:625].min() > max(it.rule.DEFAULT_THRESHOLDS.values()), out[620:625]
 
 
+def _pause_cuts(scene: Scene, count: int, *, lead_s: float = 0.25) -> list[float]:
+    """Times (s) ``lead_s`` before the first ``count`` words of ``scene`` after 1.3 s that follow at
+    least 0.3 s without sound: a file cut there opens on silence, its next word ``lead_s`` in."""
+    events = sorted(scene.audio, key=lambda ev: ev.t0)
+    cuts, end = [], 0.0
+    for ev in events:
+        if ev.t0 - end >= 0.3 and ev.t0 >= 1.3 + lead_s and ev.t0 + 5.0 <= scene.duration_s:
+            cuts.append(ev.t0 - lead_s)
+        end = max(end, ev.t1)
+    return cuts[:count]
+
+
+@pytest.mark.parametrize("room_dbfs", [None, -50.0])
+def test_a_cut_inside_dialogue_does_not_jolt_on_its_next_word(tmp_path, room_dbfs):
+    """A reel cut in a pause of the dialogue: its next word, 0.15-0.35 s in, is like the words after
+    it, whose baseline tells what the film held before the file began (the rule before read each
+    such word as an onset: 0.80-1.0 on all 8 cuts, over silence and room tone alike, where the film
+    is still). Judged as the matrix judges a jolt: not above 0.2 where the uncut film is still."""
+    speech = sounds.speech(30.0, level_dbfs=-20.0, seed=0)
+    bed = () if room_dbfs is None else (Noise(0.0, 30.0, level_dbfs=room_dbfs, colour="pink", seed=3),)
+    film = Scene(duration_s=30.0, audio=speech.audio + bed, name=f"dialogue_{room_dbfs}")
+    _, whole, _ = _run(tmp_path, film)
+    cuts = [c for lead in (0.15, 0.35) for c in _pause_cuts(speech, 4, lead_s=lead)]
+    assert len(cuts) == 8
+    for start in cuts:
+        _, chair, _ = _run(tmp_path, sounds.cut_in(film, start, 5.0))
+        k0 = int(round(start / TICK_S))
+        assert chair[:5].max() <= max(0.2, whole[k0:k0 + 5].max()), (start, chair[:8], whole[k0:k0 + 8])
+
+
+@pytest.mark.parametrize("every_s", [2.0, 3.5])
+def test_booms_seconds_apart_out_of_silence_each_vibrate_the_first_too(tmp_path, every_s):
+    """Drums seconds apart after 0.3 s of silence are like each other, but the baseline at the later
+    ones holds the silence between them: the first is an onset as every later one is."""
+    times = np.arange(0.3, 9.0 - sounds.IMPACT_LENGTH_S, every_s)
+    scene = Scene(duration_s=9.0, audio=tuple(e for i, t in enumerate(times) for e in sounds.impact(float(t), seed=i)),
+                  name=f"drums_{every_s:g}")
+    _, chair, _ = _run(tmp_path, scene)
+    for t in times:
+        assert chair[_ticks(t, t + sounds.IMPACT_LENGTH_S)].min() >= 0.7 * chair.max(), (t, chair[:40])
+    assert not chair[_ticks(0.0, 0.3)].any()
+
+
+def test_the_first_onsets_likes_are_later_onsets_near_its_level_and_none_for_a_single_sound():
+    from autohaptics.intensity.novelty import GAP_S, novelty, resumed_onsets
+
+    frames = lambda s: int(round(s / 0.02))  # noqa: E731
+    series = np.zeros(frames(8.0))
+    for t in np.arange(0.3, 7.8, 0.5):  # a word every 0.5 s at one level, after 0.3 s of silence
+        series[frames(t):frames(t + 0.25)] = 1.0
+    likes = resumed_onsets(series)
+    assert likes is not None and likes.min() >= frames(0.3 + GAP_S + 3.0) and likes.size >= 5
+    assert not novelty(series)[:frames(0.6)].any()  # resumed: the first word is no onset
+    assert novelty(series, resumed=None)[frames(0.3)] == 1.0  # the rule before: an onset out of silence
+    quieter = series.copy()
+    quieter[frames(1.0):] *= 0.3  # the words after the first at under half its level: not its likes
+    assert resumed_onsets(quieter) is None and novelty(quieter)[frames(0.3)] == 1.0
+    long_hit = np.r_[np.zeros(frames(0.3)), np.ones(frames(4.0)), np.full(frames(3.0), 0.2)]
+    assert resumed_onsets(long_hit) is None and novelty(long_hit)[frames(0.3)] == 1.0
+    assert resumed_onsets(np.zeros(50)) is None and resumed_onsets(np.ones(10)) is None
+
+
 @pytest.mark.parametrize("make", [sounds.speech, sounds.rising_rumble, sounds.music_with_impacts])
 def test_density_gives_about_that_share(tmp_path, make):
     scene = make()

@@ -12,7 +12,9 @@ seconds; an impact, an explosion, a booming hit or a rising rumble lifts it abov
   the frame. A file whose sound is under way within its first ``GAP_S`` (cut mid-score) is taken
   to have had it before it began, at its level over its opening (:func:`opening_frames`), so its
   start is no event; after an opening silence, the file's own frames are the baseline, so a
-  sound after the silence is an onset however early it comes;
+  sound after the silence is an onset however early it comes, unless the file's first onset has
+  likes seconds later (:func:`resumed_onsets`: a cut in a pause of the dialogue, inside a volley):
+  the baseline read at them is then the level before the file began;
 - novelty = log2((value + ``FLOOR``) / (baseline + ``FLOOR``)) / ``FULL_OCTAVES`` (shares of the
   film's top), at least 0: 0 at or below the baseline, 1 at a rise of 2^0.5 (+5 phon for loudness)
   well above ``FLOOR``; less among values near it, where a codec's few-percent changes would decide.
@@ -39,6 +41,8 @@ ATTACK_S = 0.2  # the loudness model reaches 0.9 of a low tone's level within it
 FULL_OCTAVES = 0.5
 EXPONENTS = {"sharpness": 1.0, "booming": 1.0, "low_energy": 0.3, "loudness": 1.0}
 FLOOR = 3e-2  # of the feature's maximum over the film, added to value and baseline (module docstring)
+RESUMED_S = 3.0  # the first onset's likes are looked for over this long once its baseline window is past it
+RESUMED_MIN = 1  # at least this many likes
 SMOOTHED = ("loudness", "sharpness")  # the features whose single-frame peaks a lossy codec moves
 
 
@@ -53,11 +57,14 @@ def feature_novelty(features: dict[str, np.ndarray], *, baseline_s: float = 3.0,
     carry such a peak into the baseline for seconds. Booming and low-frequency energy come from the
     bands a codec keeps."""
     sound = features.get("loudness")
-    opening = opening_frames(np.asarray(sound, dtype=np.float64)) if sound is not None else None
+    opening = resumed = None
+    if sound is not None:
+        sound = np.asarray(sound, dtype=np.float64)
+        opening, resumed = opening_frames(sound), resumed_onsets(sound, baseline_s=baseline_s)
     lag = (median_n - 1) // 2 if median_n > 1 else 0
     out = {f: novelty(trailing_median(np.asarray(x, dtype=np.float64), median_n) if f in SMOOTHED else x,
                       exponent=EXPONENTS[f], baseline_s=baseline_s, clip=False, opening_n=opening,
-                      lag_n=lag if f in SMOOTHED else 0)
+                      lag_n=lag if f in SMOOTHED else 0, resumed=resumed)
            for f, x in features.items()}
     if "sharpness" in out and "loudness" in out:
         out["sharpness"] = np.where(out["loudness"] > 0, out["sharpness"], 0.0)
@@ -65,7 +72,7 @@ def feature_novelty(features: dict[str, np.ndarray], *, baseline_s: float = 3.0,
 
 
 def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, clip: bool = True,
-            opening_n: int | None = None, lag_n: int = 0) -> np.ndarray:
+            opening_n: int | None = None, lag_n: int = 0, resumed: np.ndarray | None | str = "own") -> np.ndarray:
     """Novelty of one feature curve (module docstring).
 
     x : float [shape=(n,)], one value per 20 ms frame, >= 0 (non-finite values count as 0).
@@ -75,6 +82,9 @@ def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, cl
     lag_n : frames by which ``x`` lags the level ``opening_n`` was taken from (a trailing median's
         (n - 1) // 2): a curve under way from its first frame holds its opening value that long, so
         the level its opening check compares with spans ``lag_n`` frames more.
+    resumed : the frames of the later onsets like the file's first (:func:`resumed_onsets` of the
+        loudness; default: of ``x``; None: none): the history before the file is at least the
+        baseline this feature reads at them.
     Returns float64 [shape=(n,)], finite, >= 0 and (with ``clip``) <= 1; all zeros for silence.
     """
     v = np.asarray(x, dtype=np.float64)
@@ -92,8 +102,18 @@ def novelty(x: np.ndarray, *, exponent: float = 1.0, baseline_s: float = 3.0, cl
         first = int(np.argmax(v[:opening_n] > FLOOR))  # its own sound begins (a codec's delay, the median's lag)
         early_n = max(first, int(lag_n)) + gap_n - first  # its first GAP_S, as the loudness's own
         opening_n = first + _before_rise(v[first:], early_n, opening_n - first)
-    pre_n = env_n + gap_n + base_n if opening_n > 0 else 0  # history for every window before t = 0
-    env = trailing_max(np.concatenate([np.full(pre_n, v[:opening_n].max() if pre_n else 0.0), v]), env_n)
+    before = v[:opening_n].max() if opening_n > 0 else 0.0  # the level the file's sound had before it began
+    if isinstance(resumed, str):
+        resumed = resumed_onsets(v, baseline_s=baseline_s)
+    if resumed is not None:  # what the baseline reads at the first onset's likes
+        inside = trailing_max(v, env_n)
+        cum = np.concatenate([[0.0], np.cumsum(inside)])
+        hi = np.asarray(resumed, dtype=np.int64) - gap_n
+        hi = hi[(hi >= base_n) & (hi <= n)]
+        if hi.size:
+            before = max(before, float(np.median((cum[hi] - cum[hi - base_n]) / base_n)))
+    pre_n = env_n + gap_n + base_n if opening_n > 0 or before > 0 else 0  # history for every window before t = 0
+    env = trailing_max(np.concatenate([np.full(pre_n, before), v]), env_n)
     cum = np.concatenate([[0.0], np.cumsum(env)])
     hi = np.clip(np.arange(n) + pre_n - gap_n, 0, n + pre_n)
     lo = np.clip(hi - base_n, 0, n + pre_n)
@@ -126,6 +146,43 @@ def opening_frames(x: np.ndarray) -> int:
     quiet = np.flatnonzero(~sounding[first:end])
     end = first + int(quiet[0]) if quiet.size else end
     return first + _before_rise(v[first:] / top, gap_n, end - first)
+
+
+def resumed_onsets(x: np.ndarray, *, baseline_s: float = 3.0) -> np.ndarray | None:
+    """The onsets that tell a file's first onset resumes what went on before the file began: frames
+    of the later onsets like it (their level within ``OPENING_RISE`` of its own) whose whole
+    baseline window lies after it, up to ``RESUMED_S`` later; None where there are fewer than
+    ``RESUMED_MIN`` (a single hit, a long sound, a different sound after it).
+
+    An onset is a frame where ``x`` rises ``OPENING_RISE`` times above the least it read over the
+    ``GAP_S`` before (both with ``FLOOR`` added); its level is its largest over ``ATTACK_S`` from
+    there. A file cut inside dialogue or a volley opens on a word or a shot like those that follow,
+    and the baseline the rule reads at those is what it read before the file began; a boom out of
+    silence, a trailer's opening hit or drums seconds apart have no such likes, or low baselines at
+    them, and stay onsets. x : [shape=(n,)] per 20 ms frame, >= 0 (non-finite values count as 0).
+    """
+    v = np.where(np.isfinite(x), np.maximum(x, 0.0), 0.0)
+    top = float(v.max()) if v.size else 0.0
+    if top <= 0.0:
+        return None
+    v = v / top
+    gap_n, attack_n = int(round(GAP_S / FRAME_S)), int(round(ATTACK_S / FRAME_S))
+    base_n = max(1, int(round(baseline_s / FRAME_S)))
+    if v.size <= gap_n + base_n:
+        return None
+    least = sliding_window_view(v[:-1], gap_n).min(axis=1)  # over frames t - gap_n .. t - 1, t >= gap_n
+    rise = np.r_[np.zeros(gap_n, bool), v[gap_n:] + FLOOR > OPENING_RISE * (least + FLOOR)]
+    first_sound = int(np.argmax(v > FLOOR))
+    if 0 < first_sound < gap_n:  # a sound after a shorter silence rises too
+        rise[first_sound] = True
+    onsets = np.flatnonzero(rise & ~np.r_[False, rise[:-1]])
+    if onsets.size < RESUMED_MIN + 1:
+        return None
+    peak = trailing_max(np.r_[v, np.zeros(attack_n)], attack_n + 1)[attack_n:] + FLOOR  # largest from each frame on
+    h = int(onsets[0])
+    later = onsets[(onsets >= h + gap_n + base_n) & (onsets <= h + gap_n + base_n + int(round(RESUMED_S / FRAME_S)))]
+    like = later[(OPENING_RISE * peak[later] >= peak[h]) & (peak[later] <= OPENING_RISE * peak[h])]
+    return like if like.size >= RESUMED_MIN else None
 
 
 def _before_rise(v: np.ndarray, early_n: int, n: int) -> int:
