@@ -1,6 +1,7 @@
 """The audio decode's clock: a frame's timestamp that only rounds (a millisecond container) or
 strays for a frame (Vorbis at a block-size switch) moves no sample; a gap or an overlap that the
-frames after it keep is silence or a cut, so the sound stays on the picture's clock."""
+frames after it keep is silence or a cut, so the sound stays on the picture's clock; an AAC encoder's
+priming is left out where the container does not mark it (raw ADTS) as where it does."""
 
 from __future__ import annotations
 
@@ -109,3 +110,18 @@ def test_the_slack_is_one_tick_of_the_time_base_and_two_samples():
     assert timestamp_slack_s(Fraction(1, 1000), 44100) == pytest.approx(0.001 + 2 / 44100)
     assert timestamp_slack_s(Fraction(1, 48000), 48000) == pytest.approx(3 / 48000)
     assert timestamp_slack_s(None, 48000) == pytest.approx(2 / 48000)
+
+
+@pytest.mark.parametrize("suffix", [".aac", ".m4a"])
+def test_an_aac_encoders_priming_is_left_out_whether_or_not_the_container_marks_it(tmp_path, suffix):
+    """Raw ADTS has no field for the encoder's 1024 samples of priming (128 ms at 8 kHz, near-silence
+    with the sound's pre-echo): they are left out as MP4 leaves them out, so a sound under way at the
+    file's first sample is under way at the analysis's first sample in both."""
+    from autohaptics.testing import Scene, Tone, write_scene
+
+    scene = Scene(duration_s=2.0, audio=(Tone(0.0, 2.0, 200.0, level_dbfs=-12.0, ramp_s=0.0),), name="tone")
+    path = write_scene(tmp_path / f"tone{suffix}", scene, video=False, sample_rate=8000, channels=1)
+    x = read_audio(path)  # 48 kHz
+    rms = [float(np.sqrt(np.mean(x[i:i + 480] ** 2))) for i in range(0, 4800, 480)]  # the first 0.1 s, 10 ms at a time
+    assert min(rms[1:]) > 0.5 * max(rms), rms  # no 128 ms of priming before the tone
+    assert abs(len(x) / 48000 - 2.0) < 0.05

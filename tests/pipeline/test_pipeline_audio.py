@@ -111,9 +111,11 @@ def test_cli_generate_and_one_line_errors(tmp_path):
         assert len(r.stderr.strip().splitlines()) == 1
 
 
-# A score cut mid-way, and a boom out of silence, through each audio path: AAC in Matroska and in
-# .m4a, Opus through the resampler, FLAC at 96 kHz, 16-bit PCM 7.1.
+# A score cut mid-way, and a boom out of silence, through each audio path: AAC in Matroska, in .m4a
+# and raw ADTS at 8 kHz (its 128 ms of priming unmarked), Opus through the resampler, FLAC at 96 kHz,
+# 16-bit PCM 7.1.
 AUDIO_PATHS = {"aac_mkv_22k05_stereo": ("mkv", dict(audio_codec="aac", sample_rate=22050, channels=2)),
+               "aac_adts_8k_mono": ("aac", dict(sample_rate=8000, channels=1)),
                "aac_m4a_44k1_mono": ("m4a", dict(sample_rate=44100, channels=1)),
                "opus_mkv_24k_5.1": ("mkv", dict(audio_codec="libopus", sample_rate=24000, channels=6)),
                "flac_mkv_96k_stereo": ("mkv", dict(audio_codec="flac", sample_rate=96000, channels=2)),

@@ -42,7 +42,8 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
     with open_container(info.path) as c:
         stream = c.streams.audio[0]
         stream.thread_type = "AUTO"
-        clock = AudioClock(info.start_s, sr_in, timestamp_slack_s(stream.time_base, sr_in))
+        clock = AudioClock(info.start_s + unmarked_priming_s(c, stream), sr_in,
+                           timestamp_slack_s(stream.time_base, sr_in))
         mapping = None
         interleave = _Interleaver()
         held = pending = None  # pending: (time, samples) of the frame placed when the next one's time is known
@@ -64,6 +65,21 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
     if report.samples_out == 0:
         reason = f" ({report.first_error})" if report.first_error else ""
         raise MediaError(f"{info.path}: the audio stream holds no decodable samples{reason}")
+
+
+# AAC-LC encoders start with at least this many samples of priming (FFmpeg's and most others: 1024;
+# some 2048-2112). MP4 and Matroska mark it and FFmpeg's decoder leaves it out; a raw ADTS stream has
+# no field for it, and it decodes as near-silence with the sound's faint pre-echo (128 ms at 8 kHz).
+ADTS_PRIMING_SAMPLES = 1024
+
+
+def unmarked_priming_s(container, stream) -> float:
+    """The encoder's priming that ``stream`` decodes but no container field marks, s: the first
+    ``ADTS_PRIMING_SAMPLES`` of AAC in a raw ADTS file (format "aac"), else 0. Time 0 of the
+    analysis is where it ends, as for the same sound in MP4."""
+    if container.format.name == "aac" and stream.codec_context.name == "aac" and stream.sample_rate:
+        return ADTS_PRIMING_SAMPLES / float(stream.sample_rate)
+    return 0.0
 
 
 def timestamp_slack_s(time_base, sample_rate: int) -> float:

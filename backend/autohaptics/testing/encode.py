@@ -1,5 +1,5 @@
 """Encoding a :class:`~autohaptics.testing.scenes.Scene` with PyAV (container from the suffix: .mp4
-.mov .mkv .webm .avi .wav .m4a), streaming frame by frame and chunk by chunk: memory does not grow
+.mov .mkv .webm .avi .wav .m4a .aac), streaming frame by frame and chunk by chunk: memory does not grow
 with the duration, so 2-hour low-resolution files are fine (``long=True``: fastest settings).
 """
 
@@ -28,6 +28,7 @@ CONTAINERS: dict[str, tuple[str, str | None, str]] = {
     ".avi": ("avi", "mpeg4", "pcm_s16le"),
     ".wav": ("wav", None, "pcm_s16le"),
     ".m4a": ("ipod", None, "aac"),
+    ".aac": ("adts", None, "aac"),  # raw ADTS: no field for the encoder's priming
 }
 STANDARD_LAYOUTS = {1: "mono", 2: "stereo", 6: "5.1", 8: "7.1"}
 _OPUS_RATES = (8000, 12000, 16000, 24000, 48000)
@@ -44,7 +45,7 @@ def write_scene(path: str | os.PathLike, scene: Scene, *, width: int = 320, heig
                 bar_rgb: tuple[int, int, int] = (0, 0, 0)) -> Path:
     """Encode ``scene`` to ``path`` and return the path.
 
-    The container comes from the suffix (.mp4 .mov .mkv .webm .avi; audio-only .wav .m4a).
+    The container comes from the suffix (.mp4 .mov .mkv .webm .avi; audio-only .wav .m4a .aac).
     video_codec / audio_codec default per container (libx264 + aac; webm: libvpx + libopus;
     avi: mpeg4 + pcm_s16le; wav: pcm_s16le). ``video=False`` or ``audio=False`` writes a file without
     that stream. channels : 1, 2, 6 or 8 with ``channel_layout="auto"`` (mono, stereo, 5.1, 7.1),
