@@ -1,5 +1,6 @@
 """Re-encodes as the material matrix needs them: bars (pad), crop (fill), 10 bits, a variable frame
-rate, a stretch cut out of a film, and the sound alone mixed again with the picture's packets kept."""
+rate, a stretch cut out of a film, the sound alone mixed again with the picture's packets kept, and
+the sound at another level."""
 
 from __future__ import annotations
 
@@ -172,6 +173,18 @@ def test_copy_keeps_the_picture_packets_and_mixes_the_sound_again(src, tmp_path)
         pa = [bytes(p) for p in a.demux(a.streams.video[0]) if p.size]
         pb = [bytes(p) for p in b.demux(b.streams.video[0]) if p.size]
     assert pa == pb
+
+
+@pytest.mark.parametrize("gain_db, copy", [(-8.0, "copy"), (-8.0, None), (6.0, "copy")])
+def test_the_sound_can_be_quieter_or_louder_and_nothing_else_moves(src, tmp_path, gain_db, copy):
+    """The level row of the matrix: the same sound ``gain_db`` dB off the source's, at its own time."""
+    plain = read_audio(reencode(src, tmp_path / "plain.mkv", video_codec=copy, audio_codec="pcm_f32le"))
+    out = read_audio(reencode(src, tmp_path / f"gain{gain_db:g}.mkv", video_codec=copy, audio_codec="pcm_f32le",
+                              audio_gain_db=gain_db))
+    assert out.shape == plain.shape
+    level = 20 * np.log10(np.sqrt(np.mean(out ** 2)) / np.sqrt(np.mean(plain ** 2)))
+    assert level == pytest.approx(gain_db, abs=0.05)
+    np.testing.assert_allclose(out, plain * 10 ** (gain_db / 20), atol=2e-4)  # the tone at -12 dBFS: no clipping
 
 
 def test_bad_options_are_refused(src, tmp_path):

@@ -97,6 +97,7 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("sound stereo", "sound", ".mkv", options=_sound("stereo", 192_000)),
     Variant("sound 5.1", "sound", ".mkv", options=_sound("5.1", 384_000)),
     Variant("sound 7.1", "sound", ".mkv", options=_sound("7.1", 512_000)),
+    Variant("sound 8 dB quieter", "sound", ".mkv", options={**_sound("stereo", 192_000), "audio_gain_db": -8.0}),
     Variant("cut mid-score at 7.3 s", "start", options={"start_s": 7.3}, start_s=7.3),
     Variant("cut mid-score at 13.7 s", "start", options={"start_s": 13.7}, start_s=13.7),
     Variant("cut mid-score at 21.1 s", "start", options={"start_s": 21.1}, start_s=21.1),

@@ -48,7 +48,7 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
              fps: float | Fraction | None = None, conversion: str = "repeat", video_codec: str | None = None,
              audio_codec: str | None = None, video_bit_rate: int | None = None,
              audio_bit_rate: int | None = None, video_options: dict[str, str] | None = None,
-             audio_layout: str | None = None, fit: str = "stretch", pix_fmt: str = "yuv420p",
+             audio_layout: str | None = None, audio_gain_db: float = 0.0, fit: str = "stretch", pix_fmt: str = "yuv420p",
              start_s: float = 0.0, duration_s: float | None = None) -> Path:
     """Re-encode ``src`` into ``dst`` (container from the suffix, codecs default per container as in
     :func:`~autohaptics.testing.encode.write_scene`) and return ``dst``.
@@ -58,6 +58,8 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     a 24 fps source and 30 fps out). video_bit_rate, audio_bit_rate : bit/s (default: the encoder's).
     video_options : the video encoder's own options (e.g. ``{"bf": "0"}``: no B-frames).
     audio_layout : the output's channel layout (e.g. "stereo": FFmpeg's downmix; default the source's).
+    audio_gain_db : the sound's level against the source's, dB (a quieter or louder mix; samples past
+    full scale are clipped where the source's format is an integer one).
     video_codec "copy" : the video packets as they are (only the sound changes; no other video option).
     fit : how the picture meets ``width`` x ``height``: "stretch" (scaled to it), "pad" (scaled to fit
     inside, centred on black: letterbox, pillarbox or windowbox) or "fill" (scaled to cover, the
@@ -95,7 +97,8 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     if conversion == "pulldown" and (round(float(src_rate), 2) != 24 or round(float(rate), 2) != 30):
         raise ParameterError(f"3:2 pulldown turns 24 fps into 30 fps, got {float(src_rate):g} -> {float(rate):g}")
     if video_codec == "copy":
-        return _copy_video(src, dst, fmt, audio_codec or a_default, audio_bit_rate, audio_layout, info)
+        return _copy_video(src, dst, fmt, audio_codec or a_default, audio_bit_rate, audio_layout, info,
+                           gain_db=audio_gain_db)
     with media_output(dst, f"to re-encode {src}") as tmp:
         with av.open(str(src)) as inp, av.open(str(tmp), mode="w", format=fmt) as out:
             vs = out.add_stream(video_codec or v_default, rate=rate)
@@ -122,12 +125,13 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
                 out.mux(p)
             if audio is not None:
                 with av.open(str(src)) as again:
-                    _copy_audio(again.streams.audio[0], out, *audio, origin=origin, start_s=float(start_s), end_s=end_s)
+                    _copy_audio(again.streams.audio[0], out, *audio, origin=origin, start_s=float(start_s), end_s=end_s,
+                                gain_db=audio_gain_db)
     return dst
 
 
 def _copy_video(src, dst: Path, fmt: str, audio_codec: str, audio_bit_rate: int | None, audio_layout: str | None,
-                info) -> Path:
+                info, *, gain_db: float = 0.0) -> Path:
     """``src``'s video packets copied into ``dst``, its sound decoded and encoded again."""
     with media_output(dst, f"to re-encode the sound of {src}") as tmp:
         with av.open(str(src)) as inp, av.open(str(tmp), mode="w", format=fmt) as out:
@@ -141,7 +145,7 @@ def _copy_video(src, dst: Path, fmt: str, audio_codec: str, audio_bit_rate: int 
                 out.mux(packet)
             if audio is not None:
                 with av.open(str(src)) as again:
-                    _copy_audio(again.streams.audio[0], out, *audio, origin=info.start_s)
+                    _copy_audio(again.streams.audio[0], out, *audio, origin=info.start_s, gain_db=gain_db)
     return dst
 
 
@@ -279,18 +283,18 @@ def _audio_stream(inp, out, codec: str, bit_rate: int | None, layout: str | None
 
 
 def _copy_audio(a_in, out, a_out, resampler, *, origin: float = 0.0, start_s: float = 0.0,
-                end_s: float | None = None) -> None:
+                end_s: float | None = None, gain_db: float = 0.0) -> None:
     """Decode the audio stream ``a_in`` and encode its samples from ``start_s`` to ``end_s`` into
     ``a_out`` of ``out``, each at the time the analysis reads it at (``media.audio.AudioClock``),
     counted from ``origin`` (s): a gap before a frame, such as a Vorbis stream's first sound 23 ms
-    in, is silence in the output too."""
+    in, is silence in the output too. gain_db : the level against the source's (:func:`reencode`)."""
     rate = a_in.codec_context.sample_rate
     clock = AudioClock(origin, rate, timestamp_slack_s(a_in.time_base, rate))
     n, pending = 0, None
     for frame in a_in.container.decode(a_in):
         if pending is not None:
             n = _place_audio(clock, pending, frame.time, out, a_out, resampler, n, start_s, end_s)
-        pending = frame
+        pending = _scaled(frame, 10.0 ** (float(gain_db) / 20.0)) if gain_db else frame
         if end_s is not None and frame.time is not None and frame.time - origin > end_s + 1.0:
             break
     if pending is not None:
@@ -330,6 +334,18 @@ def _encode_audio(frames, out, a_out, n: int) -> int:
         for p in a_out.encode(r):
             out.mux(p)
     return n
+
+
+def _scaled(frame: av.AudioFrame, gain: float) -> av.AudioFrame:
+    """``frame``'s samples times ``gain``, in its format, layout, rate and time (an integer format clipped)."""
+    x = frame.to_ndarray()
+    y = x.astype(np.float64) * gain
+    if np.issubdtype(x.dtype, np.integer):
+        info = np.iinfo(x.dtype)
+        y = np.clip(np.rint(y), info.min, info.max)
+    out = av.AudioFrame.from_ndarray(y.astype(x.dtype), format=frame.format.name, layout=frame.layout.name)
+    out.sample_rate, out.pts, out.time_base = frame.sample_rate, frame.pts, frame.time_base
+    return out
 
 
 def _silent(frame: av.AudioFrame, n: int) -> av.AudioFrame:
