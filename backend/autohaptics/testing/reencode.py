@@ -48,8 +48,8 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
              fps: float | Fraction | None = None, conversion: str = "repeat", video_codec: str | None = None,
              audio_codec: str | None = None, video_bit_rate: int | None = None,
              audio_bit_rate: int | None = None, video_options: dict[str, str] | None = None,
-             audio_layout: str | None = None, audio_gain_db: float = 0.0, fit: str = "stretch", pix_fmt: str = "yuv420p",
-             start_s: float = 0.0, duration_s: float | None = None) -> Path:
+             audio_layout: str | None = None, audio_gain_db: float = 0.0, fit: str = "stretch",
+             pix_fmt: str = "yuv420p", start_s: float = 0.0, duration_s: float | None = None) -> Path:
     """Re-encode ``src`` into ``dst`` (container from the suffix, codecs default per container as in
     :func:`~autohaptics.testing.encode.write_scene`) and return ``dst``.
 
@@ -79,13 +79,7 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     if suffix not in CONTAINERS or CONTAINERS[suffix][1] is None:
         raise ParameterError(f"{dst}: re-encoding needs a video container, one of "
                              f"{sorted(k for k, v in CONTAINERS.items() if v[1])}")
-    if conversion not in CONVERSIONS:
-        raise ParameterError(f"conversion must be one of {CONVERSIONS}, got {conversion!r}")
-    if fit not in FITS or pix_fmt not in PIXEL_FORMATS:
-        raise ParameterError(f"fit must be one of {FITS} and pix_fmt one of {PIXEL_FORMATS}, got {fit!r}, {pix_fmt!r}")
-    end_s = None if duration_s is None else float(start_s) + float(duration_s)
-    if not (float(start_s) >= 0 and (end_s is None or end_s > start_s)):
-        raise ParameterError(f"the kept stretch needs start_s >= 0 and duration_s > 0, got {start_s!r}, {duration_s!r}")
+    end_s = _checked_options(conversion, fit, pix_fmt, start_s, duration_s)
     fmt, v_default, a_default = CONTAINERS[suffix]
     w = int(width or info.video.display_size[0])
     h = int(height or info.video.display_size[1])
@@ -128,6 +122,19 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
                     _copy_audio(again.streams.audio[0], out, *audio, origin=origin, start_s=float(start_s), end_s=end_s,
                                 gain_db=audio_gain_db)
     return dst
+
+
+def _checked_options(conversion: str, fit: str, pix_fmt: str, start_s: float, duration_s: float | None) -> float | None:
+    """The end (s) of the stretch :func:`reencode` keeps (None: the source's end); ParameterError for an
+    unknown conversion, fit or pixel format, or a stretch that is not one."""
+    if conversion not in CONVERSIONS:
+        raise ParameterError(f"conversion must be one of {CONVERSIONS}, got {conversion!r}")
+    if fit not in FITS or pix_fmt not in PIXEL_FORMATS:
+        raise ParameterError(f"fit must be one of {FITS} and pix_fmt one of {PIXEL_FORMATS}, got {fit!r}, {pix_fmt!r}")
+    end_s = None if duration_s is None else float(start_s) + float(duration_s)
+    if not (float(start_s) >= 0 and (end_s is None or end_s > start_s)):
+        raise ParameterError(f"the kept stretch needs start_s >= 0 and duration_s > 0, got {start_s!r}, {duration_s!r}")
+    return end_s
 
 
 def _copy_video(src, dst: Path, fmt: str, audio_codec: str, audio_bit_rate: int | None, audio_layout: str | None,
