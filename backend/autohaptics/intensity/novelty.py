@@ -11,10 +11,9 @@ seconds; an impact, an explosion, a booming hit or a rising rumble lifts it abov
 - the baseline is the mean envelope over ``baseline_s`` seconds ending ``GAP_S`` (0.1 s) before
   the frame. A file whose sound is under way within its first ``GAP_S`` (cut mid-score) is taken
   to have had it before it began, at its level over its opening (:func:`opening_frames`), so its
-  start is no event; after an opening silence, the file's own frames are the baseline, so a
-  sound after the silence is an onset however early it comes, unless the file's first onset has
-  likes seconds later (:func:`resumed_onsets`: a cut in a pause of the dialogue, inside a volley):
-  the baseline read at them is then the level before the file began;
+  start is no event; after an opening silence a sound is an onset however early it comes, unless
+  the file's first onset has likes seconds later (:func:`resumed_onsets`: a cut in a pause of the
+  dialogue), whose baseline is then the level before the file began;
 - novelty = log2((value + ``FLOOR``) / (baseline + ``FLOOR``)) / ``FULL_OCTAVES`` (shares of the
   film's top), at least 0: 0 at or below the baseline, 1 at a rise of 2^0.5 (+5 phon for loudness)
   well above ``FLOOR``; less among values near it, where a codec's few-percent changes would decide.

@@ -350,8 +350,8 @@ def _scaled(frame: av.AudioFrame, gain: float) -> av.AudioFrame:
     if np.issubdtype(x.dtype, np.integer):
         info = np.iinfo(x.dtype)
         y = np.clip(np.rint(y), info.min, info.max)
-    out = av.AudioFrame.from_ndarray(y.astype(x.dtype), format=frame.format.name, layout=frame.layout.name)
-    out.sample_rate, out.pts, out.time_base = frame.sample_rate, frame.pts, frame.time_base
+    out = _like(frame, y.astype(x.dtype))
+    out.pts, out.time_base = frame.pts, frame.time_base
     return out
 
 
@@ -359,15 +359,18 @@ def _silent(frame: av.AudioFrame, n: int) -> av.AudioFrame:
     """``n`` samples of silence in ``frame``'s format, layout and rate."""
     x = frame.to_ndarray()
     shape = (x.shape[0], n) if frame.format.is_planar else (1, n * len(frame.layout.channels))
-    out = av.AudioFrame.from_ndarray(np.zeros(shape, x.dtype), format=frame.format.name, layout=frame.layout.name)
-    out.sample_rate = frame.sample_rate
-    return out
+    return _like(frame, np.zeros(shape, x.dtype))
 
 
 def _trimmed(frame: av.AudioFrame, first: int, last: int) -> av.AudioFrame:
     """Samples ``first:last`` of ``frame`` as a new frame of the same format, layout and rate."""
     x = frame.to_ndarray()
     x = x[:, first:last] if frame.format.is_planar else x[:, first * len(frame.layout.channels):last * len(frame.layout.channels)]
-    out = av.AudioFrame.from_ndarray(np.ascontiguousarray(x), format=frame.format.name, layout=frame.layout.name)
+    return _like(frame, np.ascontiguousarray(x))
+
+
+def _like(frame: av.AudioFrame, x: np.ndarray) -> av.AudioFrame:
+    """The samples ``x`` (``frame.to_ndarray()``'s shape convention) as a frame of ``frame``'s format, layout and rate."""
+    out = av.AudioFrame.from_ndarray(x, format=frame.format.name, layout=frame.layout.name)
     out.sample_rate = frame.sample_rate
     return out
