@@ -1,6 +1,6 @@
 """Re-encodes as the material matrix needs them: bars (pad), crop (fill), 10 bits, a variable frame
-rate, a stretch cut out of a film, the sound alone mixed again with the picture's packets kept, and
-the sound at another level."""
+rate, a stretch cut out of a film, the sound alone mixed again with the picture's packets kept, the
+sound at another level, and a surround sound mixed to stereo at its own level."""
 
 from __future__ import annotations
 
@@ -185,6 +185,19 @@ def test_the_sound_can_be_quieter_or_louder_and_nothing_else_moves(src, tmp_path
     level = 20 * np.log10(np.sqrt(np.mean(out ** 2)) / np.sqrt(np.mean(plain ** 2)))
     assert level == pytest.approx(gain_db, abs=0.05)
     np.testing.assert_allclose(out, plain * 10 ** (gain_db / 20), atol=2e-4)  # the tone at -12 dBFS: no clipping
+
+
+@pytest.mark.parametrize("codec, suffix", [("libopus", ".webm"), ("aac", ".mp4")])
+def test_a_surround_sound_mixed_to_stereo_keeps_ffmpegs_float_level(tmp_path, codec, suffix):
+    """As ``ffmpeg -ac 2`` does, the encoder gets float samples where it takes them (libopus takes
+    16-bit ones too: FFmpeg then normalises the 5.1 -> stereo downmix against clipping, -7.7 dB), so
+    the screener's sound reads at its source's level."""
+    film = synth.write_scene(tmp_path / "six.mkv", SCENE, width=64, height=36, fps=25, channels=6)
+    out = reencode(film, tmp_path / f"two{suffix}", audio_codec=codec, audio_layout="stereo")
+    assert probe(out).audio.channels == 2
+    a, b = read_audio(film), read_audio(out)
+    level = 20 * np.log10(np.sqrt(np.mean(b ** 2)) / np.sqrt(np.mean(a ** 2)))
+    assert level == pytest.approx(0.0, abs=0.5), level
 
 
 def test_bad_options_are_refused(src, tmp_path):

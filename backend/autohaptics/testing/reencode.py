@@ -284,9 +284,21 @@ def _audio_stream(inp, out, codec: str, bit_rate: int | None, layout: str | None
     rate = 48000 if codec == "libopus" else a_in.codec_context.sample_rate
     layout = layout or a_in.codec_context.layout.name
     a_out = out.add_stream(codec, rate=rate, layout=layout)
+    a_out.codec_context.format = _sample_format(a_out.codec_context.codec.audio_formats, a_in.codec_context.format)
     if bit_rate:
         a_out.bit_rate = int(bit_rate)
     return a_out, av.AudioResampler(format=a_out.codec_context.format.name, layout=layout, rate=rate)
+
+
+def _sample_format(offered, source):
+    """The encoder's sample format for ``source``'s samples, as FFmpeg's command line picks it: the
+    narrowest of ``offered`` at least as wide as the source's (the source's planarity first), else the
+    widest. Why: a downmix into an integer format is normalised against clipping (-7.7 dB for 5.1 ->
+    stereo), which a float one is not; ``ffmpeg -ac 2 -c:a libopus`` hands the encoder floats."""
+    wide = [f for f in offered if f.bytes >= source.bytes]
+    if not wide:
+        return max(offered, key=lambda f: f.bytes)
+    return min(wide, key=lambda f: (f.bytes, f.is_planar != source.is_planar, f.name.startswith(("s", "u"))))
 
 
 def _copy_audio(a_in, out, a_out, resampler, *, origin: float = 0.0, start_s: float = 0.0,
