@@ -95,7 +95,7 @@ def _document(info: media.MediaInfo, params: af.AudioFeatureParams, feats: af.Au
         "params": dataclasses.asdict(params),
         "decode": {"sample_rate": ANALYSIS_SAMPLE_RATE, "samples": feats.n_samples, "lfe_gain_db": args.lfe_gain_db,
                    "main_channels": report.main_channels, "lfe_channel": report.lfe_channel,
-                   "nonfinite_samples_repaired": report.nonfinite_samples, "decode_errors": report.decode_errors},
+                   "downmix_weights": report.downmix_weights, "nonfinite_samples_repaired": report.nonfinite_samples, "decode_errors": report.decode_errors},
         "units": _UNITS,
         "frames": {"step_s": FRAME_S, "n": feats.n_frames, "t_s": _floats(feats.t_s),
                    **{name: _floats(getattr(feats, name)) for name in af.FEATURE_NAMES}},

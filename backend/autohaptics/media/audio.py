@@ -2,11 +2,17 @@
 full scale (calibration to pascal is the loudness stage's parameter); memory stays constant in the
 length of the film.
 
-Downmix (ALGORITHM.md section 2): the MEAN of the main channels (a sound panned everywhere keeps its
-level) plus the LFE channel with its cinema gain of +10 dB, also divided by the number of main
-channels: ``mono = (sum(main) + 10**(lfe_gain_db/20) * lfe) / n_main``. Channel roles come from the
-layout; 6 or 8 unlabelled channels are read in FFmpeg's default 5.1 / 7.1 order (LFE fourth); any
-other unlabelled layout has no LFE. Non-finite samples are replaced by 0 and counted.
+Downmix (ALGORITHM.md section 2): mono is the MEAN of the two channels of the stereo downmix that
+FFmpeg makes by default (ITU-R BS.775: centre and surrounds at -3 dB), plus the LFE channel at its
+cinema gain of +10 dB over one of the n main channels: weights front L/R 1/2, centre 1/sqrt(2), back
+centre 1/2, surrounds (sides, backs, any other role) 1/(2 sqrt(2)) (:data:`DOWNMIX_WEIGHTS`), LFE
+``10**(lfe_gain_db/20) / n_main``. Why: a film's stereo version and every screener made with FFmpeg
+are that downmix, so a 5.1 film and its stereo copy read as the same sound at the same level (the
+equal mean of the channels read a stereo sound upmixed to 5.1 8 dB quieter). The LFE keeps the
+equal mean's share: the stereo downmix leaves it out, and a larger share sets a 5.1 film further from
+its stereo copy. Mono and stereo files are the mean of their channels. Channel roles come from the
+layout; 6 or 8 unlabelled channels are read in FFmpeg's default 5.1 / 7.1 order; any other unlabelled
+layout is the equal mean of its channels, no LFE. Non-finite samples are replaced by 0 and counted.
 """
 
 from __future__ import annotations
@@ -53,7 +59,9 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
             if mapping is None:
                 mapping = _channel_roles(frame.layout, x.shape[0])
                 report.main_channels, report.lfe_channel = mapping
-                held = _Held(max(1, int(_DOWNMIX_S * sr_in)), mapping, lfe_gain, report)
+                weights = downmix_weights(frame.layout, x.shape[0], lfe_gain)
+                report.downmix_weights = [round(float(w), 6) for w in weights]
+                held = _Held(max(1, int(_DOWNMIX_S * sr_in)), weights, report)
             if pending is not None and _place(clock, *pending, frame_time, held, out):
                 yield from out.drain(False)
             pending = (frame_time, x)
@@ -140,8 +148,8 @@ class _Held:
     """Decoded samples waiting for the downmix: [shape=(channels, n)] arrays, downmixed together
     per run of one sample format and channel count."""
 
-    def __init__(self, limit: int, mapping: tuple[list[int], int | None], lfe_gain: float, report: AudioReport):
-        self.limit, self.mapping, self.lfe_gain, self.report = limit, mapping, lfe_gain, report
+    def __init__(self, limit: int, weights: np.ndarray, report: AudioReport):
+        self.limit, self.weights, self.report = limit, weights, report
         self.parts: list[np.ndarray] = []
         self.mono: list[np.ndarray] = []  # runs already downmixed (the format changed after them)
         self.n = 0
@@ -157,7 +165,7 @@ class _Held:
     def _run(self) -> np.ndarray:
         x = self.parts[0] if len(self.parts) == 1 else np.concatenate(self.parts, axis=1)
         self.parts = []
-        return _downmix(x if x.dtype.kind == "f" else _to_float(x), self.mapping, self.lfe_gain, self.report)
+        return _downmix(x if x.dtype.kind == "f" else _to_float(x), self.weights, self.report)
 
     def downmix(self) -> np.ndarray:
         """The mono signal of every held sample, in order (empty when none are held)."""
@@ -166,19 +174,18 @@ class _Held:
         return np.concatenate(out) if len(out) > 1 else (out[0] if out else np.zeros(0, np.float32))
 
 
-def _downmix(x: np.ndarray, mapping: tuple[list[int], int | None], lfe_gain: float,
-             report: AudioReport) -> np.ndarray:
-    """The mono analysis signal of float samples [shape=(channels, n)] in digital full scale (module
-    docstring), summed in float64; non-finite samples become 0 and are counted in ``report``."""
+def _downmix(x: np.ndarray, weights: np.ndarray, report: AudioReport) -> np.ndarray:
+    """The mono analysis signal of float samples [shape=(channels, n)] in digital full scale:
+    ``weights`` [shape=(channels,)] (:func:`downmix_weights`) times the channels, summed in float64;
+    non-finite samples become 0 and are counted in ``report``."""
     bad = ~np.isfinite(x)
     if bad.any():
         report.nonfinite_samples += int(bad.sum())
         x = np.where(bad, 0.0, x)
-    main, lfe = mapping
-    mono = x[main].sum(axis=0, dtype=np.float64)
-    if lfe is not None:
-        mono += lfe_gain * x[lfe].astype(np.float64)
-    return (mono / max(1, len(main))).astype(np.float32)
+    mono = np.zeros(x.shape[1], np.float64)
+    for ch in np.flatnonzero(weights):
+        mono += weights[ch] * x[ch].astype(np.float64)
+    return mono.astype(np.float32)
 
 
 class _Chunks:
@@ -298,23 +305,50 @@ def _to_float(x: np.ndarray) -> np.ndarray:
 
 # FFmpeg channel names for the LFE channel.
 _LFE_NAMES = {"LFE", "LFE2", "LOW_FREQUENCY", "LOW_FREQUENCY_2"}
+_UNLABELLED = {6: "5.1", 8: "7.1"}  # FFmpeg's default order for so many channels without a layout
+# A channel's weight in the mean of FFmpeg's default stereo downmix (module docstring); any other role
+# (sides, backs, tops, wides) counts as a surround.
+FRONT_WEIGHT = 0.5
+DOWNMIX_WEIGHTS = {"FL": FRONT_WEIGHT, "FR": FRONT_WEIGHT, "FLC": FRONT_WEIGHT, "FRC": FRONT_WEIGHT,
+                   "FC": 0.5 ** 0.5, "BC": 0.5}
+SURROUND_WEIGHT = 0.5 ** 1.5
+
+
+def _channel_names(layout, n: int) -> list[str] | None:
+    """The role names of a decoded layout's ``n`` channels, upper case; None where any is unknown
+    (6 or 8 such channels: FFmpeg's default 5.1 / 7.1 order)."""
+    names = [str(ch.name or "").upper() for ch in layout.channels][:n]
+    if len(names) == n and all(nm and nm not in ("NONE", "NA", "UNKNOWN", "UNUSED") for nm in names):
+        return names
+    if n in _UNLABELLED:
+        return [ch.name.upper() for ch in av.AudioLayout(_UNLABELLED[n]).channels]
+    return None
 
 
 def _channel_roles(layout, n: int) -> tuple[list[int], int | None]:
     """(main channel indices, LFE index or None) for a decoded layout of ``n`` channels."""
-    names = [ch.name for ch in layout.channels][:n]
-    known = [nm for nm in names if nm and nm.upper() not in ("NONE", "NA", "UNKNOWN", "UNUSED")]
-    if len(known) == n:
-        lfe = [i for i, nm in enumerate(names) if nm.upper() in _LFE_NAMES]
-    elif n in (6, 8):
-        lfe = [3]  # FFmpeg's default 5.1 / 7.1 order: FL FR FC LFE ...
-    else:
-        lfe = []
+    names = _channel_names(layout, n) or [""] * n
+    lfe = [i for i, nm in enumerate(names) if nm in _LFE_NAMES]
     lfe_idx = lfe[0] if lfe else None
     main = [i for i in range(n) if i != lfe_idx]
     if not main:  # a lone LFE channel is the whole signal
         return [lfe_idx], None
     return main, lfe_idx
+
+
+def downmix_weights(layout, n: int, lfe_gain: float) -> np.ndarray:
+    """Each of a decoded layout's ``n`` channels' weight in the mono analysis signal (module
+    docstring), float64 [shape=(n,)], >= 0. lfe_gain : the LFE's linear gain (10 dB: 3.16)."""
+    main, lfe = _channel_roles(layout, n)
+    names = _channel_names(layout, n)
+    w = np.zeros(n)
+    if names is None or len(main) <= 2:  # no roles, mono or stereo: the equal mean
+        w[main] = 1.0 / len(main)
+    else:
+        w[main] = [DOWNMIX_WEIGHTS.get(names[i], SURROUND_WEIGHT) for i in main]
+    if lfe is not None:  # the equal mean's share (module docstring)
+        w[lfe] = lfe_gain / len(main)
+    return w
 
 
 def _frames_to_array(frames) -> np.ndarray:

@@ -98,6 +98,7 @@ class AudioReport:
     first_error: str | None = None
     lfe_channel: int | None = None
     main_channels: list[int] = field(default_factory=list)
+    downmix_weights: list[float] = field(default_factory=list)  # each channel's weight in the mono signal
 
     @property
     def duration_s(self) -> float:

@@ -268,6 +268,6 @@ def _audio_pass(info: media.MediaInfo, params: GenerateParams, n: int, stats: di
         "seconds": time.perf_counter() - t0, "frames": int(n_frames), "decoded_s": round(report.duration_s, 4),
         "nonfinite_samples_repaired": report.nonfinite_samples, "decode_errors": report.decode_errors,
         "downmix": {"main_channels": report.main_channels, "lfe_channel": report.lfe_channel,
-                    "lfe_gain_db": params.lfe_gain_db},
+                    "weights": report.downmix_weights, "lfe_gain_db": params.lfe_gain_db},
     }
     return out
