@@ -47,6 +47,25 @@ def test_a_25_to_30_conversion_is_a_cadence_and_every_pair_reads_its_picture_ste
     assert cad.found == sum(1 for a, b in zip(pics, pics[1:]) if a == b) - 1  # all but the last, unjudged
 
 
+def test_a_film_that_repeats_pictures_of_its_own_keeps_its_cadence_at_30_fps():
+    """A 24 fps film made 25 fps by repeating one picture a second, then shown at 30 fps: twice a
+    second the film's own repeat stands beside one of the conversion's. The cadence holds through
+    them (before: each broke it for two periods, and the pairs read 1.2 x for 0.4-0.6 s a second)."""
+    film = shown(24, 25, 100)  # 4 s at 25 fps: the 24 fps picture each of its frames shows
+    frames = [j * 25 // 30 for j in range(120)]  # the 25 fps frame each 30 fps frame shows
+    cad = Cadence(1 / 30, 0.35)
+    timed = 0
+    for j, f in enumerate(frames):
+        cad.add(j / 30, picture(film[f]))
+        if j >= 40:
+            assert cad.period() == 6, j
+            pictures = {film[g] for g in frames[j - 2:j + 1]}
+            if frames[j] - frames[j - 2] == 2 and len(pictures) == 3:  # two steps, none the film's own repeat
+                assert cad.pair_time((j - 2) / 30, j / 30) == pytest.approx(2 / 25), j
+                timed += 1
+    assert timed >= 40
+
+
 def test_a_held_pair_is_timed_by_its_successor_as_judged():
     pics = shown(24, 30, 14)  # repeats at frames 1 (no frame before it to judge by), 6 and 11
     cad = Cadence(1 / 30, 0.35)

@@ -4,8 +4,10 @@ A 24 or 25 fps film shown at 30 or 50 fps repeats a picture at a fixed period (2
 in 5; 25 -> 30: one in 6; 25 -> 50: one in 2). Two frames two apart then hold one picture step or
 two, and motion divided by the stream's time alternates 0.6 / 1.2 x. :class:`Cadence` finds the
 repeats from each decoded frame's difference to the frame before (a coarse luma sample): a frame
-that differs far less than both its neighbours do is a repeat. A pair's time leaves out the
-intervals that end on a repeat, and three repeats at one period (a cadence) make each picture
+that differs far less than both its neighbours do is a repeat (where the cadence places one beside
+a still frame, far less than the other neighbour: a 24 fps film made 25 fps by repeating a picture a
+second, then shown at 30, puts two repeats side by side). A pair's time leaves out the intervals
+that end on a repeat, and three repeats at one period (a cadence) make each picture
 step last period / (period - 1) intervals: a pair of a 25 -> 30 fps conversion then reads its
 steps over 40 ms each, whether it takes in a repeat or not, and a stretch animated on twos reads
 as a 12 fps picture, as pairs of consecutive frames read it. Until three repeats are seen a pair
@@ -60,9 +62,15 @@ class Cadence:
         self._diffs.append(d)
         while self._frames[0][1] < time_s - _HISTORY_S:
             self._frames.popleft()
-        if len(self._diffs) == 3 and None not in self._diffs and min(self._diffs[0], self._diffs[2]) > FLOOR:
+        if len(self._diffs) == 3 and None not in self._diffs:
             j = i - 1  # the middle frame, judged now that both its neighbours are known
-            repeat = self._diffs[1] < self.ratio * min(self._diffs[0], self._diffs[2])
+            d0, d1, d2 = self._diffs
+            if min(d0, d2) > FLOOR:
+                repeat = d1 < self.ratio * min(d0, d2)
+            elif max(d0, d2) > FLOOR and self.predicted(j):  # a repeat of the film's own beside it
+                repeat = d1 < self.ratio * max(d0, d2)
+            else:
+                return
             if len(self._frames) > 1:
                 self._frames[-2][3] = repeat
             if repeat:
