@@ -182,10 +182,8 @@ def _downmix(x: np.ndarray, weights: np.ndarray, report: AudioReport) -> np.ndar
     if bad.any():
         report.nonfinite_samples += int(bad.sum())
         x = np.where(bad, 0.0, x)
-    mono = np.zeros(x.shape[1], np.float64)
-    for ch in np.flatnonzero(weights):
-        mono += weights[ch] * x[ch].astype(np.float64)
-    return mono.astype(np.float32)
+    used = np.flatnonzero(weights)
+    return (weights[used] @ x[used].astype(np.float64)).astype(np.float32)
 
 
 class _Chunks:
