@@ -18,7 +18,8 @@ LFE_GAIN = 10.0 ** 0.5  # +10 dB, read_audio's default
 
 def _signals(n_channels: int, seconds: float = 0.5) -> np.ndarray:
     """A different noise in each channel, float32 [shape=(channels, n)]."""
-    return (0.1 * np.random.default_rng(n_channels).standard_normal((n_channels, int(seconds * RATE)))).astype(np.float32)
+    rng = np.random.default_rng(n_channels)
+    return (0.1 * rng.standard_normal((n_channels, int(seconds * RATE)))).astype(np.float32)
 
 
 def _write(path, x: np.ndarray, layout: str) -> None:

@@ -292,8 +292,8 @@ def _audio_stream(inp, out, codec: str, bit_rate: int | None, layout: str | None
 
 def _sample_format(offered, source):
     """The encoder's sample format for ``source``'s samples, as FFmpeg's command line picks it: the
-    narrowest of ``offered`` at least as wide as the source's (the source's planarity first), else the
-    widest. Why: a downmix into an integer format is normalised against clipping (-7.7 dB for 5.1 ->
+    narrowest of ``offered`` at least as wide as the source's (then the source's planarity, then
+    float), else the widest. Why: a downmix into an integer format is normalised against clipping (-7.7 dB for 5.1 ->
     stereo), which a float one is not; ``ffmpeg -ac 2 -c:a libopus`` hands the encoder floats."""
     wide = [f for f in offered if f.bytes >= source.bytes]
     if not wide:
