@@ -96,7 +96,9 @@ class GenerateParams(Record):
         intensity), "visual" (the salient area's actuators, no audio), "random" (seeded random events).
     tracks : which tracks to compute; a track left out is still present, off (zeros / neutral).
     seed : random generator seed of the "random" mode.
-    lfe_gain_db : gain of the LFE channel in the downmix, dB (cinema playback: +10).
+    lfe_gain_db : gain of the LFE channel in the downmix, dB, over one main channel's equal share
+        (cinema playback: +10); the main channels are read as FFmpeg's default stereo downmix of them
+        (``media.audio``), so a 5.1 film and its stereo copy are the same sound at the same level.
     allow_truncated : accept a file whose streams decode shorter than declared (the missing part
         is silence); otherwise such a file is an error.
     """

@@ -185,6 +185,29 @@ def test_a_rise_far_below_the_films_top_counts_for_less():
     assert out[620:625].min() > max(it.rule.DEFAULT_THRESHOLDS.values()), out[620:625]
 
 
+@pytest.mark.parametrize("loud_rise", [1.0, 1.01, 1.02, 1.04, 1.1, 1.3])
+def test_a_brightening_counts_as_far_as_the_loudness_rises_with_it(loud_rise):
+    """Sharpness doubles while the loudness rises by ``loud_rise``: its novelty is kept in proportion
+    to the loudness's up to ``SHARPNESS_RISE``, in full above it; none where the loudness does not rise
+    (before: in full from any rise at all, so a level change of a few percent switched it)."""
+    from autohaptics.intensity.novelty import SHARPNESS_RISE, feature_novelty
+
+    def step(a, b):
+        return np.r_[np.full(300, a), np.full(30, b)]
+
+    feats = {"sharpness": step(1.0, 2.0), "loudness": step(10.0, 10.0 * loud_rise),
+             "booming": step(1.0, 1.0), "low_energy": step(1.0, 1.0)}
+    out = feature_novelty(feats)
+    alone = feature_novelty({**feats, "loudness": step(10.0, 1e3)})["sharpness"]  # the loudness's gate wide open
+    share = np.clip(out["loudness"][310:] / SHARPNESS_RISE, 0.0, 1.0)
+    np.testing.assert_allclose(out["sharpness"][310:], alone[310:] * share)
+    assert alone[310:].min() > 0.5  # a doubling: over the threshold by itself
+    weak = out["loudness"][310:] < SHARPNESS_RISE
+    assert (out["sharpness"][310:][weak] < alone[310:][weak]).all()
+    np.testing.assert_array_equal(out["sharpness"][310:][~weak], alone[310:][~weak])
+    assert weak.all() == (loud_rise < 1.04) and (loud_rise > 1.0 or out["sharpness"].max() == 0.0)
+
+
 def _pause_cuts(scene: Scene, count: int, *, lead_s: float = 0.25) -> list[float]:
     """Times (s) ``lead_s`` before the first ``count`` words of ``scene`` after 1.3 s that follow at
     least 0.3 s without sound: a file cut there opens on silence, its next word ``lead_s`` in."""

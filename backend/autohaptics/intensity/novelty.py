@@ -19,9 +19,9 @@ seconds; an impact, an explosion, a booming hit or a rising rumble lifts it abov
   well above ``FLOOR``; less among values near it, where a codec's few-percent changes would decide.
   :func:`novelty` clips it at 1 for display; the rule compares it unclipped (a density ranks by it).
 
-Sharpness describes a sound's colour, not its level: :func:`feature_novelty` keeps its novelty
-only where the loudness rises above its baseline too (a hiss or a consonant between louder vowels
-is brighter than what came before, but not an event).
+Sharpness is a sound's colour: :func:`feature_novelty` keeps its novelty where the loudness rises
+too (a hiss or a consonant between louder vowels is no event), in full from ``SHARPNESS_RISE`` and
+in proportion below it (a rise that the codec or the level decides switches nothing on and off).
 """
 
 from __future__ import annotations
@@ -42,13 +42,15 @@ EXPONENTS = {"sharpness": 1.0, "booming": 1.0, "low_energy": 0.3, "loudness": 1.
 FLOOR = 3e-2  # of the feature's maximum over the film, added to value and baseline (module docstring)
 RESUMED_S = 3.0  # the first onset's likes are looked for over this long once its baseline window is past it
 RESUMED_MIN = 1  # at least this many likes
+SHARPNESS_RISE = 0.1  # loudness novelty from which a sharpness rise counts in full (+0.5 phon)
 SMOOTHED = ("loudness", "sharpness")  # the features whose single-frame peaks a lossy codec moves
 
 
 def feature_novelty(features: dict[str, np.ndarray], *, baseline_s: float = 3.0,
                     median_n: int = 1) -> dict[str, np.ndarray]:
     """Unclipped novelty (>= 0, finite) of each of the four features, sharpness kept only where the
-    loudness rises too (module docstring). features : {name: [shape=(n,)] per 20 ms frame}.
+    loudness rises too, in full from ``SHARPNESS_RISE`` (module docstring).
+    features : {name: [shape=(n,)] per 20 ms frame}.
 
     median_n : frames (<= 1: none) of a running median (:func:`trailing_median`) that loudness and
     sharpness go through first: a lossy codec moves their single-frame peaks (pre-echo, a transient
@@ -66,7 +68,7 @@ def feature_novelty(features: dict[str, np.ndarray], *, baseline_s: float = 3.0,
                       lag_n=lag if f in SMOOTHED else 0, resumed=resumed)
            for f, x in features.items()}
     if "sharpness" in out and "loudness" in out:
-        out["sharpness"] = np.where(out["loudness"] > 0, out["sharpness"], 0.0)
+        out["sharpness"] = out["sharpness"] * np.clip(out["loudness"] / SHARPNESS_RISE, 0.0, 1.0)
     return out
 
 
