@@ -4,13 +4,12 @@ same level: checked against FFmpeg's resampler itself, and on a stereo sound wri
 
 from __future__ import annotations
 
-from fractions import Fraction
-
 import av
 import numpy as np
 import pytest
 
 from autohaptics.media.audio import read_audio
+from stress_inputs import write_streams
 
 RATE = 48_000
 LFE_GAIN = 10.0 ** 0.5  # +10 dB, read_audio's default
@@ -23,17 +22,8 @@ def _signals(n_channels: int, seconds: float = 0.5) -> np.ndarray:
 
 
 def _write(path, x: np.ndarray, layout: str) -> None:
-    """``x`` [shape=(channels, n)] as float PCM in WAV (its channel mask keeps ``layout``)."""
-    with av.open(str(path), "w") as out:
-        a = out.add_stream("pcm_f32le", rate=RATE, layout=layout)
-        for s in range(0, x.shape[1], 1024):
-            block = np.ascontiguousarray(x[:, s:s + 1024].T).reshape(1, -1)
-            frame = av.AudioFrame.from_ndarray(block, format="flt", layout=layout)
-            frame.sample_rate, frame.pts, frame.time_base = RATE, s, Fraction(1, RATE)
-            for packet in a.encode(frame):
-                out.mux(packet)
-        for packet in a.encode(None):
-            out.mux(packet)
+    """``x`` [shape=(channels, n)] as float PCM (a WAV's channel mask keeps ``layout``)."""
+    write_streams(path, audio=x, layout=layout, audio_codec="pcm_f32le", sample_rate=RATE)
 
 
 def _ffmpeg_stereo(x: np.ndarray, layout: str) -> np.ndarray:
