@@ -86,3 +86,53 @@ def frames_to_ticks(x: np.ndarray, n_ticks_out: int) -> np.ndarray:
     for k in range(1, FRAMES_PER_TICK):
         np.maximum(out, x[k::FRAMES_PER_TICK], out=out)
     return out
+
+
+def gaussian_taps(sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets -r..r (r = ceil(3 sigma), 0 for sigma <= 0) and their Gaussian weights, summing to 1."""
+    r = int(math.ceil(3.0 * sigma)) if sigma > 0 else 0
+    offsets = np.arange(-r, r + 1)
+    if not r:
+        return offsets, np.ones(1)
+    with np.errstate(over="ignore"):  # a tiny sigma: the neighbours' weights underflow to 0
+        g = np.exp(-0.5 * (offsets / sigma) ** 2)
+    return offsets, g / g.sum()
+
+
+def shot_smoothed(values: np.ndarray, shot: np.ndarray, ticks: np.ndarray, sigma_ticks: float, *,
+                  mask: np.ndarray | None = None, mean: bool = False) -> np.ndarray:
+    """``values`` of ``ticks`` smoothed over the ticks of their shot: float64 [shape=(len(ticks), ...)].
+
+    values : [shape=(n, ...)] per tick (non-finite values count as 0); shot : int [shape=(n,)], each
+    tick's shot number (negative: a tick that takes no part, such as a cut); ticks : int [shape=(m,)].
+    Each tick's result is the Gaussian-weighted sum (std ``sigma_ticks``) over the ticks around it of
+    its own shot where ``mask`` (bool [shape=(n,)], default all) holds, a tick elsewhere or beyond the
+    clip counting as 0; with ``mean`` the weights are renormalised over the ticks that count. The
+    tick itself always counts. Element-wise sums in a fixed order: a tick's result does not depend on
+    which other ticks are asked for.
+    """
+    x = np.asarray(values)
+    shot = np.asarray(shot)
+    ticks = np.asarray(ticks, dtype=np.int64)
+    n = x.shape[0] if x.ndim else 0
+    if x.ndim < 1 or shot.shape != (n,) or (mask is not None and np.shape(mask) != (n,)):
+        raise ParameterError(f"shot_smoothed needs (n, ...) values and (n,) shots and mask, got {x.shape}, "
+                             f"{shot.shape} and {None if mask is None else np.shape(mask)}")
+    if ticks.size and (ticks.min() < 0 or ticks.max() >= n):
+        raise ParameterError(f"ticks must lie in 0..{n - 1}")
+    offsets, gauss = gaussian_taps(float(sigma_ticks))
+    total = np.zeros((ticks.size,) + x.shape[1:], np.float64)
+    weight = np.zeros(ticks.size, np.float64)
+    own = shot[ticks] if ticks.size else np.zeros(0, shot.dtype)
+    spread = (-1,) + (1,) * (x.ndim - 1)
+    for d, g in zip(offsets, gauss):
+        src = np.clip(ticks + d, 0, n - 1)
+        ok = ((ticks + d) >= 0) & ((ticks + d) < n) & (shot[src] == own) & (shot[src] >= 0)
+        if mask is not None:
+            ok &= np.asarray(mask, bool)[src]
+        if d == 0:
+            ok = np.ones(ticks.size, bool)
+        if ok.any():
+            total += np.where(ok, g, 0.0).reshape(spread) * np.nan_to_num(x[src].astype(np.float64))
+            weight += np.where(ok, g, 0.0)
+    return total / np.maximum(weight, 1e-12).reshape(spread) if mean else total

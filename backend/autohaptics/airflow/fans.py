@@ -24,6 +24,7 @@ from autohaptics.records import ANALYSIS, DERIVE, stage
 from autohaptics.layout import FAN_COLS, FAN_ROWS
 from autohaptics.imaging import finite32
 from autohaptics.quantiles import median, percentile
+from autohaptics.timebase import gaussian_taps, shot_smoothed
 
 
 THRESHOLD_MOTIONS = ("despiked", "judged")
@@ -140,26 +141,10 @@ def smoothed_cell_motion(cell_motion_: np.ndarray, shot: np.ndarray, ticks: np.n
     of the strongest one flickers from tick to tick (docs/BENCHMARKS.md, "Fans", point 6).
     """
     cm = np.asarray(cell_motion_)
-    shot = np.asarray(shot)
-    ticks = np.asarray(ticks, dtype=np.int64)
-    n = cm.shape[0]
-    if cm.ndim != 3 or shot.shape != (n,):
+    if cm.ndim != 3 or np.shape(shot) != (cm.shape[0],):
         raise ParameterError(f"smoothed_cell_motion needs (n, rows, cols) cells and (n,) shots, "
-                             f"got {cm.shape} and {shot.shape}")
-    if ticks.size and (ticks.min() < 0 or ticks.max() >= n):
-        raise ParameterError(f"ticks must lie in 0..{n - 1}")
-    offsets, gauss = _gaussian(float(params.cell_sigma_ticks))
-    out = np.zeros((ticks.size,) + cm.shape[1:], np.float64)
-    own = shot[ticks] if ticks.size else np.zeros(0, shot.dtype)
-    for d, g in zip(offsets, gauss):
-        src = ticks + d
-        ok = (src >= 0) & (src < n)
-        src = np.clip(src, 0, n - 1)
-        ok &= (shot[src] == own) & (shot[src] >= 0)
-        if d == 0:  # the tick itself always counts (a cut tick asked for keeps its own cells)
-            ok = np.ones(ticks.size, bool)
-        if ok.any():
-            out += np.where(ok, g, 0.0)[:, None, None] * np.nan_to_num(cm[src].astype(np.float64))
+                             f"got {cm.shape} and {np.shape(shot)}")
+    out = shot_smoothed(cm, shot, ticks, float(params.cell_sigma_ticks))
     sx = float(params.cell_sigma_cells)
     if sx > 0 and out.size:
         out = _blur_axis(_blur_axis(out, 1, sx), 2, sx)
@@ -178,24 +163,12 @@ def smoothed_nearness(nearness: np.ndarray, shot: np.ndarray, depth_mask: np.nda
     the flow's noise, so a hard ``near_min`` on one frame flips cells between encodes of one film.
     """
     near = np.asarray(nearness)
-    ticks = np.asarray(ticks, dtype=np.int64)
     n = near.shape[0]
     if near.ndim != 3 or np.shape(shot) != (n,) or np.shape(depth_mask) != (n,):
         raise ParameterError(f"smoothed_nearness needs (n, rows, cols) nearness and (n,) shots and depth mask, "
                              f"got {near.shape}, {np.shape(shot)} and {np.shape(depth_mask)}")
-    shot, depth_mask = np.asarray(shot), np.asarray(depth_mask, bool)
-    offsets, gauss = _gaussian(float(params.near_sigma_ticks))
-    total = np.zeros((ticks.size,) + near.shape[1:], np.float64)
-    weight = np.zeros(ticks.size, np.float64)
-    own = shot[ticks] if ticks.size else np.zeros(0, shot.dtype)
-    for d, g in zip(offsets, gauss):
-        src = np.clip(ticks + d, 0, n - 1)
-        ok = ((ticks + d) >= 0) & ((ticks + d) < n) & (shot[src] == own) & (shot[src] >= 0) & depth_mask[src]
-        if d == 0:
-            ok = np.ones(ticks.size, bool)
-        total += np.where(ok, g, 0.0)[:, None, None] * np.nan_to_num(near[src].astype(np.float64))
-        weight += np.where(ok, g, 0.0)
-    return np.clip(total / np.maximum(weight, 1e-12)[:, None, None], 0.0, 1.0).astype(np.float32)
+    near = shot_smoothed(near, shot, ticks, float(params.near_sigma_ticks), mask=np.asarray(depth_mask, bool), mean=True)
+    return np.clip(near, 0.0, 1.0).astype(np.float32)
 
 
 def smoothed_motion(motion: np.ndarray, shot: np.ndarray, *, params: AirflowParams = AirflowParams()) -> np.ndarray:
@@ -237,22 +210,11 @@ def despiked_motion(motion: np.ndarray, shot: np.ndarray) -> np.ndarray:
     return median(np.stack([left, m, right]), axis=0)
 
 
-def _gaussian(sigma: float) -> tuple[np.ndarray, np.ndarray]:
-    """Offsets -r..r (r = ceil(3 sigma), 0 for sigma <= 0) and their Gaussian weights, summing to 1."""
-    r = int(math.ceil(3.0 * sigma)) if sigma > 0 else 0
-    offsets = np.arange(-r, r + 1)
-    if not r:
-        return offsets, np.ones(1)
-    with np.errstate(over="ignore"):  # a tiny sigma: the neighbours' weights underflow to 0
-        g = np.exp(-0.5 * (offsets / sigma) ** 2)
-    return offsets, g / g.sum()
-
-
 def _blur_axis(x: np.ndarray, axis: int, sigma: float) -> np.ndarray:
     """Gaussian blur of ``x`` along ``axis`` (standard deviation ``sigma`` samples), the edge value
     repeated beyond the edge. Element-wise sums in a fixed order: a tick's result does not depend
     on which other ticks share the array."""
-    offsets, g = _gaussian(sigma)
+    offsets, g = gaussian_taps(sigma)
     size = x.shape[axis]
     out = np.zeros_like(x)
     for d, w in zip(offsets, g):
