@@ -143,6 +143,7 @@ THESIS_RULES: dict[str, Any] = {
     "airflow.near_sigma_ticks": 0.0,  # the default smooths nearness over neighbouring ticks of the shot
     "airflow.near_share": 0.0,  # the default counts the nearest 40 % of each tick's cells as near too
     "airflow.threshold_motion": "judged",  # the default takes the threshold from the motion without one-tick spikes
+    "fusion.sigma_ticks": 0.0,  # the default spreads each tick's saliency weights over its shot's neighbouring frames
     "thermal.mapping": "thesis",  # the default maps a warm-cool measure around 33 C into the device range
 }
 

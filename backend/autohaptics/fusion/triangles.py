@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 
 from autohaptics.errors import ParameterError
-from autohaptics.records import ANALYSIS, Record, param
+from autohaptics.records import ANALYSIS, DERIVE, Record, param
 from autohaptics.layout import ACTUATOR_IDS, CENTRE_ACTUATOR, N_ACTUATORS, TRIANGLES, vertex_xy
 from autohaptics.imaging import finite32
 
@@ -48,6 +48,9 @@ class FusionParams(Record):
     min_level : lowest map value (0..1) that can count as salient.
     k_std : a pixel is salient at mean + k_std * std of the map or above (and >= min_level).
     min_speck_area : connected salient regions smaller than this fraction of the frame are noise.
+    sigma_ticks : a vibrating tick's weights are the Gaussian-weighted mean (this std, ticks) of the
+        analysed ticks of its shot around it, then scaled to a strongest actuator of 1 (default 2;
+        0 = its own frame's, the thesis; ``fusion.modes.smoothed_weights``).
     """
 
     STAGE: ClassVar[str] = ANALYSIS
@@ -57,6 +60,7 @@ class FusionParams(Record):
     min_level: float = param(0.3, 0.0, 1.0)
     k_std: float = param(1.5, -10.0, 10.0)
     min_speck_area: float = param(0.002, 0.0, 0.99)
+    sigma_ticks: float = param(2.0, 0.0, 50.0, unit="ticks", stage=DERIVE)
 
 
 def fallback_weights() -> np.ndarray:

@@ -50,7 +50,8 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
         vib, vstats = vibration_track(params.mode, intensity, seed=params.seed,
                                       beta=None if video is None else video.beta,
                                       have_beta=None if video is None else video.saliency_mask,
-                                      cut=None if video is None else video.cut)
+                                      cut=None if video is None else video.cut,
+                                      sigma_ticks=params.fusion.sigma_ticks)
         tl.vibration[:] = vib
         if params.mode == "multimodal":
             stats["fusion"] = vstats

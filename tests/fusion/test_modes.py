@@ -1,0 +1,78 @@
+"""The vibration track's weights smoothed over a shot (fusion/modes.py, ``smoothed_weights``): known
+answers on hand-made weights, where one analysed frame's salient speck reaches an actuator that its
+neighbours do not."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from autohaptics.fusion.modes import smoothed_weights, vibration_track
+from autohaptics.layout import ACTUATOR_IDS
+from autohaptics.metrics import onsets
+
+IDX = {a: i for i, a in enumerate(ACTUATOR_IDS)}
+LEFT = np.zeros(9)
+LEFT[[IDX["A1"], IDX["A3"], IDX["A5"]]] = (1.0, 0.6, 0.3)
+RIGHT = np.zeros(9)
+RIGHT[[IDX["A2"], IDX["A7"], IDX["A5"]]] = (1.0, 0.6, 0.3)
+
+
+def flickering_shot(n: int = 30) -> np.ndarray:
+    """A subject on the left in every analysed frame, and on every other frame a speck that gives
+    A7 a weight of 0.1."""
+    beta = np.tile(LEFT, (n, 1))
+    beta[1::2, IDX["A7"]] = 0.1
+    return beta
+
+
+def track(beta, sigma, cut=None, have=None):
+    n = beta.shape[0]
+    cut = np.zeros(n, bool) if cut is None else cut
+    have = np.ones(n, bool) if have is None else have
+    vib, _ = vibration_track("multimodal", np.full(n, 0.8), beta=beta, have_beta=have, cut=cut, sigma_ticks=sigma)
+    return vib
+
+
+def test_a_frames_speck_no_longer_switches_its_actuator_on_and_off():
+    beta = flickering_shot()
+    thesis, smoothed = track(beta, 0.0), track(beta, 2.0)
+    assert onsets(thesis[:, IDX["A7"]]).sum() == 15  # on with every speck, off between them
+    assert onsets(smoothed[:, IDX["A7"]]).sum() == 1  # on through the shot, at about half the speck's weight
+    assert np.allclose(smoothed[:, IDX["A7"]] / 0.8, 0.05, atol=0.02)
+    for a in ("A1", "A3", "A5"):  # the subject keeps its weights
+        assert np.allclose(smoothed[:, IDX[a]], thesis[:, IDX[a]], atol=1e-12)
+
+
+def test_the_thesis_rule_is_sigma_zero():
+    beta = flickering_shot()
+    assert smoothed_weights(beta, np.ones(30, bool), np.zeros(30, bool), 0.0) is beta
+
+
+def test_weights_do_not_cross_a_cut():
+    beta = np.vstack([np.tile(LEFT, (10, 1)), np.tile(RIGHT, (10, 1))])
+    cut = np.zeros(20, bool)
+    cut[10] = True
+    out = smoothed_weights(beta, np.ones(20, bool), cut, 3.0)
+    assert np.allclose(out, beta, rtol=0, atol=1e-12)
+
+
+def test_only_analysed_ticks_lend_their_weights():
+    beta = np.tile(LEFT, (11, 1))
+    beta[5] = RIGHT  # a borrowed (not analysed) tick's weights
+    have = np.ones(11, bool)
+    have[5] = False
+    out = smoothed_weights(beta, have, np.zeros(11, bool), 2.0)
+    assert np.allclose(out[[0, 1, 2, 3, 4, 6, 7, 8, 9, 10]], np.tile(LEFT, (10, 1)), rtol=0, atol=1e-12)
+    assert out[5, IDX["A1"]] == pytest.approx(1.0) and 0 < out[5, IDX["A2"]] < 1  # its own counts
+
+
+def test_ticks_without_weights_keep_none_and_the_strongest_is_one():
+    rng = np.random.default_rng(3)
+    beta = rng.random((40, 9)) ** 3
+    beta[rng.random(40) < 0.3] = 0.0
+    cut = rng.random(40) < 0.1
+    out = smoothed_weights(beta, rng.random(40) < 0.7, cut, 2.0)
+    weighted = beta.max(axis=1) > 0
+    assert np.all(out[~weighted] == 0) and np.allclose(out[weighted].max(axis=1), 1.0)
+    assert np.all(np.isfinite(out)) and out.min() >= 0 and out.max() <= 1
