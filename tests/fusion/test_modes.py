@@ -30,7 +30,8 @@ def track(beta, sigma, cut=None, have=None):
     n = beta.shape[0]
     cut = np.zeros(n, bool) if cut is None else cut
     have = np.ones(n, bool) if have is None else have
-    vib, _ = vibration_track("multimodal", np.full(n, 0.8), beta=beta, have_beta=have, cut=cut, sigma_ticks=sigma)
+    vib, _ = vibration_track("multimodal", np.full(n, 0.8), beta=smoothed_weights(beta, have, cut, sigma),
+                             have_beta=have, cut=cut)
     return vib
 
 
@@ -59,20 +60,33 @@ def test_weights_do_not_cross_a_cut():
 
 def test_only_analysed_ticks_lend_their_weights():
     beta = np.tile(LEFT, (11, 1))
-    beta[5] = RIGHT  # a borrowed (not analysed) tick's weights
+    beta[5] = RIGHT  # weights of a tick that was not analysed
     have = np.ones(11, bool)
     have[5] = False
     out = smoothed_weights(beta, have, np.zeros(11, bool), 2.0)
-    assert np.allclose(out[[0, 1, 2, 3, 4, 6, 7, 8, 9, 10]], np.tile(LEFT, (10, 1)), rtol=0, atol=1e-12)
-    assert out[5, IDX["A1"]] == pytest.approx(1.0) and 0 < out[5, IDX["A2"]] < 1  # its own counts
+    assert np.allclose(out[have], np.tile(LEFT, (10, 1)), rtol=0, atol=1e-12)
+    assert np.array_equal(out[5], RIGHT)  # its own, which the track replaces by its neighbour's
+    assert np.allclose(track(beta, 2.0, have=have)[5], 0.8 * LEFT, rtol=0, atol=1e-12)
 
 
 def test_ticks_without_weights_keep_none_and_the_strongest_is_one():
     rng = np.random.default_rng(3)
     beta = rng.random((40, 9)) ** 3
     beta[rng.random(40) < 0.3] = 0.0
-    cut = rng.random(40) < 0.1
-    out = smoothed_weights(beta, rng.random(40) < 0.7, cut, 2.0)
-    weighted = beta.max(axis=1) > 0
-    assert np.all(out[~weighted] == 0) and np.allclose(out[weighted].max(axis=1), 1.0)
+    have = (rng.random(40) < 0.7) & (beta.max(axis=1) > 0)
+    out = smoothed_weights(beta, have, rng.random(40) < 0.1, 2.0)
+    assert np.array_equal(out[~have], beta[~have]) and np.allclose(out[have].max(axis=1), 1.0)
     assert np.all(np.isfinite(out)) and out.min() >= 0 and out.max() <= 1
+
+
+@pytest.mark.parametrize("sigma", [0.5, 2.0, 3.7])
+def test_the_one_pass_mean_is_the_per_tick_mean(sigma):
+    """timebase.shot_mean (the whole clip at once) against timebase.shot_smoothed (tick by tick)."""
+    from autohaptics.timebase import shot_mean, shot_smoothed
+
+    rng = np.random.default_rng(7)
+    values, mask = rng.random((300, 9)), rng.random(300) < 0.6
+    shot = np.cumsum(rng.random(300) < 0.05)
+    fast = shot_mean(values, shot, mask, sigma)
+    want = shot_smoothed(values, shot, np.flatnonzero(mask), sigma, mask=mask, mean=True)
+    assert np.allclose(fast[mask], want, rtol=0, atol=1e-12)

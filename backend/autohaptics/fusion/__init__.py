@@ -5,7 +5,7 @@
 vibration track of each generation mode).
 """
 
-from autohaptics.fusion.modes import MODES, vibration_track
+from autohaptics.fusion.modes import MODES, smoothed_weights, vibration_track
 from autohaptics.fusion.saliency import SaliencyParams, make_saliency_backend, saliency_map, working_size
 from autohaptics.fusion.triangles import (
     TRIANGLE_ACTUATORS,
@@ -21,4 +21,4 @@ from autohaptics.fusion.triangles import (
 
 __all__ = ["MODES", "TRIANGLE_ACTUATORS", "TRIANGLE_XY", "VARIANTS", "FusionParams", "SaliencyParams",
            "actuator_weights", "fallback_weights", "make_saliency_backend", "salient_shape", "saliency_map",
-           "triangle_index_map", "triangle_weights", "vibration_track", "working_size"]
+           "smoothed_weights", "triangle_index_map", "triangle_weights", "vibration_track", "working_size"]

@@ -8,7 +8,8 @@
 A vibrating tick without weights of its own (saliency is computed only where the chair vibrated
 when the film was analysed) borrows those of the nearest analysed tick of its shot within
 ``BORROW_TICKS``, else falls back to A5; such ticks are reported as estimated. By default each
-tick's weights are then averaged with its shot's analysed neighbours (:func:`smoothed_weights`).
+analysed tick's weights are first averaged with its shot's analysed neighbours (:func:`smoothed_weights`,
+applied by the derive, which keeps them per analysis).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import numpy as np
 
 from autohaptics.fusion.triangles import fallback_weights
 from autohaptics.layout import ACTUATOR_IDS, AUDIO_MODE_ACTUATORS, CENTRE_ACTUATOR, N_ACTUATORS
-from autohaptics.timebase import shot_smoothed
+from autohaptics.timebase import shot_mean
 
 MODES = ("multimodal", "audio", "visual", "random")
 BORROW_TICKS = 10
@@ -25,12 +26,12 @@ BORROW_TICKS = 10
 
 def vibration_track(mode: str, intensity: np.ndarray, *, beta: np.ndarray | None = None,
                     have_beta: np.ndarray | None = None, cut: np.ndarray | None = None,
-                    seed: int = 0, sigma_ticks: float = 0.0) -> tuple[np.ndarray, dict]:
+                    seed: int = 0) -> tuple[np.ndarray, dict]:
     """The (n, 9) vibration of ``mode``, 0..1, and its stats.
 
     intensity : [shape=(n,)] audio intensity 0..1. beta, have_beta, cut : the video pass's weights
-    [shape=(n, 9)], where they were computed (bool [shape=(n,)]) and the shot cuts; None without a
-    picture. sigma_ticks : "multimodal" weights smoothed over the shot (:func:`smoothed_weights`).
+    [shape=(n, 9)] (as they are, or :func:`smoothed_weights` of them), where they were computed
+    (bool [shape=(n,)]) and the shot cuts; None without a picture.
     Returns (vibration, stats); ``stats["ticks_estimated"]`` counts borrowed weights.
     """
     n = intensity.size
@@ -44,7 +45,6 @@ def vibration_track(mode: str, intensity: np.ndarray, *, beta: np.ndarray | None
             stats["fallback"] = "no video stream: all weight on A5"
         else:
             weights, estimated = weights_for(beta, have_beta, cut, intensity > 0)
-            weights = smoothed_weights(weights, have_beta, cut, sigma_ticks)
             vib = intensity[:, None] * weights
             stats["ticks_estimated"] = int(estimated.sum())
     elif mode == "visual":
@@ -80,22 +80,21 @@ def weights_for(beta: np.ndarray, have: np.ndarray, cut: np.ndarray,
     return out, estimated
 
 
-def smoothed_weights(weights: np.ndarray, have: np.ndarray, cut: np.ndarray, sigma_ticks: float) -> np.ndarray:
-    """Each weighted tick's weights as the Gaussian-weighted mean (std ``sigma_ticks``) of those of
-    the analysed ticks (``have``) of its shot around it, its own always counting, scaled so that its
-    strongest actuator is 1; ticks without weights keep none. weights : [shape=(n, 9)] >= 0.
-    Why: which triangles hold salient pixels, and so which actuators a tick's weights reach, turns
-    on one frame's salient specks, which an encode's block noise or another frame rate moves;
-    the shot's neighbouring frames agree on where its subject is (docs/BENCHMARKS.md, stop 50).
-    Returns float64 [shape=(n, 9)] in 0..1; ``weights`` itself for sigma_ticks <= 0."""
+def smoothed_weights(beta: np.ndarray, have: np.ndarray, cut: np.ndarray, sigma_ticks: float) -> np.ndarray:
+    """Each analysed tick's weights (``have``) as the Gaussian-weighted mean (std ``sigma_ticks``)
+    of those of the analysed ticks of its shot around it, scaled so that its strongest actuator is
+    1; other ticks keep theirs (:func:`weights_for` then lends a tick without its own the nearest
+    analysed tick's). beta : [shape=(n, 9)] >= 0. Why: which triangles hold salient pixels, and so
+    which actuators a tick's weights reach, turns on one frame's salient specks, which an encode's
+    block noise or another frame rate moves; the shot's neighbouring frames agree on where its
+    subject is (docs/BENCHMARKS.md, "Vibration weights across encodes").
+    Returns float64 [shape=(n, 9)] in 0..1; ``beta`` itself for sigma_ticks <= 0."""
     if sigma_ticks <= 0:
-        return weights
-    ticks = np.flatnonzero(weights.max(axis=1, initial=0.0) > 0)
-    out = np.zeros_like(weights, dtype=np.float64)
-    if ticks.size:
-        mean = shot_smoothed(weights, np.cumsum(cut), ticks, sigma_ticks, mask=have, mean=True)
-        out[ticks] = mean / np.maximum(mean.max(axis=1, keepdims=True), 1e-12)
-    return out
+        return beta
+    have = np.asarray(have, bool)
+    mean = shot_mean(beta, np.cumsum(cut), have, sigma_ticks)
+    top = mean.max(axis=1, keepdims=True, initial=0.0)
+    return np.where(have[:, None] & (top > 0), mean / np.where(top > 0, top, 1.0), beta)
 
 
 def random_vibration(n: int, seed: int, active_fraction: float) -> np.ndarray:

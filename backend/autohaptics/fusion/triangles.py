@@ -48,8 +48,8 @@ class FusionParams(Record):
     min_level : lowest map value (0..1) that can count as salient.
     k_std : a pixel is salient at mean + k_std * std of the map or above (and >= min_level).
     min_speck_area : connected salient regions smaller than this fraction of the frame are noise.
-    sigma_ticks : a vibrating tick's weights are the Gaussian-weighted mean (this std, ticks) of the
-        analysed ticks of its shot around it, then scaled to a strongest actuator of 1 (default 2;
+    sigma_ticks : an analysed tick's weights are the Gaussian-weighted mean (this std, ticks) of those
+        of the analysed ticks of its shot around it, scaled to a strongest actuator of 1 (default 2;
         0 = its own frame's, the thesis; ``fusion.modes.smoothed_weights``).
     """
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from autohaptics import intensity as inten
 from autohaptics.airflow import fan_track
-from autohaptics.fusion import vibration_track
+from autohaptics.fusion import smoothed_weights, vibration_track
 from autohaptics.media import source_block
 from autohaptics.params import DEFAULT_PRESET, GenerateParams
 from autohaptics.pipeline.cache import Analysis
@@ -48,10 +48,9 @@ def derive(analysis: Analysis, params: GenerateParams | None = None, *, preset: 
     video = analysis.video
     if "vibration" in params.tracks:
         vib, vstats = vibration_track(params.mode, intensity, seed=params.seed,
-                                      beta=None if video is None else video.beta,
+                                      beta=None if video is None else _weights(video, params.fusion.sigma_ticks),
                                       have_beta=None if video is None else video.saliency_mask,
-                                      cut=None if video is None else video.cut,
-                                      sigma_ticks=params.fusion.sigma_ticks)
+                                      cut=None if video is None else video.cut)
         tl.vibration[:] = vib
         if params.mode == "multimodal":
             stats["fusion"] = vstats
@@ -116,6 +115,26 @@ def _kept(table: dict, lock: threading.Lock, ident: Any, key: Any, alive: Callab
         with lock:
             _MAKING.pop(gate, None)
         busy.set()
+
+
+_WEIGHTS: dict[int, tuple] = {}  # the smoothed saliency weights of recent derives, per video analysis
+_WEIGHTS_LOCK = threading.Lock()
+
+
+def _weights(video, sigma_ticks: float) -> np.ndarray:
+    """``video``'s saliency weights smoothed over their shots (``fusion.smoothed_weights``), kept
+    read-only per video analysis and standard deviation as the picture's tracks are: no threshold
+    changes them, so a threshold commit does not compute them again."""
+    if sigma_ticks <= 0:
+        return video.beta
+
+    def compute() -> tuple:
+        beta = smoothed_weights(video.beta, video.saliency_mask, video.cut, sigma_ticks)
+        beta.flags.writeable = False
+        return (weakref.ref(video), float(sigma_ticks), beta)
+
+    hit, _ = _kept(_WEIGHTS, _WEIGHTS_LOCK, id(video), float(sigma_ticks), lambda h: h[0]() is video, compute)
+    return hit[2]
 
 
 def _picture_tracks(video, params: GenerateParams, tl: Timeline, stats: dict) -> None:
