@@ -145,10 +145,9 @@ def shot_mean(values: np.ndarray, shot: np.ndarray, mask: np.ndarray, sigma_tick
     values : [shape=(n, ...)] per tick (non-finite values count as 0); shot : int [shape=(n,)], each
     tick's shot, equal within a shot and changing at each new one (a cumulative sum of cuts); mask :
     bool [shape=(n,)]. One pass over the whole clip (:func:`shot_smoothed` takes any ticks, one
-    offset at a time): the shots are laid apart by the kernel's reach, then filtered together.
+    offset at a time): the shots are laid apart by the kernel's reach, then filtered together
+    (numpy's convolution per column: scipy.ndimage would load numpy.ma and socket into ``generate``).
     """
-    from scipy.ndimage import correlate1d
-
     x = np.nan_to_num(np.asarray(values, dtype=np.float64))
     shot, mask = np.asarray(shot), np.asarray(mask, bool)
     n = x.shape[0] if x.ndim else 0
@@ -159,12 +158,13 @@ def shot_mean(values: np.ndarray, shot: np.ndarray, mask: np.ndarray, sigma_tick
         return x.copy()
     offsets, gauss = gaussian_taps(float(sigma_ticks))
     reach = int(offsets[-1])
-    pos = np.arange(n) + reach * np.concatenate([[0], np.cumsum(shot[1:] != shot[:-1])])
+    pos = reach + np.arange(n) + reach * np.concatenate([[0], np.cumsum(shot[1:] != shot[:-1])])
     spread = (-1,) + (1,) * (x.ndim - 1)
-    laid = np.zeros((int(pos[-1]) + 1,) + x.shape[1:])
+    laid = np.zeros((int(pos[-1]) + 1 + reach,) + x.shape[1:])  # ``reach`` empty rows at both ends too
     weight = np.zeros(laid.shape[0])
     laid[pos] = np.where(mask.reshape(spread), x, 0.0)
     weight[pos] = mask
-    total = correlate1d(laid, gauss, axis=0, mode="constant")[pos]
-    count = correlate1d(weight, gauss, mode="constant")[pos]
+    columns = laid.reshape(laid.shape[0], -1)
+    total = np.stack([np.convolve(c, gauss, mode="valid") for c in columns.T], axis=1)[pos - reach].reshape(x.shape)
+    count = np.convolve(weight, gauss, mode="valid")[pos - reach]
     return np.where(count.reshape(spread) > 0, total / np.where(count > 0, count, 1.0).reshape(spread), 0.0)
