@@ -120,6 +120,7 @@ def shot_smoothed(values: np.ndarray, shot: np.ndarray, ticks: np.ndarray, sigma
                              f"{shot.shape} and {None if mask is None else np.shape(mask)}")
     if ticks.size and (ticks.min() < 0 or ticks.max() >= n):
         raise ParameterError(f"ticks must lie in 0..{n - 1}")
+    mask = None if mask is None else np.asarray(mask, bool)
     offsets, gauss = gaussian_taps(float(sigma_ticks))
     total = np.zeros((ticks.size,) + x.shape[1:], np.float64)
     weight = np.zeros(ticks.size, np.float64)
@@ -129,42 +130,10 @@ def shot_smoothed(values: np.ndarray, shot: np.ndarray, ticks: np.ndarray, sigma
         src = np.clip(ticks + d, 0, n - 1)
         ok = ((ticks + d) >= 0) & ((ticks + d) < n) & (shot[src] == own) & (shot[src] >= 0)
         if mask is not None:
-            ok &= np.asarray(mask, bool)[src]
+            ok &= mask[src]
         if d == 0:
             ok = np.ones(ticks.size, bool)
         if ok.any():
             total += np.where(ok, g, 0.0).reshape(spread) * np.nan_to_num(x[src].astype(np.float64))
             weight += np.where(ok, g, 0.0)
     return total / np.maximum(weight, 1e-12).reshape(spread) if mean else total
-
-
-def shot_mean(values: np.ndarray, shot: np.ndarray, mask: np.ndarray, sigma_ticks: float) -> np.ndarray:
-    """Every tick's Gaussian-weighted mean (std ``sigma_ticks``) of ``values`` over the ticks of its
-    own shot where ``mask`` holds: float64 [shape=values.shape], 0 where none counts.
-
-    values : [shape=(n, ...)] per tick (non-finite values count as 0); shot : int [shape=(n,)], each
-    tick's shot, equal within a shot and changing at each new one (a cumulative sum of cuts); mask :
-    bool [shape=(n,)]. One pass over the whole clip (:func:`shot_smoothed` takes any ticks, one
-    offset at a time): the shots are laid apart by the kernel's reach, then filtered together
-    (numpy's convolution per column: scipy.ndimage would load numpy.ma and socket into ``generate``).
-    """
-    x = np.nan_to_num(np.asarray(values, dtype=np.float64))
-    shot, mask = np.asarray(shot), np.asarray(mask, bool)
-    n = x.shape[0] if x.ndim else 0
-    if x.ndim < 1 or shot.shape != (n,) or mask.shape != (n,):
-        raise ParameterError(f"shot_mean needs (n, ...) values and (n,) shots and mask, got {x.shape}, "
-                             f"{shot.shape} and {mask.shape}")
-    if n == 0:
-        return x.copy()
-    offsets, gauss = gaussian_taps(float(sigma_ticks))
-    reach = int(offsets[-1])
-    pos = reach + np.arange(n) + reach * np.concatenate([[0], np.cumsum(shot[1:] != shot[:-1])])
-    spread = (-1,) + (1,) * (x.ndim - 1)
-    laid = np.zeros((int(pos[-1]) + 1 + reach,) + x.shape[1:])  # ``reach`` empty rows at both ends too
-    weight = np.zeros(laid.shape[0])
-    laid[pos] = np.where(mask.reshape(spread), x, 0.0)
-    weight[pos] = mask
-    columns = laid.reshape(laid.shape[0], -1)
-    total = np.stack([np.convolve(c, gauss, mode="valid") for c in columns.T], axis=1)[pos - reach].reshape(x.shape)
-    count = np.convolve(weight, gauss, mode="valid")[pos - reach]
-    return np.where(count.reshape(spread) > 0, total / np.where(count > 0, count, 1.0).reshape(spread), 0.0)

@@ -80,14 +80,16 @@ def test_ticks_without_weights_keep_none_and_the_strongest_is_one():
 
 
 @pytest.mark.parametrize("sigma, n", [(0.5, 300), (2.0, 300), (3.7, 300), (2.0, 3), (3.7, 1)])
-def test_the_one_pass_mean_is_the_per_tick_mean(sigma, n):
-    """timebase.shot_mean (the whole clip at once) against timebase.shot_smoothed (tick by tick),
-    clips shorter than the kernel included."""
-    from autohaptics.timebase import shot_mean, shot_smoothed
-
+def test_the_smoothed_weights_are_the_masked_mean_over_the_shot(sigma, n):
+    """Against the mean written out tick by tick, clips shorter than the kernel included."""
     rng = np.random.default_rng(7)
-    values, mask = rng.random((n, 9)), rng.random(n) < 0.6
-    shot = np.cumsum(rng.random(n) < 0.05)
-    fast = shot_mean(values, shot, mask, sigma)
-    want = shot_smoothed(values, shot, np.flatnonzero(mask), sigma, mask=mask, mean=True)
-    assert np.allclose(fast[mask], want, rtol=0, atol=1e-12)
+    beta, have = rng.random((n, 9)), rng.random(n) < 0.6
+    cut = rng.random(n) < 0.05
+    shot, r = np.cumsum(cut), int(np.ceil(3 * sigma))
+    out = smoothed_weights(beta, have, cut, sigma)
+    for k in np.flatnonzero(have):
+        near = [j for j in range(max(0, k - r), min(n, k + r + 1)) if have[j] and shot[j] == shot[k]]
+        g = np.exp(-0.5 * ((np.array(near) - k) / sigma) ** 2)
+        want = (g[:, None] * beta[near]).sum(axis=0) / g.sum()
+        assert np.allclose(out[k], want / want.max(), rtol=0, atol=1e-12)
+    assert np.array_equal(out[~have], beta[~have])

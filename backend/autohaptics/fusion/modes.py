@@ -18,7 +18,7 @@ import numpy as np
 
 from autohaptics.fusion.triangles import fallback_weights
 from autohaptics.layout import ACTUATOR_IDS, AUDIO_MODE_ACTUATORS, CENTRE_ACTUATOR, N_ACTUATORS
-from autohaptics.timebase import shot_mean
+from autohaptics.timebase import shot_smoothed
 
 MODES = ("multimodal", "audio", "visual", "random")
 BORROW_TICKS = 10
@@ -92,9 +92,12 @@ def smoothed_weights(beta: np.ndarray, have: np.ndarray, cut: np.ndarray, sigma_
     if sigma_ticks <= 0:
         return beta
     have = np.asarray(have, bool)
-    mean = shot_mean(beta, np.cumsum(cut), have, sigma_ticks)
+    ticks = np.flatnonzero(have)
+    mean = shot_smoothed(beta, np.cumsum(cut), ticks, sigma_ticks, mask=have, mean=True)
     top = mean.max(axis=1, keepdims=True, initial=0.0)
-    return np.where(have[:, None] & (top > 0), mean / np.where(top > 0, top, 1.0), beta)
+    out = np.array(beta, dtype=np.float64)
+    out[ticks] = np.where(top > 0, mean / np.where(top > 0, top, 1.0), beta[ticks])
+    return out
 
 
 def random_vibration(n: int, seed: int, active_fraction: float) -> np.ndarray:
