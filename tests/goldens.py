@@ -20,7 +20,6 @@ import argparse
 import gzip
 import hashlib
 import json
-import platform
 import sys
 import tempfile
 import zipfile
@@ -31,6 +30,8 @@ GOLDEN = HERE / "golden"
 sys.path.insert(0, str(HERE))
 
 from shared_data import MEDIA  # noqa: E402
+
+from autohaptics.bench.common import environment  # noqa: E402
 
 PRESETS = ("reference", "balanced", "fast")
 MODES = ("multimodal", "audio", "visual", "random")
@@ -45,7 +46,6 @@ EXPORT_CASES = (("bbb_1080p60_2s_h264_aac6ch.mp4", "balanced", "multimodal"),
                 (LONG_CLIP, "balanced", "multimodal"), (LONG_CLIP, "balanced", "visual"))
 EXPORT_FORMATS = ("csv", "json", "ahap", "hjif", "mpegv")
 EXPORT_DATE = "2026-01-01"
-ENV_PACKAGES = ("numpy", "scipy", "av", "opencv-contrib-python-headless", "numba", "onnxruntime")
 
 
 def case_name(clip: str, preset: str, mode: str) -> str:
@@ -126,24 +126,6 @@ def export_digests(timeline_bytes: bytes, workdir: Path) -> dict[str, dict[str, 
         else:
             out[fmt] = {dest.name: hashlib.sha256(dest.read_bytes()).hexdigest()}
     return out
-
-
-def environment() -> dict:
-    """What decides the last bits of the floating-point results: library versions and the CPU."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    env = {"machine": platform.machine(), "python": platform.python_version()}
-    for pkg in ENV_PACKAGES:
-        try:
-            env[pkg] = version(pkg)
-        except PackageNotFoundError:
-            env[pkg] = None
-    try:
-        flags = next(line for line in Path("/proc/cpuinfo").read_text().splitlines() if line.startswith("flags"))
-        env["cpu_flags_sha256"] = hashlib.sha256(" ".join(sorted(flags.split()[2:])).encode()).hexdigest()[:16]
-    except (OSError, StopIteration):
-        env["cpu_flags_sha256"] = None
-    return env
 
 
 def write(*, exports_only: bool = False) -> None:

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from autohaptics import metrics as M
+from autohaptics.bench.common import machine, machine_line
 from autohaptics.cli.main import main
 from autohaptics.errors import ParameterError
 from autohaptics.timeline import Timeline
@@ -306,8 +307,9 @@ def test_bench_accuracy_end_to_end(tmp_path):
                        capture_output=True, text=True, timeout=900)
     assert r.returncode == 0, r.stderr
     assert "skipping audit" in r.stdout and "balanced onset F1" in r.stdout
-    assert "fast speed-up vs balanced (wall time)" in r.stdout
+    assert "fast speed-up vs balanced (wall time)" in r.stdout and machine_line() in r.stdout
     doc = json.loads((tmp_path / "accuracy.json").read_text())
+    assert doc["machine"] == machine()
     clip = doc["clips"][0]
     assert set(clip["configs"]) == {"reference", "balanced", "fast", "balanced-noskip", "dis-medium"}
     assert clip["configs"]["reference"]["error"]["vibration_mae"] == 0.0

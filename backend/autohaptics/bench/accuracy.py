@@ -30,11 +30,11 @@ import json
 import os
 import statistics
 import subprocess
-import sys
 from fractions import Fraction
 from pathlib import Path
 
 from autohaptics.bench.child import measure_decode, measure_generate, snapshot_source
+from autohaptics.bench.common import machine, machine_line
 from autohaptics.bench.configs import NOSKIP, REFERENCE, SKIP_STAGES, TARGETS, Config, default_configs, parse_config
 from autohaptics.bench.report import plot, print_tables, verdicts
 from autohaptics.errors import ParameterError
@@ -271,11 +271,13 @@ def run(args) -> int:
         clips += film_clips(out)
     if not clips:
         raise ParameterError("give at least one VIDEO, --films or --synth WxH@FPS:SECONDS")
+    here = machine()
     print(f"source tree: {git}" + ("" if args.no_snapshot else f" (measured from a copy in {out / '_source'})")
-          + f"; {os.cpu_count()} CPUs; load average {os.getloadavg()[0]:.1f}")
+          + f"; load average {os.getloadavg()[0]:.1f}")
+    print(machine_line(here))
     print(f"configurations: {', '.join(f'{c.name} ({c.preset}' + ''.join(f', {k}={v}' for k, v in c.overrides) + ')' for c in configs)}")
     doc = {"configs": [{"name": c.name, "preset": c.preset, "overrides": dict(c.overrides)} for c in configs],
-           "targets": TARGETS, "python": sys.version.split()[0], "cpu_count": os.cpu_count(), "git": git,
+           "targets": TARGETS, "machine": here, "git": git,
            "snapshot": not args.no_snapshot, "load_average_start": os.getloadavg(),
            "clips": []}
     for clip in clips:

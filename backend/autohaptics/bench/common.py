@@ -1,12 +1,17 @@
-"""Helpers shared by the benchmarks: wall time, CPU time and peak memory of a callable."""
+"""Helpers shared by the benchmarks: wall time, CPU time and peak memory of a callable, and the
+machine a figure was measured on."""
 
 from __future__ import annotations
 
+import hashlib
+import os
+import platform
 import resource
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import psutil
@@ -53,6 +58,55 @@ def measure(fn: Callable[[], Any], *, sample_s: float = 0.01) -> Measurement:
 def lifetime_peak_rss_mb() -> float:
     """Peak RSS of this process since it started (ru_maxrss), MiB."""
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+ENV_PACKAGES = ("numpy", "scipy", "av", "opencv-contrib-python-headless", "numba", "onnxruntime")
+
+
+def environment() -> dict:
+    """What decides the last bits of the floating-point results: the packages' versions and the
+    CPU's instruction sets (a hash of /proc/cpuinfo's flags; None where it cannot be read)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    env: dict[str, Any] = {"machine": platform.machine(), "python": platform.python_version()}
+    for pkg in ENV_PACKAGES:
+        try:
+            env[pkg] = version(pkg)
+        except PackageNotFoundError:
+            env[pkg] = None
+    flags = _cpuinfo("flags")
+    env["cpu_flags_sha256"] = None if flags is None else \
+        hashlib.sha256(" ".join(sorted(flags.split())).encode()).hexdigest()[:16]
+    return env
+
+
+def machine() -> dict:
+    """:func:`environment` plus the CPU's model and core count and the FFmpeg inside PyAV: a
+    benchmark's figures belong to them (an encoder writes other bits on another CPU, a kernel
+    costs more on one CPU than on another), so every figures file records them."""
+    import av
+
+    return {**environment(), "cpu": _cpuinfo("model name") or platform.processor() or None,
+            "cores": os.cpu_count(), "ffmpeg": getattr(av, "ffmpeg_version_info", None)}
+
+
+def machine_line(m: dict | None = None) -> str:
+    """:func:`machine` in one line, for the top of a benchmark's output."""
+    m = m or machine()
+    return f"machine: {m['cpu'] or m['machine']}, {m['cores']} cores; FFmpeg {m['ffmpeg']}, PyAV {m['av']}"
+
+
+def _cpuinfo(key: str) -> str | None:
+    """The value of the first ``key`` line of /proc/cpuinfo, or None (not Linux, no such line)."""
+    try:
+        lines = Path("/proc/cpuinfo").read_text().splitlines()
+    except OSError:
+        return None
+    for line in lines:
+        name, _, value = line.partition(":")
+        if name.strip() == key:
+            return value.strip()
+    return None
 
 
 def table(rows: list[list[Any]], header: list[str]) -> str:

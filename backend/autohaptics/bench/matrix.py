@@ -28,7 +28,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from autohaptics.bench.common import table
+from autohaptics.bench.common import machine, machine_line, table
 from autohaptics.errors import ParameterError
 from autohaptics.metrics import compare_tracks, headline
 from autohaptics.timebase import TICK_S
@@ -234,6 +234,8 @@ def run(args) -> int:
             raise ParameterError(f"{s}: no such file")
     words = [w.strip().lower() for w in args.rows.split(",") if w.strip()]
     variants = [v for v in VARIANTS if not words or any(w in v.name.lower() for w in words)]
+    here = machine()
+    print(machine_line(here), file=sys.stderr)
     rows, figures = [], []
     for src in sources:
         clean = _measured(src, out, args.speed)
@@ -267,7 +269,7 @@ def run(args) -> int:
     print(table(rows, ["source", "variant", "onset F1", "fan-tick F1", "fan IoU (tol.)", "temp. MAE C",
                        "jolt / film", "generate / decode", "meets"]))
     out.mkdir(parents=True, exist_ok=True)
-    doc = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "targets": TARGETS, "rows": figures}
+    doc = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "machine": here, "targets": TARGETS, "rows": figures}
     (out / "matrix.json").write_text(json.dumps(doc, indent=1, default=str))
     missed = [f for f in figures if f["misses"]]
     print(f"{len(figures) - len(missed)} of {len(figures)} rows meet every target; figures in {out / 'matrix.json'}")

@@ -22,7 +22,7 @@ from pathlib import Path
 
 from autohaptics import media
 from autohaptics.bench.clips import copied_clip, film_clips, looped_clip
-from autohaptics.bench.common import measure, table
+from autohaptics.bench.common import machine, machine_line, measure, table
 from autohaptics.bench.decode import bare_decode
 from autohaptics.errors import ParameterError
 from autohaptics.params import add_generation_options, params_from_args
@@ -93,6 +93,7 @@ def run(args) -> int:
         paths += film_clips(Path(args.out))
     if not paths:
         raise ParameterError("give at least one VIDEO or --films")
+    print(machine_line())
     for path in paths:
         bench_one(path, args, params, preset, generate)
 
@@ -132,5 +133,5 @@ def bench_one(path: Path, args, params, preset: str, generate) -> None:
     fig = {"file": str(path), "preset": preset, "decode_s": decode_s, "generate_s": gen_s, "ratio": g / d,
            "process_decode_s": pd, "process_generate_s": pg, "process_ratio": pg / pd,
            "process_decode_cpu_s": cd, "process_generate_cpu_s": cg, "process_cpu_ratio": cg / cd,
-           "peak_rss_mb": max(rss), "stats": st, "time": time.strftime("%Y-%m-%d %H:%M:%S")}
+           "peak_rss_mb": max(rss), "stats": st, "time": time.strftime("%Y-%m-%d %H:%M:%S"), "machine": machine()}
     (out / f"pipeline_{path.stem}_{preset}.json").write_text(json.dumps(fig, indent=1, default=str))
