@@ -82,8 +82,8 @@ def environment() -> dict:
 
 def machine() -> dict:
     """:func:`environment` plus the CPU's model and core count and the FFmpeg inside PyAV: a
-    benchmark's figures belong to them (an encoder writes other bits on another CPU, a kernel
-    costs more on one CPU than on another), so every figures file records them."""
+    benchmark's figures belong to them (timings do; the same re-encoded pair read other accuracy
+    figures on two CPUs, docs/BENCHMARKS.md "Stop 51"), so every figures file records them."""
     import av
 
     return {**environment(), "cpu": _cpuinfo("model name") or platform.processor() or None,
