@@ -181,6 +181,8 @@ def test_the_editor_plays_on_the_virtual_chair(cpage, chair_api, chair_server, f
     a1 = clocks(pg)
     seek_video(pg, 30.0)
     b0 = clocks(pg)
+    first = chair.wait_for(lambda e: e["ev"] == "frame" and e["tick"] >= 300, timeout_s=15.0)["tick"]
+    video_then = clocks(pg)[1]  # where the video is once the chair has its first frame after the seek
     chair.wait_for(lambda e: e["ev"] == "frame" and e["tick"] >= 318, timeout_s=15.0)
     assert pg.evaluate("() => window.autohaptics.state().playing")
     b1 = clocks(pg)
@@ -219,8 +221,10 @@ def test_the_editor_plays_on_the_virtual_chair(cpage, chair_api, chair_server, f
     if not restarts:
         assert all(b > a for a, b in zip(flat, flat[1:])), ticks
     assert len(before) <= 1 + skipped + restarts, ticks
-    # After the seek: from 30.0 s on, in order.
-    assert after and 300 <= after[0][0] <= 301, ticks
+    # After the seek: from 30.0 s on, in order. The chair starts where the video is when the page
+    # reports it: 30.0 s, or a little later on a busy machine where the report (or a play report after
+    # the video waited for data) goes out once the video has moved on; never ahead of the video.
+    assert after and after[0][0] == first and 300 <= first <= math.floor(video_then * 10) + 1, (ticks, video_then)
     flat = [t for r in after for t in r]
     if not restarts:
         assert all(b > a for a, b in zip(flat, flat[1:])), ticks
