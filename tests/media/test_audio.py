@@ -11,6 +11,7 @@ import av
 import numpy as np
 import pytest
 
+from autohaptics import media
 from autohaptics.media.audio import AudioClock, read_audio, timestamp_slack_s
 
 RATE = 44100
@@ -125,3 +126,36 @@ def test_an_aac_encoders_priming_is_left_out_whether_or_not_the_container_marks_
     rms = [float(np.sqrt(np.mean(x[i:i + 480] ** 2))) for i in range(0, 4800, 480)]  # the first 0.1 s, 10 ms at a time
     assert min(rms[1:]) > 0.5 * max(rms), rms  # no 128 ms of priming before the tone
     assert abs(len(x) / 48000 - 2.0) < 0.05
+
+
+def _two_tracks(path, first: np.ndarray, second: np.ndarray) -> None:
+    """A Matroska file with two mono PCM audio tracks: 16-bit ``first``, float ``second``."""
+    with av.open(str(path), "w", format="matroska") as out:
+        streams = [out.add_stream(codec, rate=RATE, layout="mono") for codec in ("pcm_s16le", "pcm_f32le")]
+        for stream, x, fmt in zip(streams, (first, second), ("s16", "flt")):
+            for k in range(len(x) // N):
+                chunk = x[None, k * N:(k + 1) * N]
+                chunk = (chunk * 32767).astype(np.int16) if fmt == "s16" else chunk
+                frame = av.AudioFrame.from_ndarray(chunk, format=fmt, layout="mono")
+                frame.sample_rate, frame.pts, frame.time_base = RATE, k * N, Fraction(1, RATE)
+                for packet in stream.encode(frame):
+                    out.mux(packet)
+
+
+def test_the_sound_read_is_the_stream_probe_chose(tmp_path):
+    """The first audio stream FFmpeg can decode: a first track without a decoder is passed over
+    (before, the probe named the second track and the decode read the first, and the file failed
+    with "no decodable samples"); with both decodable, the first."""
+    noise = _noise(2.0)
+    both = tmp_path / "both.mkv"
+    _two_tracks(both, np.zeros_like(noise), noise)
+    data = both.read_bytes()
+    assert data.count(b"A_PCM/INT/LIT") == 1
+    unknown_first = tmp_path / "unknown_first.mkv"
+    unknown_first.write_bytes(data.replace(b"A_PCM/INT/LIT", b"A_QQQ/INT/LIT"))
+
+    assert media.probe(unknown_first).audio.index == 1
+    got = read_audio(unknown_first)
+    assert np.abs(got).max() > 0.1  # the noise of the second track
+    assert media.probe(both).audio.index == 0
+    assert np.abs(read_audio(both)).max() == 0.0  # the first track's silence

@@ -24,13 +24,14 @@ import av
 import numpy as np
 
 from autohaptics.errors import MediaError
-from autohaptics.media.probe import AudioReport, MediaInfo, decode_tolerant, open_container, probe
+from autohaptics.media.probe import AudioReport, MediaInfo, decode_tolerant, open_container, probe, stream_by_index
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
 
 
 def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_gain_db: float = 10.0,
                chunk_s: float = 2.0, report: AudioReport | None = None) -> Iterator[np.ndarray]:
-    """Decode the first audio stream as float32 mono chunks at 48 kHz (digital full scale).
+    """Decode the audio stream :func:`probe` chose (``info.audio``: the first one FFmpeg can decode)
+    as float32 mono chunks at 48 kHz (digital full scale).
 
     Time 0 is the container start (``info.start_s``): gaps in the stream's timestamps are
     zero-filled and overlaps dropped so audio stays aligned with the picture, where the next frame's
@@ -46,7 +47,7 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
     out = _Chunks(max(1, int(chunk_s * ANALYSIS_SAMPLE_RATE)), report, sr_in)
     lfe_gain = 10.0 ** (lfe_gain_db / 20.0)
     with open_container(info.path) as c:
-        stream = c.streams.audio[0]
+        stream = stream_by_index(c, info.audio.index)
         stream.thread_type = "AUTO"
         clock = AudioClock(info.start_s + unmarked_priming_s(c, stream), sr_in,
                            timestamp_slack_s(stream.time_base, sr_in))
