@@ -1,10 +1,11 @@
 """A decoded picture and its proxies: small, colour-converted copies in display orientation, made
 only when a stage asks (converting every 1080p frame to RGB costs as much as decoding it).
 
-For 8-bit planar YUV the planes are area-averaged in place (OpenCV's area averaging, :mod:`.area`)
-and converted on the small proxy (BT.709 for BT.709-tagged frames, BT.601 otherwise, as FFmpeg's
-scaler does), within about 2 grey levels of FFmpeg's scaled conversion of the full frame and about
-3x cheaper.
+For planar YUV (8-bit, and 9-16 bits in 16-bit words: 10-bit encodes, ProRes masters) the planes are
+area-averaged in place (OpenCV's area averaging, :mod:`.area`), brought to 8-bit scale on the small
+proxy and converted there (BT.709 for BT.709-tagged frames, BT.601 otherwise, as FFmpeg's scaler
+does), within about 2 grey levels of FFmpeg's scaled conversion of the full frame and 3x (8-bit) to
+15x (10-bit) cheaper.
 
 A frame may be cropped to a rectangle (the active picture inside black bars,
 :mod:`autohaptics.media.active`): its size, proxies and copies are then those of the rectangle,
@@ -20,6 +21,9 @@ import numpy as np
 from autohaptics.media.area import area_resize
 
 _PLANAR_YUV8 = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj444p", "yuv440p", "yuvj440p"}
+# planar YUV stored in 16-bit words (10-bit H.264/HEVC, ProRes and DNxHR masters): name -> bits
+_PLANAR_YUV_WIDE = {f"yuv{a}{s}p{bits}le": bits for a in ("", "a") for s in ("420", "422", "444", "440")
+                    for bits in (9, 10, 12, 14, 16)}
 
 
 class Frame:
@@ -76,7 +80,7 @@ class Frame:
         width, height : proxy size in pixels (height defaults to keep the display aspect).
         fmt : "rgb24" -> uint8 [shape=(h, w, 3)]; "gray" -> uint8 [shape=(h, w)] (luma).
 
-        For 8-bit planar YUV smaller than the frame (nearly every film) the planes are area-averaged
+        For planar YUV smaller than the frame (nearly every film) the planes are area-averaged
         in place (:mod:`.area`) and converted on the small proxy (BT.709 matrix for BT.709-tagged
         frames, BT.601 otherwise, as FFmpeg's scaler does): about 3x cheaper than FFmpeg's
         scaled conversion of the full frame, within about 2 grey levels of it.
@@ -165,13 +169,13 @@ class Frame:
 
     def luma(self) -> np.ndarray:
         """The full-resolution luma, full range, display orientation: uint8 [shape=(h, w)], a
-        copy. For 8-bit planar YUV the decoded plane itself, range-converted as :meth:`gray` does
+        copy. For planar YUV the decoded plane itself (at 8-bit scale), range-converted as :meth:`gray` does
         (at 1080p about 10x cheaper than FFmpeg's gray conversion of :meth:`full`); else that."""
         f = self._frame
-        if f.format.name not in _PLANAR_YUV8:
+        arr = _plane(f, 0)
+        if arr is None:
             return self.full(fmt="gray")
-        plane = f.planes[0]
-        arr = np.frombuffer(plane, np.uint8).reshape(-1, plane.line_size)[:plane.height, :plane.width]
+        arr = _to_8_bit(arr, f)
         if self._crop is not None:
             x, y, w, h = self._crop
             arr = arr[y:y + h, x:x + w]
@@ -185,16 +189,13 @@ class Frame:
         scale: uint8 (None for a pixel format without planar luma). Microseconds at any size: the
         repeat test of :mod:`autohaptics.airflow.cadence`, which needs no scaling."""
         f = self._frame
-        name = f.format.name
-        wide = name.endswith(("p10le", "p12le"))
-        if name not in _PLANAR_YUV8 and not (wide and name.startswith("yuv")):
+        arr = _plane(f, 0)
+        if arr is None:
             return None
-        plane = f.planes[0]
-        dtype, size = (np.dtype("<u2"), 2) if wide else (np.dtype(np.uint8), 1)
-        arr = np.frombuffer(plane, dtype).reshape(-1, plane.line_size // size)[:plane.height, :plane.width]
-        sy, sx = max(1, plane.height // max(1, rows)), max(1, plane.width // max(1, cols))
+        sy, sx = max(1, arr.shape[0] // max(1, rows)), max(1, arr.shape[1] // max(1, cols))
         grid = arr[sy // 2::sy, sx // 2::sx]
-        return (grid >> (2 if name.endswith("p10le") else 4)).astype(np.uint8) if wide else grid.copy()
+        bits = _stored_bits(f)
+        return (grid >> (bits - 8)).astype(np.uint8) if bits > 8 else grid.copy()
 
     def full(self, *, fmt: str = "rgb24") -> np.ndarray:
         """Full-resolution copy in display orientation (the reference preset)."""
@@ -215,8 +216,7 @@ class Frame:
                 grid_out.append(self._ready.pop(made))
                 return self._ready.pop(key)
         f = self._frame
-        name = f.format.name
-        if name not in _PLANAR_YUV8 or width >= self.width or height >= self.height:
+        if _stored_bits(f) is None or width >= self.width or height >= self.height:
             return None
         k = self.rotation // 90
         dw, dh = (height, width) if k % 2 else (width, height)  # target (w, h) before rotation
@@ -225,9 +225,8 @@ class Frame:
             if i == 0 and not luma:
                 out.append(None)
                 continue
-            plane = f.planes[i]
-            ph, pw = plane.height, plane.width
-            arr = np.frombuffer(plane, np.uint8).reshape(-1, plane.line_size)[:ph, :pw]
+            arr = _plane(f, i)
+            ph, pw = arr.shape
             if self._crop is not None:  # a view of the rectangle, at the plane's own sub-sampling
                 x, y, cw_, ch_ = self._crop
                 sx, sy = pw / f.width, ph / f.height
@@ -237,6 +236,7 @@ class Frame:
                 # 4x or more: average 2 x 2 blocks first (cv2.pyrDown-like), then area-scale: half
                 # the memory traffic of one big area pass, the same proxy within a grey level
                 arr = cv2.resize(arr, (pw // 2, ph // 2), interpolation=cv2.INTER_AREA)
+            arr = _to_8_bit(arr, f)  # a wide plane: the fractional area passes below are 8-bit ones
             # chroma too straight to the proxy's size at its own scale, as FFmpeg's scaler does (4:2:0
             # 1080p to 240 px: two exact halvings)
             small = _shrink(arr, (dw, dh))
@@ -259,6 +259,32 @@ def _stored_rect(rect, rotation: int, width: int, height: int) -> tuple[int, int
     if min(sx, sy) < 0 or min(sw, sh) <= 0 or sx + sw > width or sy + sh > height:
         return None
     return sx, sy, sw, sh
+
+
+def _stored_bits(frame: av.VideoFrame) -> int | None:
+    """Bits per sample of a planar YUV frame (8 in bytes, 9-16 in 16-bit words), None for any other
+    pixel format (those are converted by FFmpeg's scaler)."""
+    name = frame.format.name
+    return 8 if name in _PLANAR_YUV8 else _PLANAR_YUV_WIDE.get(name)
+
+
+def _plane(frame: av.VideoFrame, i: int) -> np.ndarray | None:
+    """Plane ``i`` of a planar YUV frame as stored, a view: uint8, or uint16 for 9-16 bits; None
+    for another pixel format."""
+    bits = _stored_bits(frame)
+    if bits is None:
+        return None
+    plane = frame.planes[i]
+    dtype = np.dtype(np.uint8) if bits == 8 else np.dtype("<u2")
+    return np.frombuffer(plane, dtype).reshape(-1, plane.line_size // dtype.itemsize)[:plane.height, :plane.width]
+
+
+def _to_8_bit(arr: np.ndarray, frame: av.VideoFrame) -> np.ndarray:
+    """Samples of ``frame``'s planes at 8-bit scale, rounded (the array itself when 8-bit already)."""
+    bits = _stored_bits(frame)
+    if arr.dtype == np.uint8 or bits is None or bits == 8:
+        return arr
+    return cv2.convertScaleAbs(arr, alpha=1.0 / (1 << (bits - 8)))
 
 
 def _shrink(arr: np.ndarray, size: tuple[int, int]) -> np.ndarray:

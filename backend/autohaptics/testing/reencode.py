@@ -30,7 +30,7 @@ from autohaptics.testing.scenes import check_size, fps_fraction
 
 CONVERSIONS = ("repeat", "pulldown", "vfr")
 FITS = ("stretch", "pad", "fill")
-PIXEL_FORMATS = ("yuv420p", "yuv420p10le")
+PIXEL_FORMATS = ("yuv420p", "yuv420p10le", "yuv422p10le")
 _VFR_STEPS = (1, 1, 2, 1, 1, 1, 2, 1, 3, 1, 1, 2)  # source frames from one kept frame to the next
 _VFR_TIME_BASE = Fraction(1, 1000)
 # a source frame's time may be this much late (Matroska/WebM store times rounded to the millisecond:
@@ -63,7 +63,8 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     video_codec "copy" : the video packets as they are (only the sound changes; no other video option).
     fit : how the picture meets ``width`` x ``height``: "stretch" (scaled to it), "pad" (scaled to fit
     inside, centred on black: letterbox, pillarbox or windowbox) or "fill" (scaled to cover, the
-    overhang cropped evenly). pix_fmt : "yuv420p" or "yuv420p10le" (10-bit).
+    overhang cropped evenly). pix_fmt : "yuv420p", "yuv420p10le" (10-bit) or "yuv422p10le" (a
+    ProRes or DNxHR master's 10-bit 4:2:2).
     start_s, duration_s : the stretch of ``src`` kept, s (a reel cut mid-film; default all of it). A cut
     at the source's rate keeps each frame at its film time from ``start_s`` (the frame on screen there
     first), wherever the cut falls between two frames.
