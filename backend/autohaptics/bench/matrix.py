@@ -2,8 +2,8 @@
 
 Each source (the shared film clips, or any file given) is written again as each :data:`VARIANTS`
 row says: re-encoded as it is (H.264); letterboxed and pillarboxed; at half size; at 23.976, 25, 29.97 and 50 fps and at a
-variable frame rate; in 10 bits (H.264, and a ProRes master); as VP9 and H.264 screeners; with its sound as mono, stereo, 5.1
-and 7.1; cut to start mid-score. Every row's timeline is compared with the source's own (the clean
+variable frame rate; in 10 bits (H.264, and a ProRes master); as VP9 and H.264 screeners; with its
+sound as mono, stereo, 5.1 and 7.1; cut to start mid-score. Every row's timeline is compared with the source's own (the clean
 variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what differs
 is the start of the file, not the context a whole film gives its film-relative levels): onset F1,
 fan-tick F1, tolerant fan IoU and temperature MAE against :data:`TARGETS`, and a cut's largest

@@ -2,10 +2,10 @@
 only when a stage asks (converting every 1080p frame to RGB costs as much as decoding it).
 
 For planar YUV (8-bit, and 9-16 bits in 16-bit words: 10-bit encodes, ProRes masters) the planes are
-area-averaged in place (OpenCV's area averaging, :mod:`.area`), brought to 8-bit scale on the small
-proxy and converted there (BT.709 for BT.709-tagged frames, BT.601 otherwise, as FFmpeg's scaler
-does), within about 2 grey levels of FFmpeg's scaled conversion of the full frame and 3x (8-bit) to
-15x (10-bit) cheaper.
+area-averaged in place (OpenCV's area averaging, :mod:`.area`; a wide plane brought to 8-bit scale
+after its first halving) and converted on the small proxy (BT.709 for BT.709-tagged frames, BT.601
+otherwise, as FFmpeg's scaler does), within about 2 grey levels of FFmpeg's scaled conversion of the
+full frame and about 3x cheaper.
 
 A frame may be cropped to a rectangle (the active picture inside black bars,
 :mod:`autohaptics.media.active`): its size, proxies and copies are then those of the rectangle,
@@ -169,16 +169,17 @@ class Frame:
 
     def luma(self) -> np.ndarray:
         """The full-resolution luma, full range, display orientation: uint8 [shape=(h, w)], a
-        copy. For planar YUV the decoded plane itself (at 8-bit scale), range-converted as :meth:`gray` does
-        (at 1080p about 10x cheaper than FFmpeg's gray conversion of :meth:`full`); else that."""
+        copy. For planar YUV the decoded plane itself (at 8-bit scale), range-converted as
+        :meth:`gray` does (at 1080p about 10x cheaper than FFmpeg's gray conversion of :meth:`full`);
+        else that."""
         f = self._frame
         arr = _plane(f, 0)
         if arr is None:
             return self.full(fmt="gray")
-        arr = _to_8_bit(arr, f)
         if self._crop is not None:
             x, y, w, h = self._crop
             arr = arr[y:y + h, x:x + w]
+        arr = _to_8_bit(arr, f)
         full = _luma_full_range(arr, f)
         arr = full.copy() if full is arr else full
         k = self.rotation // 90
