@@ -282,10 +282,9 @@ def _plane(frame: av.VideoFrame, i: int) -> np.ndarray | None:
 
 def _to_8_bit(arr: np.ndarray, frame: av.VideoFrame) -> np.ndarray:
     """Samples of ``frame``'s planes at 8-bit scale, rounded (the array itself when 8-bit already)."""
-    bits = _stored_bits(frame)
-    if arr.dtype == np.uint8 or bits is None or bits == 8:
+    if arr.dtype == np.uint8:
         return arr
-    return cv2.convertScaleAbs(arr, alpha=1.0 / (1 << (bits - 8)))
+    return cv2.convertScaleAbs(arr, alpha=1.0 / (1 << (_stored_bits(frame) - 8)))
 
 
 def _shrink(arr: np.ndarray, size: tuple[int, int]) -> np.ndarray:
