@@ -24,13 +24,15 @@ import av
 import numpy as np
 
 from autohaptics.errors import MediaError
+from autohaptics.media.mix import Mix
 from autohaptics.media.probe import AudioReport, MediaInfo, decode_tolerant, open_container, probe, stream_by_index
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
 
 
 def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_gain_db: float = 10.0,
                chunk_s: float = 2.0, report: AudioReport | None = None) -> Iterator[np.ndarray]:
-    """Decode the audio stream :func:`probe` chose (``info.audio``: the first one FFmpeg can decode)
+    """Decode the sound :func:`probe` chose (``info.audio``: the first audio stream FFmpeg can decode,
+    with the mono tracks that hold the other channels of its mix, :func:`~autohaptics.media.probe.channel_tracks`)
     as float32 mono chunks at 48 kHz (digital full scale).
 
     Time 0 is the container start (``info.start_s``): gaps in the stream's timestamps are
@@ -47,33 +49,66 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
     out = _Chunks(max(1, int(chunk_s * ANALYSIS_SAMPLE_RATE)), report, sr_in)
     lfe_gain = 10.0 ** (lfe_gain_db / 20.0)
     with open_container(info.path) as c:
-        stream = stream_by_index(c, info.audio.index)
-        stream.thread_type = "AUTO"
-        clock = AudioClock(info.start_s + unmarked_priming_s(c, stream), sr_in,
-                           timestamp_slack_s(stream.time_base, sr_in))
-        mapping = None
-        interleave = _Interleaver()
-        held = pending = None  # pending: (time, samples) of the frame placed when the next one's time is known
-        for frame in decode_tolerant(c, stream, report, info.path):
-            frame_time = frame.time  # before _samples: interleaving clears the frame's pts
-            x = _samples(frame, interleave)
-            if mapping is None:
-                mapping = _channel_roles(frame.layout, x.shape[0])
-                report.main_channels, report.lfe_channel = mapping
-                weights = downmix_weights(frame.layout, x.shape[0], lfe_gain)
-                report.downmix_weights = [round(float(w), 6) for w in weights]
-                held = _Held(max(1, int(_DOWNMIX_S * sr_in)), weights, report)
-            if pending is not None and _place(clock, *pending, frame_time, held, out):
+        streams = [stream_by_index(c, i) for i in info.audio.streams]
+        start_s = info.start_s + unmarked_priming_s(c, streams[0])
+        mix = None
+        if len(streams) == 1:
+            tracks = {streams[0].index: _Track(streams[0], start_s, sr_in, out, report)}
+        else:  # the channels of one mix in mono tracks: each weighted by its role, then summed
+            weights = _mapping(report, av.AudioLayout(info.audio.layout), len(streams), lfe_gain)
+            mix = Mix(len(streams), sr_in, out)
+            tracks = {s.index: _Track(s, start_s, sr_in, mix.lane(k), report, weights[k:k + 1])
+                      for k, s in enumerate(streams)}
+        for index, frame in decode_tolerant(c, streams, report, info.path, tagged=True):
+            if tracks[index].add(frame, lfe_gain):
                 yield from out.drain(False)
-            pending = (frame_time, x)
-        if pending is not None:
-            _place(clock, *pending, None, held, out)
-        if held is not None:
-            out.emit(held.downmix())
+        for track in tracks.values():
+            track.close()
+        if mix is not None:
+            mix.close()
         yield from out.finish()
     if report.samples_out == 0:
         reason = f" ({report.first_error})" if report.first_error else ""
         raise MediaError(f"{info.path}: the audio stream holds no decodable samples{reason}")
+
+
+def _mapping(report: AudioReport, layout, n: int, lfe_gain: float) -> np.ndarray:
+    """The downmix weights of ``n`` channels in ``layout`` (:func:`downmix_weights`), noted in ``report``."""
+    report.main_channels, report.lfe_channel = _channel_roles(layout, n)
+    weights = downmix_weights(layout, n, lfe_gain)
+    report.downmix_weights = [round(float(w), 6) for w in weights]
+    return weights
+
+
+class _Track:
+    """One audio stream's frames placed on the container's clock (:class:`AudioClock`) and downmixed
+    into ``sink``, with ``weights`` or, when None, the weights of its first frame's layout."""
+
+    def __init__(self, stream, start_s: float, rate: int, sink, report: AudioReport,
+                 weights: np.ndarray | None = None):
+        stream.thread_type = "AUTO"
+        self.clock = AudioClock(start_s, rate, timestamp_slack_s(stream.time_base, rate))
+        self.sink, self.report, self.limit = sink, report, max(1, int(_DOWNMIX_S * rate))
+        self.held = None if weights is None else _Held(self.limit, weights, report)
+        self.interleave = _Interleaver()
+        self.pending = None  # (time, samples) of the frame placed when the next one's time is known
+
+    def add(self, frame: av.AudioFrame, lfe_gain: float) -> bool:
+        """Take one decoded frame; True when the output may hold chunks ready."""
+        frame_time = frame.time  # before _samples: interleaving clears the frame's pts
+        x = _samples(frame, self.interleave)
+        if self.held is None:
+            self.held = _Held(self.limit, _mapping(self.report, frame.layout, x.shape[0], lfe_gain), self.report)
+        ready = self.pending is not None and _place(self.clock, *self.pending, frame_time, self.held, self.sink)
+        self.pending = (frame_time, x)
+        return ready
+
+    def close(self) -> None:
+        """Place the last frame and downmix what is held."""
+        if self.pending is not None:
+            _place(self.clock, *self.pending, None, self.held, self.sink)
+        if self.held is not None:
+            self.sink.emit(self.held.downmix())
 
 
 # AAC-LC encoders start with at least this many samples of priming (FFmpeg's and most others: 1024;
@@ -126,7 +161,7 @@ class AudioClock:
 
 
 def _place(clock: AudioClock, t: float | None, x: np.ndarray, t_next: float | None, held: "_Held",
-           out: "_Chunks") -> bool:
+           out) -> bool:
     """Add one decoded frame's samples at their place (``clock``); True when ``out`` has chunks ready."""
     shift = clock.offset(t, x.shape[1], t_next)
     if shift > 0:

@@ -21,7 +21,9 @@ from autohaptics.shots import Boundaries, detect
 # parameter of its own): a cache of another revision is analysed again. 1: every frame decoded at
 # 29-40 fps (``media.video.REPEAT_MIN_FPS``); caches before it carry none and count as 0. 2: audio
 # frames placed on the container's clock without splices at rounded timestamps (``media.audio.AudioClock``).
-ANALYSIS_REVISION = 2
+# 3: 10-bit and wider pictures read through the 8-bit proxies' path (``media.frames``); a master's mono
+# tracks read as its mix (``media.probe.channel_tracks``).
+ANALYSIS_REVISION = 3
 
 
 @dataclass

@@ -31,6 +31,7 @@ from autohaptics.testing.scenes import check_size, fps_fraction
 CONVERSIONS = ("repeat", "pulldown", "vfr")
 FITS = ("stretch", "pad", "fill")
 PIXEL_FORMATS = ("yuv420p", "yuv420p10le", "yuv422p10le")
+AUDIO_TRACKS = ("one", "mono")
 _VFR_STEPS = (1, 1, 2, 1, 1, 1, 2, 1, 3, 1, 1, 2)  # source frames from one kept frame to the next
 _VFR_TIME_BASE = Fraction(1, 1000)
 # a source frame's time may be this much late (Matroska/WebM store times rounded to the millisecond:
@@ -46,10 +47,10 @@ SCREENERS: dict[str, tuple[str, str, str, int, dict[str, str]]] = {
 
 def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | None = None, height: int | None = None,
              fps: float | Fraction | None = None, conversion: str = "repeat", video_codec: str | None = None,
-             audio_codec: str | None = None, video_bit_rate: int | None = None,
-             audio_bit_rate: int | None = None, video_options: dict[str, str] | None = None,
-             audio_layout: str | None = None, audio_gain_db: float = 0.0, fit: str = "stretch",
-             pix_fmt: str = "yuv420p", start_s: float = 0.0, duration_s: float | None = None) -> Path:
+             audio_codec: str | None = None, video_bit_rate: int | None = None, audio_bit_rate: int | None = None,
+             video_options: dict[str, str] | None = None, audio_layout: str | None = None, audio_gain_db: float = 0.0,
+             audio_tracks: str = "one", fit: str = "stretch", pix_fmt: str = "yuv420p", start_s: float = 0.0,
+             duration_s: float | None = None) -> Path:
     """Re-encode ``src`` into ``dst`` (container from the suffix, codecs default per container as in
     :func:`~autohaptics.testing.encode.write_scene`) and return ``dst``.
 
@@ -59,7 +60,8 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     video_options : the video encoder's own options (e.g. ``{"bf": "0"}``: no B-frames).
     audio_layout : the output's channel layout (e.g. "stereo": FFmpeg's downmix; default the source's).
     audio_gain_db : the sound's level against the source's, dB (a quieter or louder mix; samples past
-    full scale are clipped where the source's format is an integer one).
+    full scale are clipped where the source's format is an integer one). audio_tracks : "one" stream
+    or "mono" (each channel in a mono track, as a master keeps them; a PCM one labelled with its role).
     video_codec "copy" : the video packets as they are (only the sound changes; no other video option).
     fit : how the picture meets ``width`` x ``height``: "stretch" (scaled to it), "pad" (scaled to fit
     inside, centred on black: letterbox, pillarbox or windowbox) or "fill" (scaled to cover, the
@@ -80,8 +82,9 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     if suffix not in CONTAINERS or CONTAINERS[suffix][1] is None:
         raise ParameterError(f"{dst}: re-encoding needs a video container, one of "
                              f"{sorted(k for k, v in CONTAINERS.items() if v[1])}")
-    end_s = _checked_options(conversion, fit, pix_fmt, start_s, duration_s)
+    end_s = _checked_options(conversion, fit, pix_fmt, audio_tracks, start_s, duration_s)
     fmt, v_default, a_default = CONTAINERS[suffix]
+    sound = (audio_codec or a_default, audio_bit_rate, audio_layout, audio_tracks == "mono")
     w = int(width or info.video.display_size[0])
     h = int(height or info.video.display_size[1])
     check_size(w, h)
@@ -92,8 +95,7 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     if conversion == "pulldown" and (round(float(src_rate), 2) != 24 or round(float(rate), 2) != 30):
         raise ParameterError(f"3:2 pulldown turns 24 fps into 30 fps, got {float(src_rate):g} -> {float(rate):g}")
     if video_codec == "copy":
-        return _copy_video(src, dst, fmt, audio_codec or a_default, audio_bit_rate, audio_layout, info,
-                           gain_db=audio_gain_db)
+        return _copy_video(src, dst, fmt, sound, info, gain_db=audio_gain_db)
     with media_output(dst, f"to re-encode {src}") as tmp:
         with av.open(str(src)) as inp, av.open(str(tmp), mode="w", format=fmt) as out:
             vs = out.add_stream(video_codec or v_default, rate=rate)
@@ -105,7 +107,7 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
                 vs.bit_rate = int(video_bit_rate)
             if video_options:
                 vs.options = dict(video_options)
-            audio = _audio_stream(inp, out, audio_codec or a_default, audio_bit_rate, audio_layout) if info.audio else None
+            audio = _audio_stream(inp, out, *sound) if info.audio else None
             v_in = inp.streams.video[0]
             origin = _origin(v_in, info, as_shown)
             frames = _source_frames(v_in, w, h, fit=fit, origin=origin, start_s=float(start_s), end_s=end_s)
@@ -125,11 +127,14 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     return dst
 
 
-def _checked_options(conversion: str, fit: str, pix_fmt: str, start_s: float, duration_s: float | None) -> float | None:
+def _checked_options(conversion: str, fit: str, pix_fmt: str, audio_tracks: str, start_s: float,
+                     duration_s: float | None) -> float | None:
     """The end (s) of the stretch :func:`reencode` keeps (None: the source's end); ParameterError for an
-    unknown conversion, fit or pixel format, or a stretch that is not one."""
+    unknown conversion, fit, pixel format or audio tracks, or a stretch that is not one."""
     if conversion not in CONVERSIONS:
         raise ParameterError(f"conversion must be one of {CONVERSIONS}, got {conversion!r}")
+    if audio_tracks not in AUDIO_TRACKS:
+        raise ParameterError(f"audio_tracks must be one of {AUDIO_TRACKS}, got {audio_tracks!r}")
     if fit not in FITS or pix_fmt not in PIXEL_FORMATS:
         raise ParameterError(f"fit must be one of {FITS} and pix_fmt one of {PIXEL_FORMATS}, got {fit!r}, {pix_fmt!r}")
     end_s = None if duration_s is None else float(start_s) + float(duration_s)
@@ -138,14 +143,14 @@ def _checked_options(conversion: str, fit: str, pix_fmt: str, start_s: float, du
     return end_s
 
 
-def _copy_video(src, dst: Path, fmt: str, audio_codec: str, audio_bit_rate: int | None, audio_layout: str | None,
-                info, *, gain_db: float = 0.0) -> Path:
-    """``src``'s video packets copied into ``dst``, its sound decoded and encoded again."""
+def _copy_video(src, dst: Path, fmt: str, sound: tuple, info, *, gain_db: float = 0.0) -> Path:
+    """``src``'s video packets copied into ``dst``, its sound decoded and encoded again (``sound``:
+    :func:`_audio_stream`'s arguments after ``out``)."""
     with media_output(dst, f"to re-encode the sound of {src}") as tmp:
         with av.open(str(src)) as inp, av.open(str(tmp), mode="w", format=fmt) as out:
             v_in = inp.streams.video[0]
             v_out = out.add_stream_from_template(v_in)
-            audio = _audio_stream(inp, out, audio_codec, audio_bit_rate, audio_layout) if info.audio else None
+            audio = _audio_stream(inp, out, *sound) if info.audio else None
             for packet in inp.demux(v_in):
                 if packet.dts is None:
                     continue
@@ -278,17 +283,45 @@ def _pulldown(frames):
     yield from group  # a short last group as it is
 
 
-def _audio_stream(inp, out, codec: str, bit_rate: int | None, layout: str | None):
-    """The output audio stream for ``inp``'s first audio stream (in ``layout``, default its own),
-    and the resampler that feeds it."""
+def _audio_stream(inp, out, codec: str, bit_rate: int | None, layout: str | None, mono_tracks: bool = False):
+    """The output audio stream for ``inp``'s first audio stream (in ``layout``, default its own; with
+    ``mono_tracks``, a :class:`_MonoTracks` of its channels), and the resampler that feeds it."""
     a_in = inp.streams.audio[0]
     rate = 48000 if codec == "libopus" else a_in.codec_context.sample_rate
     layout = layout or a_in.codec_context.layout.name
-    a_out = out.add_stream(codec, rate=rate, layout=layout)
-    a_out.codec_context.format = _sample_format(a_out.codec_context.codec.audio_formats, a_in.codec_context.format)
-    if bit_rate:
-        a_out.bit_rate = int(bit_rate)
-    return a_out, av.AudioResampler(format=a_out.codec_context.format.name, layout=layout, rate=rate)
+    labelled = codec.startswith("pcm_")  # other encoders take a plain mono layout only
+    channels = ([av.AudioLayout(ch.name if labelled else "mono") for ch in av.AudioLayout(layout).channels]
+                if mono_tracks else [layout])
+    streams = [out.add_stream(codec, rate=rate, layout=ch) for ch in channels]
+    fmt = _sample_format(streams[0].codec_context.codec.audio_formats, a_in.codec_context.format)
+    for a_out in streams:
+        a_out.codec_context.format = fmt
+        if bit_rate:
+            a_out.bit_rate = int(bit_rate)
+    a_out = _MonoTracks(streams) if mono_tracks else streams[0]
+    return a_out, av.AudioResampler(format=fmt.name, layout=layout, rate=rate)
+
+
+class _MonoTracks:
+    """Mono output streams, one per channel of a layout, encoded as one stream: :meth:`encode` takes a
+    frame of the whole layout and returns every track's packets."""
+
+    def __init__(self, streams: list):
+        self.streams = streams
+        self.codec_context = streams[0].codec_context
+
+    def encode(self, frame: av.AudioFrame | None) -> list:
+        if frame is None:
+            return [p for s in self.streams for p in s.encode(None)]
+        x = frame.to_ndarray()
+        x = x if frame.format.is_planar else x.reshape(frame.samples, len(self.streams)).T
+        packets = []
+        for k, s in enumerate(self.streams):
+            mono = av.AudioFrame.from_ndarray(np.ascontiguousarray(x[k:k + 1]), format=s.codec_context.format.name,
+                                              layout=s.codec_context.layout)
+            mono.sample_rate, mono.pts, mono.time_base = frame.sample_rate, frame.pts, frame.time_base
+            packets += s.encode(mono)
+        return packets
 
 
 def _sample_format(offered, source):
