@@ -2,7 +2,8 @@
 
 Each source (the shared film clips, or any file given) is written again as each :data:`VARIANTS`
 row says: re-encoded as it is (H.264); letterboxed and pillarboxed; at half size; at 23.976, 25, 29.97 and 50 fps and at a
-variable frame rate; in 10 bits (H.264, and a ProRes master); as VP9 and H.264 screeners; with its
+variable frame rate; in 10 bits (H.264, and a ProRes master with its sound in one stream or, as
+editing suites write it, each channel in a mono track); as VP9 and H.264 screeners; with its
 sound as mono, stereo, 5.1 and 7.1; cut to start mid-score. Every row's timeline is compared with the source's own (the clean
 variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what differs
 is the start of the file, not the context a whole film gives its film-relative levels): onset F1,
@@ -93,6 +94,9 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("ProRes 422 HQ master, 24-bit PCM", "depth", ".mov",
             options={"video_codec": "prores_ks", "pix_fmt": "yuv422p10le", "video_options": {"profile": "3"},
                      "audio_codec": "pcm_s24le"}),
+    Variant("ProRes 422 HQ master, 24-bit PCM in mono tracks", "depth", ".mov",
+            options={"video_codec": "prores_ks", "pix_fmt": "yuv422p10le", "video_options": {"profile": "3"},
+                     "audio_codec": "pcm_s24le", "audio_tracks": "mono"}),
     Variant("screener VP9 240p crf 32 realtime, Opus", "screener", ".webm", screener="vp9", crf=32),
     Variant("screener H.264 360p crf 35", "screener", screener="h264", crf=35),
     Variant("screener H.264 240p crf 32", "screener", screener="h264", crf=32, options={"height": 240}),
