@@ -1,5 +1,5 @@
-"""Re-encodes as the material matrix needs them: bars (pad), crop (fill), 10 bits, a variable frame
-rate, a stretch cut out of a film, the sound alone mixed again with the picture's packets kept, the
+"""Re-encodes as the material matrix needs them: bars (pad), crop (fill), 10 bits, HDR grades, a variable
+frame rate, a stretch cut out of a film, the sound alone mixed again with the picture's packets kept, the
 sound at another level, and a surround sound mixed to stereo at its own level."""
 
 from __future__ import annotations
@@ -62,6 +62,28 @@ def test_ten_bits(src, tmp_path):
     with av.open(str(out)) as c:
         assert c.streams.video[0].codec_context.pix_fmt == "yuv420p10le"
     assert np.abs(_frame(out) - _frame(src)).mean() < 3
+
+
+@pytest.mark.parametrize("transfer, codec", [("pq", "libx265"), ("hlg", "libx264")])
+def test_an_hdr_grade_is_tagged_and_reads_as_the_sdr_picture(src, tmp_path, transfer, codec):
+    """An HDR10 (HEVC) or HLG grade: 10-bit BT.2020 frames tagged with their transfer, whose SDR proxies
+    (``media.hdr``) are the source's picture; FFmpeg's own conversion, which ignores the transfer, is not."""
+    from autohaptics import media
+
+    quiet = {"x265-params": "log-level=error"} if codec == "libx265" else None
+    out = reencode(src, tmp_path / f"{transfer}.mp4", video_codec=codec, pix_fmt="yuv420p10le", transfer=transfer,
+                   video_options=quiet)
+    with av.open(str(out)) as c:
+        f = [f for _, f in zip(range(11), c.decode(c.streams.video[0]))][-1]
+        assert (f.format.name, f.color_primaries, f.colorspace, f.color_trc) == ("yuv420p10le", 9, 9,
+                                                                                  {"pq": 16, "hlg": 18}[transfer])
+        got = media.Frame(f, 10, 0.4, 0).proxy(160).astype(int)
+        as_is = f.to_ndarray(width=160, height=90, format="rgb24", interpolation="AREA").astype(int)
+    with av.open(str(src)) as c:
+        g = [g for _, g in zip(range(11), c.decode(c.streams.video[0]))][-1]
+        want = media.Frame(g, 10, 0.4, 0).proxy(160).astype(int)
+    assert np.abs(got - want).mean() < 4
+    assert np.abs(as_is - want).mean() > 10
 
 
 def test_variable_frame_rate_keeps_each_frame_at_its_own_time(src, tmp_path):
@@ -203,5 +225,9 @@ def test_a_surround_sound_mixed_to_stereo_keeps_ffmpegs_float_level(tmp_path, co
 def test_bad_options_are_refused(src, tmp_path):
     with pytest.raises(ParameterError, match="fit"):
         reencode(src, tmp_path / "x.mp4", fit="zoom")
+    with pytest.raises(ParameterError, match="transfer"):
+        reencode(src, tmp_path / "x.mp4", transfer="pq")  # an HDR grade is 10-bit
+    with pytest.raises(ParameterError, match="audio_tracks"):
+        reencode(src, tmp_path / "x.mp4", audio_tracks="stereo")
     with pytest.raises(ParameterError, match="start_s"):
         reencode(src, tmp_path / "x.mp4", start_s=1.0, duration_s=0.0)

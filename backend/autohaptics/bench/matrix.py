@@ -1,18 +1,17 @@
 """``autohaptics bench matrix``: the material matrix, the forms a film reaches us in.
 
-Each source (the shared film clips, or any file given) is written again as each :data:`VARIANTS`
-row says: re-encoded as it is (H.264); letterboxed and pillarboxed; at half size; at 23.976, 25, 29.97 and 50 fps and at a
-variable frame rate; in 10 bits (H.264, and a ProRes master with its sound in one stream or, as
-editing suites write it, each channel in a mono track); as VP9 and H.264 screeners; with its
-sound as mono, stereo, 5.1 and 7.1; cut to start mid-score. Every row's timeline is compared with the source's own (the clean
-variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what differs
-is the start of the file, not the context a whole film gives its film-relative levels): onset F1,
-fan-tick F1, tolerant fan IoU and temperature MAE against :data:`TARGETS`, and a cut's largest
-vibration in its first 0.5 s where the film itself does not vibrate. With
-``--speed`` each file's ``generate`` and its bare decode (:func:`~autohaptics.bench.decode.
-bare_decode`) also run as whole processes, and the row gives their ratio. The digital-silence pair
-(booms and blips over exact silence, and over a -100 dBFS floor) is a row of its own: the silence
-variant against the floor variant, and the ratio of their generate times.
+Each source (the shared film clips, or any file given) is written again as each :data:`VARIANTS` row says:
+re-encoded as it is (H.264); letterboxed and pillarboxed; at half size; at 23.976, 25, 29.97 and 50 fps and at
+a variable frame rate; in 10 bits (H.264, and a ProRes master with its sound in one stream or, as editing
+suites write it, each channel in a mono track); as an HDR10 grade; as VP9 and H.264 screeners; with its sound
+as mono, stereo, 5.1 and 7.1; cut to start mid-score. Every row's timeline is compared with the source's own
+(the clean variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what
+differs is the start of the file, not the context a whole film gives its film-relative levels): onset F1,
+fan-tick F1, tolerant fan IoU and temperature MAE against :data:`TARGETS`, and a cut's largest vibration in
+its first 0.5 s where the film itself does not vibrate. With ``--speed`` each file's ``generate`` and its bare
+decode (:func:`~autohaptics.bench.decode.bare_decode`) also run as whole processes, and the row gives their
+ratio. The digital-silence pair (booms and blips over exact silence, and over a -100 dBFS floor) is a row of
+its own: the silence variant against the floor variant, and the ratio of their generate times.
 
 Variant files are written once into ``--out`` and reused; nothing large is committed.
 """
@@ -97,6 +96,7 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("ProRes 422 HQ master, 24-bit PCM in mono tracks", "depth", ".mov",
             options={"video_codec": "prores_ks", "pix_fmt": "yuv422p10le", "video_options": {"profile": "3"},
                      "audio_codec": "pcm_s24le", "audio_tracks": "mono"}),
+    Variant("HDR10 grade (PQ, BT.2020), 10-bit H.264", "depth", options={"pix_fmt": "yuv420p10le", "transfer": "pq"}),
     Variant("screener VP9 240p crf 32 realtime, Opus", "screener", ".webm", screener="vp9", crf=32),
     Variant("screener H.264 360p crf 35", "screener", screener="h264", crf=35),
     Variant("screener H.264 240p crf 32", "screener", screener="h264", crf=32, options={"height": 240}),

@@ -3,9 +3,9 @@ only when a stage asks (converting every 1080p frame to RGB costs as much as dec
 
 For planar YUV (8-bit, and 9-16 bits in 16-bit words: 10-bit encodes, ProRes masters) the planes are
 area-averaged in place (OpenCV's area averaging, :mod:`.area`; a wide plane brought to 8-bit scale
-after its first halving) and converted on the small proxy (BT.709 for BT.709-tagged frames, BT.601
-otherwise, as FFmpeg's scaler does), within about 2 grey levels of FFmpeg's scaled conversion of the
-full frame and about 3x cheaper.
+after its first halving) and converted on the small proxy (BT.709 or BT.2020 for frames tagged so,
+BT.601 otherwise, as FFmpeg's scaler does), within about 2 grey levels of FFmpeg's scaled conversion of the
+full frame and about 3x cheaper. HDR frames (PQ, HLG) give SDR proxies, luma and colour (:mod:`.hdr`).
 
 A frame may be cropped to a rectangle (the active picture inside black bars,
 :mod:`autohaptics.media.active`): its size, proxies and copies are then those of the rectangle,
@@ -18,6 +18,7 @@ import av
 import cv2
 import numpy as np
 
+from autohaptics.media import hdr
 from autohaptics.media.area import area_resize
 
 _PLANAR_YUV8 = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj444p", "yuv440p", "yuvj440p"}
@@ -81,9 +82,10 @@ class Frame:
         fmt : "rgb24" -> uint8 [shape=(h, w, 3)]; "gray" -> uint8 [shape=(h, w)] (luma).
 
         For planar YUV smaller than the frame (nearly every film) the planes are area-averaged
-        in place (:mod:`.area`) and converted on the small proxy (BT.709 matrix for BT.709-tagged
-        frames, BT.601 otherwise, as FFmpeg's scaler does): about 3x cheaper than FFmpeg's
-        scaled conversion of the full frame, within about 2 grey levels of it.
+        in place (:mod:`.area`) and converted on the small proxy (BT.709 or BT.2020 matrix for frames
+        tagged so, BT.601 otherwise, as FFmpeg's scaler does): about 3x cheaper than FFmpeg's
+        scaled conversion of the full frame, within about 2 grey levels of it. An HDR frame's
+        proxies are SDR ones (:mod:`.hdr`).
         """
         width, height = self._size(width, height)
         planes = self._planes_small(width, height, colour=fmt == "rgb24") if fmt in ("rgb24", "gray") else None
@@ -104,6 +106,8 @@ class Frame:
                                          interpolation=interpolation)
         if self.rotation:
             arr = np.ascontiguousarray(np.rot90(arr, k=self.rotation // 90))
+        if hdr.transfer(self._frame) is not None and fmt in ("rgb24", "gray"):  # FFmpeg's full-range signal
+            arr = hdr.sdr_rgb(arr, self._frame) if fmt == "rgb24" else hdr.sdr_luma(arr, self._frame, True)
         return arr
 
     def gray(self, width: int) -> np.ndarray:
@@ -281,8 +285,9 @@ def _plane(frame: av.VideoFrame, i: int) -> np.ndarray | None:
 
 
 def _to_8_bit(arr: np.ndarray, frame: av.VideoFrame) -> np.ndarray:
-    """Samples of ``frame``'s planes at 8-bit scale, rounded (the array itself when 8-bit already)."""
-    if arr.dtype == np.uint8:
+    """Samples of ``frame``'s planes at 8-bit scale, rounded (the array itself when 8-bit already, or
+    when the frame is HDR: its planes keep their bits until its transfer, :mod:`.hdr`)."""
+    if arr.dtype == np.uint8 or hdr.transfer(frame) is not None:
         return arr
     return cv2.convertScaleAbs(arr, alpha=1.0 / (1 << (_stored_bits(frame) - 8)))
 
@@ -303,7 +308,10 @@ def _full_range(frame: av.VideoFrame) -> bool:
 
 
 def _luma_full_range(y: np.ndarray, frame: av.VideoFrame) -> np.ndarray:
-    """Limited-range luma 16..235 -> 0..255, as FFmpeg's gray conversion does."""
+    """Limited-range luma 16..235 -> 0..255, as FFmpeg's gray conversion does; an HDR frame's as SDR
+    luma (:mod:`.hdr`)."""
+    if hdr.transfer(frame) is not None:
+        return hdr.sdr_luma(y, frame, _full_range(frame), _stored_bits(frame) or 8)
     if _full_range(frame):
         return y
     return cv2.convertScaleAbs(y, alpha=255.0 / 219.0, beta=-16.0 * 255.0 / 219.0)
@@ -311,11 +319,15 @@ def _luma_full_range(y: np.ndarray, frame: av.VideoFrame) -> np.ndarray:
 
 def _yuv_to_rgb(y: np.ndarray, u: np.ndarray, v: np.ndarray, frame: av.VideoFrame) -> np.ndarray:
     """uint8 Y, U, V planes of one size -> uint8 RGB [shape=(h, w, 3)], float32 arithmetic rounded
-    half up (BT.709 or BT.601 by the frame's tag, limited or full range), each channel computed in
-    place in a plane of its own and interleaved by OpenCV (fewer passes than channel slices)."""
-    kr, kb = (0.2126, 0.0722) if getattr(frame, "colorspace", 0) == 1 else (0.299, 0.114)
+    half up (BT.709, BT.2020 or BT.601 by the frame's tag, limited or full range), each channel computed
+    in place in a plane of its own and interleaved by OpenCV (fewer passes than channel slices); an HDR
+    frame's brought to SDR (:mod:`.hdr`)."""
+    kr, kb = _LUMA_WEIGHTS.get(getattr(frame, "colorspace", 0), (0.299, 0.114))
     kg = 1.0 - kr - kb
     yy, cb, cr = y.astype(np.float32), u.astype(np.float32), v.astype(np.float32)
+    if y.dtype != np.uint8:  # an HDR frame's planes as stored (:func:`_to_8_bit`): to 8-bit scale, unrounded
+        for c in (yy, cb, cr):
+            c *= np.float32(1.0 / (1 << (_stored_bits(frame) - 8)))
     cb -= np.float32(128.0)
     cr -= np.float32(128.0)
     if not _full_range(frame):
@@ -329,6 +341,14 @@ def _yuv_to_rgb(y: np.ndarray, u: np.ndarray, v: np.ndarray, frame: av.VideoFram
     np.subtract(yy, np.multiply(cb, np.float32(2.0 * kb * (1.0 - kb) / kg), out=tmp), out=rgb[1])
     np.subtract(rgb[1], np.multiply(cr, np.float32(2.0 * kr * (1.0 - kr) / kg), out=tmp), out=rgb[1])
     np.add(yy, np.multiply(cb, np.float32(2.0 * (1.0 - kb)), out=rgb[2]), out=rgb[2])
+    if hdr.transfer(frame) is not None:
+        np.clip(rgb, 0.0, 255.0, out=rgb)
+        return hdr.sdr_rgb(cv2.merge(list(rgb)), frame)
     rgb += np.float32(0.5)
     np.clip(rgb, 0.0, 255.0, out=rgb)
     return cv2.merge([c.astype(np.uint8) for c in rgb])
+
+
+# (Kr, Kb) of the YCbCr matrix by FFmpeg's AVColorSpace tag: BT.709, BT.2020 (non-constant and constant
+# luminance, the latter read as the former); any other tag BT.601, as FFmpeg's scaler reads it
+_LUMA_WEIGHTS = {1: (0.2126, 0.0722), 9: (0.2627, 0.0593), 10: (0.2627, 0.0593)}

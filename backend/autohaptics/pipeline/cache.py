@@ -22,7 +22,7 @@ from autohaptics.shots import Boundaries, detect
 # 29-40 fps (``media.video.REPEAT_MIN_FPS``); caches before it carry none and count as 0. 2: audio
 # frames placed on the container's clock without splices at rounded timestamps (``media.audio.AudioClock``).
 # 3: 10-bit and wider pictures read through the 8-bit proxies' path (``media.frames``); a master's mono
-# tracks read as its mix (``media.probe.channel_tracks``).
+# tracks read as its mix (``media.probe.channel_tracks``); HDR pictures read as SDR (``media.hdr``).
 ANALYSIS_REVISION = 3
 
 

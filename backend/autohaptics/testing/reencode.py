@@ -25,6 +25,7 @@ import numpy as np
 from autohaptics.errors import ParameterError
 from autohaptics.media import probe
 from autohaptics.media.audio import AudioClock, timestamp_slack_s
+from autohaptics.testing import grade
 from autohaptics.testing.encode import CONTAINERS, media_output
 from autohaptics.testing.scenes import check_size, fps_fraction
 
@@ -49,8 +50,8 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
              fps: float | Fraction | None = None, conversion: str = "repeat", video_codec: str | None = None,
              audio_codec: str | None = None, video_bit_rate: int | None = None, audio_bit_rate: int | None = None,
              video_options: dict[str, str] | None = None, audio_layout: str | None = None, audio_gain_db: float = 0.0,
-             audio_tracks: str = "one", fit: str = "stretch", pix_fmt: str = "yuv420p", start_s: float = 0.0,
-             duration_s: float | None = None) -> Path:
+             audio_tracks: str = "one", fit: str = "stretch", pix_fmt: str = "yuv420p", transfer: str = "sdr",
+             start_s: float = 0.0, duration_s: float | None = None) -> Path:
     """Re-encode ``src`` into ``dst`` (container from the suffix, codecs default per container as in
     :func:`~autohaptics.testing.encode.write_scene`) and return ``dst``.
 
@@ -66,7 +67,8 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     fit : how the picture meets ``width`` x ``height``: "stretch" (scaled to it), "pad" (scaled to fit
     inside, centred on black: letterbox, pillarbox or windowbox) or "fill" (scaled to cover, the
     overhang cropped evenly). pix_fmt : "yuv420p", "yuv420p10le" (10-bit) or "yuv422p10le" (a
-    ProRes or DNxHR master's 10-bit 4:2:2).
+    ProRes or DNxHR master's 10-bit 4:2:2). transfer : "sdr", or an HDR grade of the picture, "pq"
+    (HDR10) or "hlg", 10-bit 4:2:0 (:mod:`autohaptics.testing.grade`).
     start_s, duration_s : the stretch of ``src`` kept, s (a reel cut mid-film; default all of it). A cut
     at the source's rate keeps each frame at its film time from ``start_s`` (the frame on screen there
     first), wherever the cut falls between two frames.
@@ -82,7 +84,7 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     if suffix not in CONTAINERS or CONTAINERS[suffix][1] is None:
         raise ParameterError(f"{dst}: re-encoding needs a video container, one of "
                              f"{sorted(k for k, v in CONTAINERS.items() if v[1])}")
-    end_s = _checked_options(conversion, fit, pix_fmt, audio_tracks, start_s, duration_s)
+    end_s = _checked_options(conversion, fit, pix_fmt, audio_tracks, transfer, start_s, duration_s)
     fmt, v_default, a_default = CONTAINERS[suffix]
     sound = (audio_codec or a_default, audio_bit_rate, audio_layout, audio_tracks == "mono")
     w = int(width or info.video.display_size[0])
@@ -107,14 +109,13 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
                 vs.bit_rate = int(video_bit_rate)
             if video_options:
                 vs.options = dict(video_options)
+            grade.tag(vs.codec_context, transfer)
             audio = _audio_stream(inp, out, *sound) if info.audio else None
             v_in = inp.streams.video[0]
             origin = _origin(v_in, info, as_shown)
             frames = _source_frames(v_in, w, h, fit=fit, origin=origin, start_s=float(start_s), end_s=end_s)
             for (pts, time_base), rgb in _timed(frames, conversion, rate, as_shown):
-                frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
-                if pix_fmt != "yuv420p":
-                    frame = frame.reformat(format=pix_fmt)
+                frame = _picture(rgb, pix_fmt, transfer)
                 frame.pts, frame.time_base = pts, time_base
                 for p in vs.encode(frame):
                     out.mux(p)
@@ -127,10 +128,21 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     return dst
 
 
-def _checked_options(conversion: str, fit: str, pix_fmt: str, audio_tracks: str, start_s: float,
+def _picture(rgb: np.ndarray, pix_fmt: str, transfer: str) -> av.VideoFrame:
+    """One output picture from RGB, in ``pix_fmt`` (an HDR grade: :func:`~autohaptics.testing.grade.hdr_frame`)."""
+    if transfer != "sdr":
+        return grade.hdr_frame(rgb, transfer)
+    frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
+    return frame if pix_fmt == "yuv420p" else frame.reformat(format=pix_fmt)
+
+
+def _checked_options(conversion: str, fit: str, pix_fmt: str, audio_tracks: str, transfer: str, start_s: float,
                      duration_s: float | None) -> float | None:
     """The end (s) of the stretch :func:`reencode` keeps (None: the source's end); ParameterError for an
-    unknown conversion, fit, pixel format or audio tracks, or a stretch that is not one."""
+    unknown conversion, fit, pixel format, audio tracks or transfer, or a stretch that is not one."""
+    if transfer not in grade.TRANSFERS or (transfer != "sdr" and pix_fmt != "yuv420p10le"):
+        raise ParameterError(f"transfer must be one of {grade.TRANSFERS} (an HDR grade with pix_fmt "
+                             f"'yuv420p10le'), got {transfer!r} with {pix_fmt!r}")
     if conversion not in CONVERSIONS:
         raise ParameterError(f"conversion must be one of {CONVERSIONS}, got {conversion!r}")
     if audio_tracks not in AUDIO_TRACKS:
