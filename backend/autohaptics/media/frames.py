@@ -318,10 +318,10 @@ def _luma_full_range(y: np.ndarray, frame: av.VideoFrame) -> np.ndarray:
 
 
 def _yuv_to_rgb(y: np.ndarray, u: np.ndarray, v: np.ndarray, frame: av.VideoFrame) -> np.ndarray:
-    """uint8 Y, U, V planes of one size -> uint8 RGB [shape=(h, w, 3)], float32 arithmetic rounded
-    half up (BT.709, BT.2020 or BT.601 by the frame's tag, limited or full range), each channel computed
-    in place in a plane of its own and interleaved by OpenCV (fewer passes than channel slices); an HDR
-    frame's brought to SDR (:mod:`.hdr`)."""
+    """Y, U, V planes of one size (uint8; an HDR frame's uint16 as stored) -> uint8 RGB [shape=(h, w, 3)],
+    float32 arithmetic rounded half up (BT.709, BT.2020 or BT.601 by the frame's tag, limited or full
+    range), each channel computed in place in a plane of its own and interleaved by OpenCV (fewer passes
+    than channel slices); an HDR frame's brought to SDR (:mod:`.hdr`)."""
     kr, kb = _LUMA_WEIGHTS.get(getattr(frame, "colorspace", 0), (0.299, 0.114))
     kg = 1.0 - kr - kb
     yy, cb, cr = y.astype(np.float32), u.astype(np.float32), v.astype(np.float32)
