@@ -24,8 +24,9 @@ import av
 import numpy as np
 
 from autohaptics.errors import MediaError
-from autohaptics.media.mix import Mix
-from autohaptics.media.probe import AudioReport, MediaInfo, decode_tolerant, open_container, probe, stream_by_index
+from autohaptics.media.mix import Mix, Sink
+from autohaptics.media.probe import (NO_ROLE, AudioReport, MediaInfo, decode_tolerant, open_container, probe,
+                                     stream_by_index)
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
 
 
@@ -84,7 +85,7 @@ class _Track:
     """One audio stream's frames placed on the container's clock (:class:`AudioClock`) and downmixed
     into ``sink``, with ``weights`` or, when None, the weights of its first frame's layout."""
 
-    def __init__(self, stream, start_s: float, rate: int, sink, report: AudioReport,
+    def __init__(self, stream, start_s: float, rate: int, sink: Sink, report: AudioReport,
                  weights: np.ndarray | None = None):
         stream.thread_type = "AUTO"
         self.clock = AudioClock(start_s, rate, timestamp_slack_s(stream.time_base, rate))
@@ -161,7 +162,7 @@ class AudioClock:
 
 
 def _place(clock: AudioClock, t: float | None, x: np.ndarray, t_next: float | None, held: "_Held",
-           out) -> bool:
+           out: Sink) -> bool:
     """Add one decoded frame's samples at their place (``clock``); True when ``out`` has chunks ready."""
     shift = clock.offset(t, x.shape[1], t_next)
     if shift > 0:
@@ -352,7 +353,7 @@ def _channel_names(layout, n: int) -> list[str] | None:
     """The role names of a decoded layout's ``n`` channels, upper case; None where any is unknown
     (6 or 8 such channels: FFmpeg's default 5.1 / 7.1 order)."""
     names = [str(ch.name or "").upper() for ch in layout.channels][:n]
-    if len(names) == n and all(nm and nm not in ("NONE", "NA", "UNKNOWN", "UNUSED") for nm in names):
+    if len(names) == n and all(nm and nm not in NO_ROLE for nm in names):
         return names
     if n in _UNLABELLED:
         return [ch.name.upper() for ch in av.AudioLayout(_UNLABELLED[n]).channels]

@@ -9,6 +9,8 @@ import numpy as np
 
 
 class Sink(Protocol):
+    """Where mono samples go, in order (``media.audio``'s chunker, or a :class:`Lane` of a mix)."""
+
     def emit(self, mono: np.ndarray) -> None: ...
 
 

@@ -295,6 +295,8 @@ def _audio_info(s, c) -> AudioInfo:
 # Containers whose unlabelled mono tracks are the channels of one mix (broadcast MXF and GXF carry
 # each AES3 channel as a track); elsewhere such tracks are versions of the sound (languages, commentary).
 _CHANNEL_PER_TRACK = ("mxf", "gxf")
+# FFmpeg's names of a channel without a role (an unlabelled layout's channels)
+NO_ROLE = ("NONE", "NA", "UNKNOWN", "UNUSED")
 # Labels of a stereo downmix (Lt/Rt) beside the discrete channels it is made from.
 _DOWNMIX_LABELS = ("DL", "DR")
 
@@ -342,7 +344,7 @@ def _track_label(s) -> str:
     (FFmpeg reads an unlabelled QuickTime track as plain mono, an MXF or Matroska one as NONE)."""
     layout = s.codec_context.layout
     name = str(layout.channels[0].name or "").upper() if layout.channels else ""
-    return "" if layout.name == "mono" or name in ("", "NONE", "NA", "UNKNOWN", "UNUSED") else name
+    return "" if layout.name == "mono" or not name or name in NO_ROLE else name
 
 
 def _container_start(c) -> float:
