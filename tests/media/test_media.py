@@ -129,6 +129,38 @@ def test_sparse_decoding_below_40_fps_skips_only_non_reference_frames():
     assert sparse == fast
 
 
+@pytest.mark.parametrize("codec, options", [("mpeg2video", {"bf": "2", "g": "12"}),
+                                            ("libx265", {"preset": "veryfast", "x265-params": "log-level=error"})],
+                         ids=["MPEG-2, two B-frames", "HEVC, x265's B-pyramid"])
+@pytest.mark.parametrize("prefetch", [0, 4])
+def test_skipping_that_would_leave_two_frames_out_decodes_every_frame(tmp_path, codec, options, prefetch):
+    """MPEG-2's two B-frames between references (a DVD's) and x265's four (one of them a reference)
+    leave 3-frame gaps where the non-reference frames are skipped: "nonref" decodes every frame
+    there, the same frames as "full", from the start or from a seek, and x264's stream still skips."""
+    import av
+
+    from autohaptics.media.video import SKIP_GAP_MAX
+    from autohaptics.testing.reencode import reencode
+
+    texture = cv2.GaussianBlur(np.random.default_rng(5).integers(0, 256, (96, 256, 3), dtype=np.uint8), (7, 7), 2)
+    frames = [np.ascontiguousarray(np.roll(texture, 2 * i, axis=1)[:, :128]) for i in range(48)]  # a pan
+    h264 = write_streams(tmp_path / "b.mp4", frames=frames, fps=24)
+    other = reencode(h264, tmp_path / "o.mkv", video_codec=codec, video_options=options, video_bit_rate=2_000_000)
+    with av.open(str(other)) as c:  # the stream itself: gaps of three frames without the non-reference ones
+        c.streams.video[0].codec_context.skip_frame = "NONREF"
+        times = [f.time for f in c.decode(video=0)]
+    assert max(np.diff(times)) * 24 > SKIP_GAP_MAX
+    for start_s in (0.0, 0.9):
+        full = [(f.time_s, f.gray(64)) for f in media.iter_video(other, decode="full", start_s=start_s)]
+        got = [(f.index, f.time_s, f.gray(64)) for f in media.iter_video(other, decode="nonref", prefetch=prefetch,
+                                                                          start_s=start_s)]
+        assert [i for i, _, _ in got] == list(range(len(full)))
+        assert [t for _, t, _ in got] == [t for t, _ in full]
+        for (_, _, g), (_, gf) in zip(got, full):
+            np.testing.assert_array_equal(g, gf)
+    assert len(_decoded(h264, "nonref")) < 0.75 * len(_decoded(h264, "full"))
+
+
 def test_decoder_threads_leave_the_analysis_a_core(tmp_path, monkeypatch):
     """Frames decoded ahead of the analysis: FFmpeg gets one thread fewer than the cores where it
     skips the non-reference frames of a B-frame stream below 40 fps, its own count otherwise

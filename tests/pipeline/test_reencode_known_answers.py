@@ -1,6 +1,6 @@
 """The tracks are a property of the film, not of its encoding: a generated motion scene, encoded once
 and re-encoded the ways a film reaches a user (half size; 25 -> 30 fps by repeated frames; 24 -> 30 fps
-by 3:2 pulldown; VP9 at a low bit rate), must give the same fans, vibration onsets and temperature
+by 3:2 pulldown; VP9 at a low bit rate; MPEG-2 and HEVC with their B-frames), must give the same fans, vibration onsets and temperature
 as the original encode. Also the flow pair's repeated-frame rule on its own (issue 16, points 3-4).
 """
 
@@ -29,6 +29,11 @@ VARIANTS = {
     "24 -> 30 fps, 3:2 pulldown": (24, dict(fps=30, conversion="pulldown"), ".mp4"),
     "VP9 at 150 kbit/s, Opus": (24, dict(video_codec="libvpx-vp9", video_bit_rate=150_000), ".webm"),
     "VP9 at 150 kbit/s, 25 fps": (25, dict(video_codec="libvpx-vp9", video_bit_rate=150_000), ".webm"),
+    # B-frame runs whose skipped frames leave 3-frame gaps (media.video.SKIP_GAP_MAX)
+    "MPEG-2, two B-frames (a DVD's)": (25, dict(video_codec="mpeg2video", video_bit_rate=4_000_000,
+                                                  video_options={"bf": "2", "g": "15"}), ".mkv"),
+    "HEVC, x265 veryfast": (24, dict(video_codec="libx265", video_options={"preset": "veryfast", "crf": "18",
+                                                                          "x265-params": "log-level=error"}), ".mp4"),
 }
 
 

@@ -30,6 +30,12 @@ REPEAT_MIN_FPS = 29.0
 # for up to the default 5 ms (300 1080p frames decoded beside a Python loop: 5.9 s instead of 1.2 s
 # alone, 2.1 s at 1 ms); docs/BENCHMARKS.md, "Full-frame 1080p", eleventh stop
 SWITCH_INTERVAL_S = 0.001
+# "nonref" and "fast" skip the non-reference frames only while the frames decoded stay at most this many
+# frame intervals apart (one frame skipped between two: x264's B-frames). From the first wider gap on,
+# every frame is decoded: MPEG-2's two B-frames between references, or x265's four with one of them a
+# reference, leave gaps of 3 frames (125 ms at 24 fps, longer than a tick), so ticks go without their
+# own frame and flow pairs span three frames (docs/BENCHMARKS.md, "Stop 55").
+SKIP_GAP_MAX = 2.5
 
 
 def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefetch: int = 0,
@@ -38,19 +44,18 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
                crop: tuple[int, int, int, int] | None = None) -> Iterator[Frame]:
     """Decode the video stream frame by frame (presentation order); nothing is converted here.
 
-    decode : "full" decodes every frame exactly; "nonref" asks FFmpeg to skip non-reference
-        frames (in H.264/HEVC typically the B-frames: about half the frames; formats without them,
-        such as VP8 or intra-only video, decode every frame), the others exactly; "fast" also
-        skips the in-loop deblocking filter (invisible on small proxies, not decoded exactly);
-        "sparse" (the fast preset) also skips the reference B-frames at ``SPARSE_MIN_FPS`` and
-        above (H.264 B-pyramids; only I- and P-frames are decoded, about a quarter of the frames at
-        60 fps): a P-frame that used a skipped B-frame as reference comes out approximate (mean 3,
-        at most 5.6 grey levels off on the shared 1080p60 clip). Frames keep their true timestamps. A
-        variable-rate stream skips no frame; nor, but in "sparse", does one at 29 to 40 fps (a film's repeats).
-    prefetch : when > 0, decode in a background thread up to this many frames ahead, so the
-        decoder keeps working while the caller analyses a frame (PyAV releases the GIL while
-        decoding); FFmpeg then gets its threads by :func:`decoder_threads`.
-        Frames stay valid after the step that yielded them in this mode.
+    decode : "full" decodes every frame exactly; "nonref" asks FFmpeg to skip non-reference frames (in
+        H.264/HEVC typically the B-frames: about half the frames; formats without them, such as VP8 or
+        intra-only video, decode every frame), the others exactly; "fast" also skips the in-loop deblocking
+        filter (invisible on small proxies, not decoded exactly); "sparse" (the fast preset) also skips the
+        reference B-frames at ``SPARSE_MIN_FPS`` and above (H.264 B-pyramids; only I- and P-frames are decoded,
+        about a quarter of the frames at 60 fps): a P-frame that used a skipped B-frame as reference comes out
+        approximate (mean 3, at most 5.6 grey levels off on the shared 1080p60 clip). Frames keep their true
+        timestamps. No frame is skipped in a variable-rate stream, nor, but in "sparse", at 29 to 40 fps (a
+        film's repeats) or after skipping left two frames in a row out (``SKIP_GAP_MAX``; "sparse" below 40 fps).
+    prefetch : when > 0, decode in a background thread up to this many frames ahead, so the decoder keeps
+        working while the caller analyses a frame (PyAV releases the GIL while decoding); FFmpeg then gets
+        its threads by :func:`decoder_threads`. Frames stay valid after the step that yielded them then.
     start_s : when > 0, seek to the keyframe at or before this time (s) first; the frames then
         decode exactly as in a pass from the start, but ``Frame.index`` counts from the seek.
     prepare : with ``prefetch``, called on each frame in the decoding thread while that thread is
@@ -92,41 +97,67 @@ def decoder_threads(stream, decode: str, fps: float) -> int:
 
 def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0, beside: bool = False,
                 crop: tuple[int, int, int, int] | None = None) -> Iterator[Frame]:
-    """The frames of :func:`iter_video`. beside : decoded ahead of an analysis (:func:`decoder_threads`)."""
+    """The frames of :func:`iter_video`. beside : decoded ahead of an analysis (:func:`decoder_threads`).
+
+    Where skipping the non-reference frames leaves a gap wider than ``SKIP_GAP_MAX`` the stream is
+    opened again to decode every frame (with the decoder threads of a full decode) from the keyframe
+    before the last frame given, and goes on after that frame."""
     report = AudioReport()
     n = 0
-    with open_container(info.path) as c:
-        stream = stream_by_index(c, info.video.index)
-        stream.thread_type = "AUTO"
-        # a variable-rate stream's frames are already few and irregular: skipping some leaves gaps of 0.1-0.3 s
-        skips = decode in ("nonref", "fast", "sparse") and not info.video.variable_rate \
-            and (decode == "sparse" or not REPEAT_MIN_FPS <= info.video.fps < SPARSE_MIN_FPS)
-        if skips:
-            sparse = decode == "sparse" and info.video.fps >= SPARSE_MIN_FPS
-            stream.codec_context.skip_frame = "BIDIR" if sparse else "NONREF"
-            if sparse:
-                # a chain of P-frames gains nothing from frame threads (each waits for the one
-                # before; measured: 2.49 s, one thread 2.42 s); slice threads do where the encoder
-                # cut frames into slices (1.52 s on the 30 s 1080p BBB loop) and cost nothing where not
-                stream.thread_type = "SLICE"
-        threads = decoder_threads(stream, decode if skips else "full", info.video.fps) if beside else 0
-        if threads:
-            stream.codec_context.thread_count = threads
-        if decode in ("fast", "sparse"):
-            stream.codec_context.options = {"skip_loop_filter": "all"}
-        if start_s > 0 and stream.time_base:
-            c.seek(int((start_s + info.start_s) / stream.time_base), backward=True, any_frame=False, stream=stream)
-        last_t = -math.inf
-        for frame in decode_tolerant(c, stream, report, info.path):
-            t = float(frame.time) - info.start_s if frame.time is not None else n / max(info.video.fps, 1e-9)
-            if t <= last_t:  # broken timestamps: keep frames ordered
-                t = last_t + 1.0 / max(info.video.fps, 1e-9)
-            last_t = t
-            yield Frame(frame, n, t, norm_rotation(getattr(frame, "rotation", info.video.rotation)), crop)
-            n += 1
+    last_t = -math.inf
+    resume_after = None  # after a reopening: the frames up to this time were given already
+    skip_allowed = True
+    while True:
+        with open_container(info.path) as c:
+            stream = stream_by_index(c, info.video.index)
+            watch_gaps = _configure(stream, info, decode, beside, skip_allowed)
+            seek_s = start_s if resume_after is None else resume_after
+            if seek_s > 0 and stream.time_base:
+                c.seek(int((seek_s + info.start_s) / stream.time_base), backward=True, any_frame=False, stream=stream)
+            for frame in decode_tolerant(c, stream, report, info.path):
+                t = float(frame.time) - info.start_s if frame.time is not None else n / max(info.video.fps, 1e-9)
+                if resume_after is not None:
+                    if t <= resume_after:
+                        continue
+                    resume_after = None
+                if t <= last_t:  # broken timestamps: keep frames ordered
+                    t = last_t + 1.0 / max(info.video.fps, 1e-9)
+                if watch_gaps and n and (t - last_t) * info.video.fps > SKIP_GAP_MAX:
+                    resume_after = last_t
+                    break
+                last_t = t
+                yield Frame(frame, n, t, norm_rotation(getattr(frame, "rotation", info.video.rotation)), crop)
+                n += 1
+        if resume_after is None:
+            break
+        skip_allowed = False
     if n == 0:
         reason = f" ({report.first_error})" if report.first_error else ""
         raise MediaError(f"{info.path}: the video stream holds no decodable frames{reason}")
+
+
+def _configure(stream, info: MediaInfo, decode: str, beside: bool, skip_allowed: bool = True) -> bool:
+    """Set ``stream``'s decoder up for ``decode`` (:func:`iter_video`); True where it skips the
+    non-reference frames, so the gaps between the frames it gives are to be watched (``SKIP_GAP_MAX``).
+    skip_allowed : False decodes every frame whatever ``decode`` says (its loop filter as it says)."""
+    stream.thread_type = "AUTO"
+    # a variable-rate stream's frames are already few and irregular: skipping some leaves gaps of 0.1-0.3 s
+    skips = skip_allowed and decode in ("nonref", "fast", "sparse") and not info.video.variable_rate \
+        and (decode == "sparse" or not REPEAT_MIN_FPS <= info.video.fps < SPARSE_MIN_FPS)
+    sparse = skips and decode == "sparse" and info.video.fps >= SPARSE_MIN_FPS
+    if skips:
+        stream.codec_context.skip_frame = "BIDIR" if sparse else "NONREF"
+        if sparse:
+            # a chain of P-frames gains nothing from frame threads (each waits for the one
+            # before; measured: 2.49 s, one thread 2.42 s); slice threads do where the encoder
+            # cut frames into slices (1.52 s on the 30 s 1080p BBB loop) and cost nothing where not
+            stream.thread_type = "SLICE"
+    threads = decoder_threads(stream, decode if skips else "full", info.video.fps) if beside else 0
+    if threads:
+        stream.codec_context.thread_count = threads
+    if decode in ("fast", "sparse"):
+        stream.codec_context.options = {"skip_loop_filter": "all"}
+    return skips and not sparse and info.video.fps > 0
 
 
 _END = object()

@@ -23,7 +23,8 @@ from autohaptics.shots import Boundaries, detect
 # frames placed on the container's clock without splices at rounded timestamps (``media.audio.AudioClock``).
 # 3: 10-bit and wider pictures read through the 8-bit proxies' path (``media.frames``); a master's mono
 # tracks read as its mix (``media.probe.channel_tracks``); HDR pictures read as SDR (``media.hdr``).
-ANALYSIS_REVISION = 3
+# 4: every frame decoded where skipping the non-reference ones leaves gaps (``media.video.SKIP_GAP_MAX``).
+ANALYSIS_REVISION = 4
 
 
 @dataclass
