@@ -1,7 +1,8 @@
-"""The tracks are a property of the film, not of its encoding: a generated motion scene, encoded once
-and re-encoded the ways a film reaches a user (half size; 25 -> 30 fps by repeated frames; 24 -> 30 fps
-by 3:2 pulldown; VP9 at a low bit rate; MPEG-2 and HEVC with their B-frames), must give the same fans, vibration onsets and temperature
-as the original encode. Also the flow pair's repeated-frame rule on its own (issue 16, points 3-4).
+"""The tracks are a property of the film, not of its encoding: a generated motion scene, encoded once and
+re-encoded the ways a film reaches a user (half size; 25 -> 30 fps by repeated frames; 24 -> 30 fps by
+3:2 pulldown; VP9 at a low bit rate; MPEG-2 and HEVC with their B-frames), must give the same fans,
+vibration onsets and temperature as the original encode. Also the flow pair's repeated-frame rule on its
+own (issue 16, points 3-4).
 """
 
 from __future__ import annotations
