@@ -292,6 +292,7 @@ def test_rename_view_duplicate_delete(client, data_dir):
     assert client.get(f"/api/projects/{copy['id']}/timeline").json()["tracks"] == \
         client.get(f"/api/projects/{pid}/timeline").json()["tracks"]
 
+    assert client.app.state.pictures.wait_idle(60)  # the job's warm-up made the filmstrip in the background
     original = sorted(p.name for p in (data_dir / "projects" / pid).iterdir())
     assert client.delete(f"/api/projects/{copy['id']}").status_code == 204
     assert not (data_dir / "projects" / copy["id"]).exists()
