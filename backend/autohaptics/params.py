@@ -145,6 +145,7 @@ THESIS_RULES: dict[str, Any] = {
     "airflow.threshold_motion": "judged",  # the default takes the threshold from the motion without one-tick spikes
     "fusion.sigma_ticks": 0.0,  # the default spreads each tick's saliency weights over its shot's neighbouring frames
     "thermal.mapping": "thesis",  # the default maps a warm-cool measure around 33 C into the device range
+    "cuts.in_one_step": False,  # the default confirms a cut between two ticks' frames over the frame between
 }
 
 PRESETS: dict[str, dict[str, Any]] = {
@@ -278,7 +279,8 @@ def params_from_args(args):
 
 # Analysis-time fields whose default analyses otherwise than the analysis did before the field
 # existed: a document without the field was analysed with this value (dotted name -> value).
-ABSENT_AS = {"flow.min_span_frames": 0.0, "flow.cadence_ratio": 0.0, "depth.expansion_grain": 0.0}
+ABSENT_AS = {"flow.min_span_frames": 0.0, "flow.cadence_ratio": 0.0, "depth.expansion_grain": 0.0,
+             "cuts.in_one_step": False}
 
 
 def analysis_key(doc: dict) -> dict:

@@ -17,7 +17,10 @@ import pytest
 from autohaptics import airflow, pipeline
 from autohaptics import testing as synth
 from autohaptics.params import resolve_params
+from autohaptics.airflow import cuts
+from autohaptics.imaging import resized
 from autohaptics.pipeline import video as vision
+from autohaptics.pipeline.ticks import centre_frames
 from autohaptics.errors import ParameterError
 from autohaptics.layout import ACTUATOR_IDS, FAN_COLS
 from autohaptics.testing import Noise, Scene, Segment, Shape, Texture, Tone
@@ -144,6 +147,31 @@ def test_no_airflow_at_a_hard_cut_between_two_static_shots(generated, tmp_path):
               for t in (1.5, 1.5 + 1 / 24))
     across = airflow.motion_score(airflow.motion_magnitude(airflow.optical_flow(g0, g1), dt_s=1 / 24, width_px=160))
     assert across > 10 * FLOOR
+
+
+def test_a_change_spread_over_the_frames_between_two_ticks_is_not_a_cut_and_a_hard_cut_is(tmp_path):
+    """At 40 fps the ticks' frames are 4 intervals apart (1.05, 1.15 s, ...) and each flow pair ends on the
+    frame half-way (1.10 s). A dark wing half the frame wide sweeps in between 1.05 and 1.15 s, as
+    fast action does between the analysed frames of a decode that skips frames: each step changes the
+    picture by half, no cut; the shot changes at 2.075 s, within one step: a cut (tick 21, and tick
+    20, whose pair crosses it). With ``cuts.in_one_step=False`` (the rule before) the wing is a cut."""
+    w = 0.5
+    scene = Scene(3.0, background=(Segment(0, 2.075, (70, 110, 170), texture=tex(1, 0.1, 0.4)),
+                                   Segment(2.075, 3.0, (170, 120, 60), texture=tex(2, 0.1, 0.4))),
+                  shapes=(Shape("rect", (110, 80, 60), t_off=2.075, xy0=(-w / 2, 0.5), xy1=(w / 2, 0.5),
+                                size0=(w, 1.0), move_t0=1.05, move_t1=1.15, texture=tex(3, 0.2, 0.5)),))
+    path = synth.write_scene(tmp_path / "wing.mp4", scene, fps=40)
+    flagged, spread = {}, {}
+    for one_step in (True, False):
+        params, _ = resolve_params(overrides={"video.decode": "full", "cuts.in_one_step": one_step})
+        video = pipeline.analyse(path, params).video
+        flagged[one_step], spread[one_step] = np.flatnonzero(video.cut).tolist(), video.stats["cuts"]["spread"]
+    assert flagged[True] == [20, 21] and spread[True] == 1
+    assert flagged[False] == [11, 20, 21] and spread[False] == 0
+    sig = [cuts.frame_signature(resized(synth.render_frame(scene, t, width=320, height=180), 48))
+           for t in (1.05, 1.10, 1.15)]  # the premise, on the pictures as drawn
+    assert cuts.cut_score(sig[0], sig[2]) >= 0.55
+    assert max(cuts.cut_score(sig[0], sig[1]), cuts.cut_score(sig[1], sig[2])) <= 0.45
 
 
 def test_a_fade_in_of_a_still_picture_has_no_motion_even_in_the_reference(tmp_path):
@@ -306,7 +334,7 @@ def test_sintel_encodes_agree_on_fan_cells(sintel):
 
 # ---------------------------------------------------------------- stride (the fast preset)
 class _Timed:
-    """A decoded frame as :func:`vision.centre_frames` sees it: its time only."""
+    """A decoded frame as :func:`centre_frames` sees it: its time only."""
 
     def __init__(self, t: float):
         self.time_s = t
@@ -315,7 +343,7 @@ class _Timed:
 @pytest.mark.parametrize("fps,stride,n", [(60, 2, 20), (24, 2, 25), (30, 3, 10), (60, 1, 7), (5, 2, 8), (15, 4, 9)])
 def test_each_group_of_ticks_gets_the_frame_nearest_its_centre(fps, stride, n):
     frames = [_Timed(i / fps) for i in range(int(n * 0.1 * fps) + 3)]  # a few past the last tick
-    out = list(vision.centre_frames(iter(frames), n, stride))
+    out = list(centre_frames(iter(frames), n, stride))
     assert [f for f, _ in out] == frames  # every frame once, in order
     chosen = {k: f.time_s for f, k in out if k is not None}
     expected = {}

@@ -43,6 +43,9 @@ class CutParams(Record):
     corr_threshold : thumbnail correlation (-1..1) up to which the layout counts as changed (0.5).
     flat_std : thumbnail standard deviation (grey levels) below which a frame is flat (4).
     flat_jump : mean brightness jump (grey levels) that makes a cut next to a flat frame (40).
+    in_one_step : a change between two ticks' analysed frames is a cut only if it is one over one of the
+        two steps through the frame decoded between them, where the video pass has one (default True;
+        False: the two frames alone, the rule before issue 31; :mod:`autohaptics.pipeline.video`).
     """
 
     STAGE: ClassVar[str] = ANALYSIS
@@ -52,6 +55,7 @@ class CutParams(Record):
     corr_threshold: float = param(0.5, -1.0, 1.0)
     flat_std: float = param(4.0, 0.0, 255.0, unit="grey levels")
     flat_jump: float = param(40.0, hi=255.0, gt=0.0, unit="grey levels")
+    in_one_step: bool = True
 
 
 def frame_signature(frame: np.ndarray) -> np.ndarray:

@@ -1,10 +1,13 @@
-"""The video pass's per-tick results (:class:`~autohaptics.pipeline.video.VideoAnalysis`): several
-frames' values summed into one tick and divided at the end (:class:`TickSums`), and the ticks
-without a frame of their own filled from the analysed tick before them (:func:`hold_missing`)."""
+"""The video pass's ticks: which decoded frame is analysed for each (:func:`centre_frames`), and its
+per-tick results (:class:`~autohaptics.pipeline.video.VideoAnalysis`): several frames' values summed
+into one tick and divided at the end (:class:`TickSums`), and the ticks without a frame of their
+own filled from the analysed tick before them (:func:`hold_missing`)."""
 
 from __future__ import annotations
 
 import numpy as np
+
+from autohaptics.timebase import TICK_S, tick_of_time
 
 
 class TickSums:
@@ -90,3 +93,36 @@ def hold_missing(out) -> np.ndarray:
         if arr is not None:
             arr[rows] = arr[src[rows]]
     return src[rows]
+
+
+def centre_frames(frames, n: int, stride: int = 1):
+    """Yield every frame once, in order, as (frame, tick) where ``tick`` is the tick whose CENTRE
+    (0.1 k + 0.05 s) this frame is nearest to among the tick's frames, else (frame, None).
+
+    The vibration of tick k goes with the picture at that instant, so that is the frame analysed
+    for it (saliency; colour and flow too in the tick analysis); the frame is known one frame late
+    (one frame of look-ahead). With ``stride`` s > 1 the ticks go in groups of s (the last one may
+    be shorter): the frame nearest the group's centre is chosen, and ``tick`` is the group's first.
+    """
+    held = None  # (frame, tick): the best candidate so far for its tick (group), not yet yielded
+    done = -1  # last tick (group's first tick) whose frame was chosen
+    for f in frames:
+        k = min(int(tick_of_time(f.time_s)), n - 1)
+        if stride > 1 and k >= 0:
+            k -= k % stride
+        if held is not None:
+            hf, hk = held
+            centre = (hk + 0.5 * min(stride, n - hk)) * TICK_S
+            if k == hk and abs(f.time_s - centre) < abs(hf.time_s - centre):
+                yield hf, None
+                held = (f, k)
+                continue
+            yield hf, hk
+            done = hk
+            held = None
+        if k > done and k >= 0:
+            held = (f, k)
+        else:
+            yield f, None
+    if held is not None:
+        yield held

@@ -41,7 +41,7 @@ from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.pairs import PairJudge
 from autohaptics.pipeline.saliency_queue import LaterMask, SaliencyQueue
-from autohaptics.pipeline.ticks import TickSums, hold_missing
+from autohaptics.pipeline.ticks import TickSums, centre_frames, hold_missing
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel
 from autohaptics.temperature import mean_colour
 from autohaptics.timebase import TICK_S, tick_of_time
@@ -192,6 +192,8 @@ class _Pass:
         # a pair's least span, s; a variable-rate stream has no frame period to span: its next frame
         self.min_span_s = float(flow_params.min_span_frames) / fps if fps > 0 and not info.video.variable_rate else 0.0
         self.held = None  # a flow pair waiting for the frame after its successor (cadence)
+        self.between = None  # [frame, colour signature or None]: the last pair's successor, if not analysed
+        self.spread = 0  # changes between two ticks' frames read as a cut but spread over both steps
         self.cadence = Cadence(1.0 / fps if fps > 0 else 0.0, flow_params.cadence_ratio if need_flow else 0.0)
 
     def prepare(self, frame: media.Frame) -> None:
@@ -259,6 +261,7 @@ class _Pass:
             self.repeats += 1
             return
         pair, self.pending = (self.pending, frame, gray, sig), None
+        self.between = None if analysed else [frame, sig]
         if self.cadence.ratio:
             self.held = pair
         else:
@@ -288,9 +291,9 @@ class _Pass:
         if sig is None:
             sig = st["cuts"].run(cuts.frame_signature, gray)
         if self.prev_sig is not None and self.prev_sig.shape == sig.shape and \
-                cuts.is_cut(self.prev_sig, sig, params=params.cuts):
+                cuts.is_cut(self.prev_sig, sig, params=params.cuts) and self._cut_in_a_step(sig):
             out.cut[k] = True
-        self.prev_sig = sig
+        self.prev_sig, self.between = sig, None
         if centre or not out.signature[k].any():
             packed = cuts.pack_signature(sig)
             if packed is not None:
@@ -301,6 +304,25 @@ class _Pass:
             self.saliency.add(k, frame.width, rgb, luma)
         if self.need_flow:
             self.pending = (k, gray, rgb, sig, frame.time_s)
+
+    def _cut_in_a_step(self, sig) -> bool:
+        """Whether a change between the previous analysed frame and this one (``sig``) that reads as a
+        cut also reads as one over one of the two steps through the frame decoded between them (the
+        previous pair's successor), where there is one. Why: skipping decodes leave analysed frames up to
+        4 frame intervals apart, over which fast action (a wing sweeping past) changes a picture as a cut
+        does; a cut changes it within one step (docs/BENCHMARKS.md, "Cuts over the decoded frames")."""
+        if self.between is None or not self.params.cuts.in_one_step:
+            return True
+        frame, mid = self.between
+        if mid is None:
+            mid = self._signature(self.stages["proxy"].run(frame.rgb, self.rgb_width, self.flow_params.proxy_width))
+        if mid.shape != sig.shape:
+            return True
+        cut = self.params.cuts
+        if cuts.is_cut(self.prev_sig, mid, params=cut) or cuts.is_cut(mid, sig, params=cut):
+            return True
+        self.spread += 1
+        return False
 
     def luma_signature(self, gray: np.ndarray) -> np.ndarray:
         """A gray proxy's cut signature, kept for the last two proxies (a successor frame that is
@@ -355,7 +377,7 @@ class _Pass:
         out.stats["static"]["ticks_static"] = int(out.static.sum())
         out.stats["flow"]["repeats_skipped"] = int(self.repeats)
         out.stats["flow"]["cadence_repeats"] = int(self.cadence.found)
-        out.stats["cuts"]["cuts"] = int(out.cut.sum())
+        out.stats["cuts"].update({"cuts": int(out.cut.sum()), "spread": int(self.spread)})
         out.stats["frames"] = {"ticks_with_frame": int(out.frame_mask.sum()), "ticks": n,
                                "last_time_s": round(self.last_time, 6)}
         rect = self.area if self.area is not None else (0, 0, *self.frame_size)
@@ -406,36 +428,3 @@ def active_area(info: media.MediaInfo, params: GenerateParams) -> tuple[int, int
     if info.video is None or params.video.active_area == "full":
         return None
     return media.find_active_area(info)
-
-
-def centre_frames(frames, n: int, stride: int = 1):
-    """Yield every frame once, in order, as (frame, tick) where ``tick`` is the tick whose CENTRE
-    (0.1 k + 0.05 s) this frame is nearest to among the tick's frames, else (frame, None).
-
-    The vibration of tick k goes with the picture at that instant, so that is the frame analysed
-    for it (saliency; colour and flow too in the tick analysis); the frame is known one frame late
-    (one frame of look-ahead). With ``stride`` s > 1 the ticks go in groups of s (the last one may
-    be shorter): the frame nearest the group's centre is chosen, and ``tick`` is the group's first.
-    """
-    held = None  # (frame, tick): the best candidate so far for its tick (group), not yet yielded
-    done = -1  # last tick (group's first tick) whose frame was chosen
-    for f in frames:
-        k = min(int(tick_of_time(f.time_s)), n - 1)
-        if stride > 1 and k >= 0:
-            k -= k % stride
-        if held is not None:
-            hf, hk = held
-            centre = (hk + 0.5 * min(stride, n - hk)) * TICK_S
-            if k == hk and abs(f.time_s - centre) < abs(hf.time_s - centre):
-                yield hf, None
-                held = (f, k)
-                continue
-            yield hf, hk
-            done = hk
-            held = None
-        if k > done and k >= 0:
-            held = (f, k)
-        else:
-            yield f, None
-    if held is not None:
-        yield held
