@@ -18,7 +18,13 @@ from stress_inputs import write_streams
 
 
 def _frames(path, n: int = 4):
-    return itertools.islice(media.iter_video(path, prefetch=4), n)
+    """The first ``n`` decoded frames; the decode is closed after them, not whenever it is collected (an
+    open one holds the interpreter's switch interval short, which another test reads)."""
+    frames = media.iter_video(path, prefetch=4)
+    try:
+        yield from itertools.islice(frames, n)
+    finally:
+        frames.close()
 
 
 def test_luma_grid_read_with_the_proxies_is_the_full_frame_average():
@@ -232,6 +238,16 @@ def test_rgb_proxy_is_close_to_ffmpegs_scaled_conversion():
     w, h = ours.shape[1], ours.shape[0]
     ffmpeg = frame._frame.to_ndarray(width=w, height=h, format="rgb24", interpolation="AREA").astype(np.int16)
     assert float(np.abs(ours - ffmpeg).mean()) < 2.5  # 1.5 measured (area averaging before the conversion, not after)
+
+
+def test_fields_are_the_even_and_the_odd_rows_of_the_picture():
+    frame = list(_frames(shared_clip("sintel_trailer_480x204_h264_aac.mp4"), 120))[-1]
+    full = frame.proxy(frame.width, frame.height)
+    top, bottom = frame.fields(64)
+    assert top.shape == bottom.shape == (14, 64, 3)  # 102 rows of 480 px, 64 px wide
+    for got, rows in ((top, full[0::2]), (bottom, full[1::2])):
+        want = cv2.resize(rows, (64, 14), interpolation=cv2.INTER_AREA).astype(np.int16)
+        assert np.abs(got.astype(np.int16) - want).max() <= 1
 
 
 @pytest.mark.parametrize("colorspace, color_range", [(1, 1), (0, 1), (1, 2), (0, 2)])  # BT.709/601, limited/full

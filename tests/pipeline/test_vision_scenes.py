@@ -174,6 +174,41 @@ def test_a_change_spread_over_the_frames_between_two_ticks_is_not_a_cut_and_a_ha
     assert max(cuts.cut_score(sig[0], sig[1]), cuts.cut_score(sig[1], sig[2])) <= 0.45
 
 
+def test_a_cut_through_a_telecined_frame_is_a_cut(tmp_path):
+    """3:2 pulldown puts a cut's two shots into one frame, one in each field. At 30 fps the ticks' frames
+    are 3 intervals apart (1.033, 1.133 s) and the flow pair ends on the frame between (1.1 s): here that
+    frame is the combed one, so each step changes the picture by half (below the cut bar, as drawn), its
+    two fields by all of it: a cut (tick 11), as under the rule before (``cuts.in_one_step=false``)."""
+    import av
+
+    w, h = 320, 180
+
+    def shot(rgb, seed):
+        grain = cv2.resize((np.random.default_rng(seed).random((h // 8, w // 8)) * 120).astype(np.float32), (w, h))
+        return np.clip(np.array(rgb, np.float32) + grain[..., None] - 60, 0, 255).astype(np.uint8)
+
+    a, b = shot((60, 90, 160), 1), shot((170, 120, 60), 2)
+    combed = a.copy()
+    combed[1::2] = b[1::2]
+    path = tmp_path / "telecined.mp4"
+    with av.open(str(path), "w") as out:
+        vs = out.add_stream("libx264", rate=30)
+        vs.width, vs.height, vs.pix_fmt = w, h, "yuv420p"
+        vs.options = {"crf": "16", "preset": "veryfast", "x264-params": "bframes=0:scenecut=0"}
+        for picture in [a] * 33 + [combed] + [b] * 26:
+            for packet in vs.encode(av.VideoFrame.from_ndarray(picture, format="rgb24")):
+                out.mux(packet)
+        for packet in vs.encode():
+            out.mux(packet)
+    for one_step in (True, False):
+        params, _ = resolve_params(overrides={"video.decode": "full", "cuts.in_one_step": one_step})
+        video = pipeline.analyse(path, params).video
+        assert np.flatnonzero(video.cut).tolist() == [11] and video.stats["cuts"]["spread"] == 0
+    sig = [cuts.frame_signature(resized(picture, 48)) for picture in (a, combed, b)]
+    assert cuts.cut_score(sig[0], sig[2]) >= 0.9
+    assert max(cuts.cut_score(sig[0], sig[1]), cuts.cut_score(sig[1], sig[2])) <= 0.4
+
+
 def test_a_fade_in_of_a_still_picture_has_no_motion_even_in_the_reference(tmp_path):
     """A still textured picture fading in from black over 2 s: the reference (no skipping, every
     frame) reads no motion and blows no fan. Not vacuous: with the fade check switched off the

@@ -103,6 +103,9 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("MPEG-2 with two B-frames (a DVD's), AC-3", "codec", ".mkv",
             options={"video_codec": "mpeg2video", "video_bit_rate": 6_000_000, "video_options": {"bf": "2", "g": "15"},
                      "audio_codec": "ac3"}),
+    Variant("NTSC DVD: 3:2 pulldown to 30 fps, MPEG-2 with two B-frames, AC-3", "codec", ".mkv",
+            options={"fps": 30, "conversion": "pulldown", "video_codec": "mpeg2video", "video_bit_rate": 6_000_000,
+                     "video_options": {"bf": "2", "g": "18"}, "audio_codec": "ac3"}),
     Variant("MPEG-4 Part 2 AVI with two B-frames (a DivX or Xvid copy), MP3 stereo", "codec", ".avi",
             options={"video_codec": "mpeg4", "video_bit_rate": 1_200_000, "video_options": {"bf": "2", "g": "250"},
                      "audio_codec": "libmp3lame", "audio_layout": "stereo"}),
@@ -122,11 +125,13 @@ VARIANTS: tuple[Variant, ...] = (
 
 def not_applicable(variant: Variant, info) -> str | None:
     """Why ``variant`` does not apply to a source (``media.MediaInfo``), or None: a sound row needs
-    sound, a picture row a picture, a cut at least ``CUT_MIN_S`` of film after it."""
+    sound, a picture row a picture, 3:2 pulldown a 24 fps film, a cut at least ``CUT_MIN_S`` of film after it."""
     if variant.group == "sound" and info.audio is None:
         return "no sound"
     if info.video is None:
         return "no picture"
+    if variant.options.get("conversion") == "pulldown" and round(float(info.video.fps), 2) != 24:
+        return f"3:2 pulldown telecines a 24 fps film, this one is {float(info.video.fps):g} fps"
     if variant.start_s and variant.start_s > info.duration_s - CUT_MIN_S:
         return f"the film is {info.duration_s:.1f} s long"
     return None

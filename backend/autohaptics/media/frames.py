@@ -110,6 +110,16 @@ class Frame:
             arr = hdr.sdr_rgb(arr, self._frame) if fmt == "rgb24" else hdr.sdr_luma(arr, self._frame, True)
         return arr
 
+    def fields(self, width: int) -> tuple[np.ndarray, np.ndarray]:
+        """The picture's two fields (its even rows, its odd rows) as RGB proxies ``width`` px wide, uint8
+        [shape=(h, w, 3)] each: a telecined or interlaced frame holds two moments, or at a cut two shots."""
+        full = self.proxy(self.width, self.height)
+        out = []
+        for field in (full[0::2], full[1::2]):
+            h = max(1, int(round(width * field.shape[0] / max(1, field.shape[1]))))
+            out.append(cv2.resize(field, (max(1, int(width)), h), interpolation=cv2.INTER_AREA))
+        return out[0], out[1]
+
     def gray(self, width: int) -> np.ndarray:
         """Luma proxy ``width`` px wide (aspect kept), uint8 [shape=(h, w)], display orientation."""
         return self.proxy(width, fmt="gray")

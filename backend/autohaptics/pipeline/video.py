@@ -310,7 +310,8 @@ class _Pass:
         cut also reads as one over one of the two steps through the frame decoded between them (the
         previous pair's successor), where there is one. Why: skipping decodes leave analysed frames up to
         4 frame intervals apart, over which fast action (a wing sweeping past) changes a picture as a cut
-        does; a cut changes it within one step (docs/BENCHMARKS.md, "Cuts over the decoded frames")."""
+        does; a cut changes it within one step, or between the two fields of the frame between (3:2
+        pulldown): docs/BENCHMARKS.md, "Stop 56"."""
         if self.between is None or not self.params.cuts.in_one_step:
             return True
         frame, mid = self.between
@@ -320,6 +321,9 @@ class _Pass:
             return True
         cut = self.params.cuts
         if cuts.is_cut(self.prev_sig, mid, params=cut) or cuts.is_cut(mid, sig, params=cut):
+            return True
+        top, bottom = (self._signature(f) for f in frame.fields(self.rgb_width))  # a telecined frame at a
+        if cuts.is_cut(top, bottom, params=cut):  # cut holds both shots, one in each field: a cut between them
             return True
         self.spread += 1
         return False
