@@ -44,8 +44,9 @@ class CutParams(Record):
     flat_std : thumbnail standard deviation (grey levels) below which a frame is flat (4).
     flat_jump : mean brightness jump (grey levels) that makes a cut next to a flat frame (40).
     in_one_step : a change between two ticks' analysed frames is a cut only if it is one over one of the
-        two steps through the frame decoded between them, where the video pass has one (default True;
-        False: the two frames alone, the rule before issue 31; :mod:`autohaptics.pipeline.video`).
+        two steps through the frame decoded between them, or between that frame's two fields (a telecined
+        frame), where the video pass has one (default True; False: the two frames alone, the rule before
+        issue 31; :mod:`autohaptics.pipeline.video`).
     """
 
     STAGE: ClassVar[str] = ANALYSIS

@@ -28,7 +28,8 @@ _PLANAR_YUV_WIDE = {f"yuv{a}{s}p{bits}le": bits for a in ("", "a") for s in ("42
 
 
 class Frame:
-    """One decoded picture. Valid only inside the iteration step that yielded it."""
+    """One decoded picture. It holds its own reference to the decoded planes, so it can be read after
+    later frames are decoded (the video pass reads a flow pair's successor a few frames on)."""
 
     __slots__ = ("_frame", "index", "time_s", "rotation", "width", "height", "_crop", "_ready", "_luma_kept", "ahead")
 
