@@ -106,6 +106,10 @@ def test_an_analysis_from_before_a_field_existed_serves_what_it_was_analysed_wit
     before["depth.expansion_grain"] = 0.0
     assert analysis_compatible(old, apply_overrides(GenerateParams(), before))
     assert not analysis_compatible(old, apply_overrides(GenerateParams(), {**before, "depth.expansion_grain": 0.015}))
+    del old.params["cuts"]["in_one_step"]
+    before["cuts.in_one_step"] = False
+    assert analysis_compatible(old, apply_overrides(GenerateParams(), before))
+    assert not analysis_compatible(old, apply_overrides(GenerateParams(), {**before, "cuts.in_one_step": True}))
 
 
 def test_an_analysis_of_another_revision_is_analysed_again(av_analysis, tmp_path):
