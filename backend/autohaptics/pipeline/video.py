@@ -192,7 +192,7 @@ class _Pass:
         # a pair's least span, s; a variable-rate stream has no frame period to span: its next frame
         self.min_span_s = float(flow_params.min_span_frames) / fps if fps > 0 and not info.video.variable_rate else 0.0
         self.held = None  # a flow pair waiting for the frame after its successor (cadence)
-        self.between = None  # [frame, colour signature or None]: the last pair's successor, if not analysed
+        self.between = None  # (frame, colour signature or None): the last pair's successor, if not analysed
         self.spread = 0  # changes between two ticks' frames read as a cut but spread over both steps
         self.cadence = Cadence(1.0 / fps if fps > 0 else 0.0, flow_params.cadence_ratio if need_flow else 0.0)
 
@@ -245,6 +245,10 @@ class _Pass:
             gray = st["proxy"].run(frame.gray, fw)
         return rgb, gray, luma, None if rgb is None else self._signature(rgb)
 
+    def _frame_signature(self, frame):
+        """A frame's colour cut signature read from its gray plane (a frame not analysed has no RGB proxy)."""
+        return self._signature(self.stages["proxy"].run(frame.rgb, self.rgb_width, self.flow_params.proxy_width))
+
     def _signature(self, rgb):
         """A frame's colour cut signature from its RGB proxy (all at ``SIGNATURE_WIDTH``)."""
         return self.stages["cuts"].run(cuts.frame_signature, resized(rgb, SIGNATURE_WIDTH))
@@ -261,7 +265,7 @@ class _Pass:
             self.repeats += 1
             return
         pair, self.pending = (self.pending, frame, gray, sig), None
-        self.between = None if analysed else [frame, sig]
+        self.between = None if analysed else (frame, sig)
         if self.cadence.ratio:
             self.held = pair
         else:
@@ -269,12 +273,11 @@ class _Pass:
 
     def _motion(self, first, frame, gray, sig) -> None:
         """A flow pair's motion and depth, added to its tick (:mod:`.pairs`)."""
-        (pk, pgray, prgb, psig, pt), st = first, self.stages
+        pk, pgray, prgb, psig, pt = first
 
         def successor_sig():  # colour matters for the in-pair cut check (a green and a grey shot
             # can share their luma): read only when the pair moves enough to matter, from its gray plane
-            return sig if sig is not None else self._signature(
-                st["proxy"].run(frame.rgb, self.rgb_width, self.flow_params.proxy_width))
+            return sig if sig is not None else self._frame_signature(frame)
 
         self.pairs.add(pk, pgray, gray, prgb, psig, successor_sig, self.cadence.pair_time(pt, frame.time_s),
                        ahead=frame.ahead)
@@ -315,8 +318,7 @@ class _Pass:
         if self.between is None or not self.params.cuts.in_one_step:
             return True
         frame, mid = self.between
-        if mid is None:
-            mid = self._signature(self.stages["proxy"].run(frame.rgb, self.rgb_width, self.flow_params.proxy_width))
+        mid = mid if mid is not None else self._frame_signature(frame)
         if mid.shape != sig.shape:
             return True
         cut = self.params.cuts
