@@ -64,6 +64,19 @@ def test_luma_grid_is_in_display_orientation(tmp_path, rotation):
     assert np.abs(bright - seen).max() < 0.15
 
 
+@pytest.mark.parametrize("rotation, pixel_aspect, shown", [(0, 1.0, 16 / 9), (0, 64 / 45, 1024 / 576),
+                                                          (90, 1.0, 9 / 16), (90, 64 / 45, 576 / 1024)])
+def test_the_shown_aspect_applies_the_pixels_aspect_along_the_stored_rows(rotation, pixel_aspect, shown):
+    """A 1024 x 576 picture stored as 720 x 576 with pixels 64/45 wide (an anamorphic PAL DVD), or a
+    16:9 one; turned by the rotation metadata, the pixels' aspect stretches the shown picture's height."""
+    width = 1024 if pixel_aspect == 1.0 else 720
+    video = media.VideoInfo(index=0, width=width, height=576, fps=25.0, codec="h264", n_frames=None,
+                            rotation=rotation, duration_s=None, pixel_aspect=pixel_aspect)
+    assert video.shown_aspect() == pytest.approx(shown)
+    w, h = video.display_size
+    assert video.shown_aspect(w / 2, h) == pytest.approx(shown / 2)  # a region of it (the active picture)
+
+
 @pytest.mark.parametrize("size, rotation", [((854, 480), 0), ((854, 480), 90), ((640, 360), 0)])
 def test_planes_made_ahead_give_the_same_proxies(tmp_path, size, rotation):
     """Frame.prepare (run in the decoding thread) changes no proxy: gray, rgb_and_gray with and

@@ -12,6 +12,7 @@ import logging
 import os
 import signal
 import time
+from fractions import Fraction
 from pathlib import Path
 
 import cv2
@@ -112,6 +113,24 @@ def test_posters_show_their_tick_at_the_pictures_aspect(served):
         r = client.get(f"/api/projects/{pid}/posters/{tick}.jpg")
         img = cv2.imdecode(np.frombuffer(r.content, np.uint8), cv2.IMREAD_GRAYSCALE)
         assert img.shape == (80, 160) and abs(img[10:-10, 10:-10].mean() - level(tick)) < 1.2
+
+
+def test_an_anamorphic_films_posters_show_it_as_it_is_shown(tmp_path):
+    """A PAL DVD's 720 x 576 picture with pixels 64/45 wide shows 16:9: its posters are 160 x 90 (they
+    were 160 x 128, squeezed), and a disc round on screen is round in them."""
+    from autohaptics.testing import Shape
+    from autohaptics.testing.reencode import reencode
+
+    scene = Scene(1.0, background=(Segment(0, 1.0, (200, 180, 160)),),
+                  shapes=(Shape("circle", (20, 20, 200), t_on=0, t_off=1.0, xy0=(0.5, 0.5), size0=(0.2, 0.35)),))
+    wide = write_scene(tmp_path / "wide.mp4", scene, width=320, height=180, fps=25, audio=False)
+    dvd = reencode(wide, tmp_path / "dvd.mkv", width=720, height=576, pixel_aspect=Fraction(64, 45),
+                   video_codec="mpeg2video", video_bit_rate=6_000_000)
+    source = posters.film(dvd, tmp_path / "no-analysis.npz")
+    assert posters.poster_size(source) == (160, 90)
+    img = cv2.imdecode(np.frombuffer(posters.picture_jpeg(source, [5], (160, 90)), np.uint8), cv2.IMREAD_COLOR)
+    ys, xs = np.nonzero((img[..., 0] > 150) & (img[..., 2] < 90))  # BGR: the blue disc
+    assert img.shape[:2] == (90, 160) and abs(int(xs.max() - xs.min()) - int(ys.max() - ys.min())) <= 3
 
 
 def test_the_pictures_are_made_ahead_and_kept_on_disk(served):

@@ -1,4 +1,4 @@
-"""Re-encodes as the material matrix needs them: bars (pad), crop (fill), 10 bits, HDR grades, a variable
+"""Re-encodes as the material matrix needs them: bars (pad), crop (fill), anamorphic pixels, 10 bits, HDR grades, a variable
 frame rate, a stretch cut out of a film, the sound alone mixed again with the picture's packets kept, the
 sound at another level, and a surround sound mixed to stereo at its own level."""
 
@@ -50,6 +50,22 @@ def test_pad_centres_the_whole_picture_on_black_bars(src, tmp_path, size, bars):
     ys, xs = np.nonzero(blue)
     assert abs((xs.max() - xs.min()) - (ys.max() - ys.min())) <= 4
     assert abs(xs.mean() - size[0] / 2) <= 3 and abs(ys.mean() - size[1] / 2) <= 3
+
+
+@pytest.mark.parametrize("sar, bar_rows", [(Fraction(64, 45), 0), (Fraction(16, 15), 72)])
+def test_an_anamorphic_picture_is_fitted_as_it_is_shown(src, tmp_path, sar, bar_rows):
+    """A PAL DVD's 720 x 576 with pixels 64/45 wide shows 16:9: the 16:9 source fills it; with pixels
+    16/15 wide (4:3 on screen) it is letterboxed (768 x 432 of 768 x 576 on screen). The file says
+    its pixels' aspect, and the marker disc is round on screen (wider than high in stored pixels)."""
+    out = reencode(src, tmp_path / "dvd.mkv", width=720, height=576, fit="pad", pixel_aspect=sar,
+                   video_codec="mpeg2video", video_bit_rate=6_000_000)
+    video = probe(out).video
+    assert video.pixel_aspect == pytest.approx(float(sar))
+    assert video.shown_aspect() == pytest.approx(float(720 * sar / 576))
+    img = _frame(out)
+    assert int((img.max(axis=(1, 2)) < 24).sum()) == pytest.approx(2 * bar_rows, abs=4)
+    ys, xs = np.nonzero((img[..., 2] > 150) & (img[..., 0] < 90))
+    assert (xs.max() - xs.min()) * float(sar) == pytest.approx(ys.max() - ys.min(), abs=5)
 
 
 def test_fill_crops_the_overhang_and_leaves_no_bar(src, tmp_path):
@@ -225,6 +241,8 @@ def test_a_surround_sound_mixed_to_stereo_keeps_ffmpegs_float_level(tmp_path, co
 def test_bad_options_are_refused(src, tmp_path):
     with pytest.raises(ParameterError, match="fit"):
         reencode(src, tmp_path / "x.mp4", fit="zoom")
+    with pytest.raises(ParameterError, match="pixel_aspect"):
+        reencode(src, tmp_path / "x.mp4", pixel_aspect=-1)
     with pytest.raises(ParameterError, match="transfer"):
         reencode(src, tmp_path / "x.mp4", transfer="pq")  # an HDR grade is 10-bit
     with pytest.raises(ParameterError, match="audio_tracks"):

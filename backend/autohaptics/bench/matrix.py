@@ -3,8 +3,9 @@
 Each source (the shared film clips, or any file given) is written again as each :data:`VARIANTS` row says:
 re-encoded as it is (H.264); letterboxed and pillarboxed; at half size; at 23.976, 25, 29.97 and 50 fps and at
 a variable frame rate; in 10 bits (H.264, and a ProRes master with its sound in one stream or, as editing
-suites write it, each channel in a mono track); as an HDR10 grade; as VP9 and H.264 screeners; with its sound
-as mono, stereo, 5.1 and 7.1; cut to start mid-score. Every row's timeline is compared with the source's own
+suites write it, each channel in a mono track); as an HDR10 grade; as DVDs (NTSC, PAL anamorphic); as VP9 and
+H.264 screeners; with its sound as mono, stereo (Opus, and AAC from FFmpeg's downmix), 5.1 and 7.1; cut to
+start mid-score. Every row's timeline is compared with the source's own
 (the clean variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what
 differs is the start of the file, not the context a whole film gives its film-relative levels): onset F1,
 fan-tick F1, tolerant fan IoU and temperature MAE against :data:`TARGETS`, and a cut's largest vibration in
@@ -72,10 +73,10 @@ class Variant:
         return "".join(c if c.isalnum() else "_" for c in self.name).strip("_")
 
 
-def _sound(layout: str, bit_rate: int) -> dict:
-    """A sound row's options: the picture's packets as they are, the sound mixed to ``layout`` as Opus
-    (a codec of its own, not the AAC of the picture rows)."""
-    return {"video_codec": "copy", "audio_codec": "libopus", "audio_layout": layout, "audio_bit_rate": bit_rate}
+def _sound(layout: str, bit_rate: int, codec: str = "libopus") -> dict:
+    """A sound row's options: the picture's packets as they are, the sound mixed to ``layout`` as
+    ``codec`` (Opus: a codec of its own, not the AAC of the picture rows)."""
+    return {"video_codec": "copy", "audio_codec": codec, "audio_layout": layout, "audio_bit_rate": bit_rate}
 
 
 ENCODE = {"preset": "veryfast", "crf": "18"}  # x264 settings of every row that re-encodes the picture itself
@@ -106,6 +107,10 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("NTSC DVD: 3:2 pulldown to 30 fps, MPEG-2 with two B-frames, AC-3", "codec", ".mkv",
             options={"fps": 30, "conversion": "pulldown", "video_codec": "mpeg2video", "video_bit_rate": 6_000_000,
                      "video_options": {"bf": "2", "g": "18"}, "audio_codec": "ac3"}),
+    Variant("PAL DVD: 720 x 576 anamorphic 16:9, MPEG-2 with two B-frames, AC-3", "codec", ".mkv",
+            size=lambda w, h: (720, 576),
+            options={"fps": 25, "fit": "pad", "pixel_aspect": Fraction(64, 45), "video_codec": "mpeg2video",
+                     "video_bit_rate": 6_000_000, "video_options": {"bf": "2", "g": "12"}, "audio_codec": "ac3"}),
     Variant("MPEG-4 Part 2 AVI with two B-frames (a DivX or Xvid copy), MP3 stereo", "codec", ".avi",
             options={"video_codec": "mpeg4", "video_bit_rate": 1_200_000, "video_options": {"bf": "2", "g": "250"},
                      "audio_codec": "libmp3lame", "audio_layout": "stereo"}),
@@ -117,6 +122,9 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("sound 5.1", "sound", ".mkv", options=_sound("5.1", 384_000)),
     Variant("sound 7.1", "sound", ".mkv", options=_sound("7.1", 512_000)),
     Variant("sound 8 dB quieter", "sound", ".mkv", options={**_sound("stereo", 192_000), "audio_gain_db": -8.0}),
+    # as ``ffmpeg -ac 2 -c:a aac`` makes it: FFmpeg's float downmix, which a loud 5.1 mix takes past full
+    # scale, and FFmpeg's AAC encoder then turns such blocks down (docs/BENCHMARKS.md, "Stop 57")
+    Variant("sound stereo AAC 128 kb/s, FFmpeg's downmix", "sound", ".mkv", options=_sound("stereo", 128_000, "aac")),
     Variant("cut mid-score at 7.3 s", "start", options={"start_s": 7.3}, start_s=7.3),
     Variant("cut mid-score at 13.7 s", "start", options={"start_s": 13.7}, start_s=13.7),
     Variant("cut mid-score at 21.1 s", "start", options={"start_s": 21.1}, start_s=21.1),

@@ -53,11 +53,21 @@ class VideoInfo:
     # frames come irregularly: the average rate under VARIABLE_RATE_SHARE of the stream's own (a
     # phone's or screen recorder's stream, a conversion that drops frames)
     variable_rate: bool = False
+    # a stored pixel's width over its height on screen (an anamorphic 16:9 PAL DVD's 720 x 576: 64/45);
+    # 1 where the file says nothing (or something outside 0.1..10)
+    pixel_aspect: float = 1.0
 
     @property
     def display_size(self) -> tuple[int, int]:
-        """(width, height) as shown, after the rotation metadata."""
+        """(width, height) in pixels as shown, after the rotation metadata (the pixels' aspect aside)."""
         return (self.height, self.width) if self.rotation % 180 else (self.width, self.height)
+
+    def shown_aspect(self, width: float | None = None, height: float | None = None) -> float:
+        """Width over height on screen of ``width`` x ``height`` px of the picture in display
+        orientation (default: the whole frame), its pixels' aspect applied along the stored rows."""
+        w, h = self.display_size if width is None or height is None else (width, height)
+        stretch = 1.0 / self.pixel_aspect if self.rotation % 180 else self.pixel_aspect
+        return float(w) * stretch / max(float(h), 1e-9)
 
 
 @dataclass(frozen=True)
@@ -239,8 +249,10 @@ def _video_info(s) -> VideoInfo:
         fps = s.frames / dur
     if not fps or not math.isfinite(fps) or fps <= 0:
         fps = 25.0
+    sar = s.sample_aspect_ratio or cc.sample_aspect_ratio
     return VideoInfo(index=s.index, width=cc.width, height=cc.height, fps=fps, codec=cc.name,
-                     n_frames=int(s.frames) if s.frames else None, rotation=0, duration_s=dur)
+                     n_frames=int(s.frames) if s.frames else None, rotation=0, duration_s=dur,
+                     pixel_aspect=float(sar) if sar and 0.1 <= float(sar) <= 10 else 1.0)
 
 
 def _first_frame_rotation(c, s) -> int:

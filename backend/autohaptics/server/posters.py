@@ -33,7 +33,8 @@ class Cancelled(Exception):
 @dataclass(frozen=True)
 class Film:
     """What pictures are cut from: the media file, its probe, the active picture ``crop`` (x, y, w,
-    h px in display orientation; None: the whole frame) and its ``aspect`` (w / h)."""
+    h px in display orientation; None: the whole frame) and its ``aspect`` (w / h on screen, the
+    pixels' own aspect applied: an anamorphic DVD's)."""
 
     path: Path
     info: media.MediaInfo
@@ -56,8 +57,7 @@ def film(media_path: Path, analysis_path: Path) -> Film:
             crop = tuple(int(v) for v in rect)
     except (OSError, KeyError, TypeError, ValueError):
         pass
-    w, h = crop[2:] if crop else info.video.display_size
-    return Film(Path(media_path), info, crop, w / max(1, h))
+    return Film(Path(media_path), info, crop, info.video.shown_aspect(*crop[2:]) if crop else info.video.shown_aspect())
 
 
 def poster_tick(t0: int, t1: int) -> int:

@@ -51,7 +51,7 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
              audio_codec: str | None = None, video_bit_rate: int | None = None, audio_bit_rate: int | None = None,
              video_options: dict[str, str] | None = None, audio_layout: str | None = None, audio_gain_db: float = 0.0,
              audio_tracks: str = "one", fit: str = "stretch", pix_fmt: str = "yuv420p", transfer: str = "sdr",
-             start_s: float = 0.0, duration_s: float | None = None) -> Path:
+             start_s: float = 0.0, duration_s: float | None = None, pixel_aspect: Fraction | None = None) -> Path:
     """Re-encode ``src`` into ``dst`` (container from the suffix, codecs default per container as in
     :func:`~autohaptics.testing.encode.write_scene`) and return ``dst``.
 
@@ -68,7 +68,8 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
     inside, centred on black: letterbox, pillarbox or windowbox) or "fill" (scaled to cover, the
     overhang cropped evenly). pix_fmt : "yuv420p", "yuv420p10le" (10-bit) or "yuv422p10le" (a
     ProRes or DNxHR master's 10-bit 4:2:2). transfer : "sdr", or an HDR grade of the picture, "pq"
-    (HDR10) or "hlg", 10-bit 4:2:0 (:mod:`autohaptics.testing.grade`).
+    (HDR10) or "hlg", 10-bit 4:2:0 (:mod:`autohaptics.testing.grade`). pixel_aspect : the output pixels'
+    width / height on screen (default 1; a 16:9 PAL DVD's 720 x 576: 64/45); "pad" and "fill" fit to that.
     start_s, duration_s : the stretch of ``src`` kept, s (a reel cut mid-film; default all of it). A cut
     at the source's rate keeps each frame at its film time from ``start_s`` (the frame on screen there
     first), wherever the cut falls between two frames.
@@ -85,6 +86,9 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
         raise ParameterError(f"{dst}: re-encoding needs a video container, one of "
                              f"{sorted(k for k, v in CONTAINERS.items() if v[1])}")
     end_s = _checked_options(conversion, fit, pix_fmt, audio_tracks, transfer, start_s, duration_s)
+    sar = Fraction(pixel_aspect or 1)
+    if not 0.1 <= sar <= 10:
+        raise ParameterError(f"pixel_aspect must lie in 0.1..10, got {pixel_aspect!r}")
     fmt, v_default, a_default = CONTAINERS[suffix]
     sound = (audio_codec or a_default, audio_bit_rate, audio_layout, audio_tracks == "mono")
     w = int(width or info.video.display_size[0])
@@ -100,20 +104,13 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
         return _copy_video(src, dst, fmt, sound, info, gain_db=audio_gain_db)
     with media_output(dst, f"to re-encode {src}") as tmp:
         with av.open(str(src)) as inp, av.open(str(tmp), mode="w", format=fmt) as out:
-            vs = out.add_stream(video_codec or v_default, rate=rate)
-            vs.width, vs.height, vs.pix_fmt = w, h, pix_fmt
             as_shown = conversion == "vfr" or (float(start_s) > 0 and fps is None and conversion == "repeat")
-            if as_shown:  # every kept frame at its own time (a cut: the picture keeps the film's time)
-                vs.codec_context.time_base = _VFR_TIME_BASE
-            if video_bit_rate:
-                vs.bit_rate = int(video_bit_rate)
-            if video_options:
-                vs.options = dict(video_options)
-            grade.tag(vs.codec_context, transfer)
+            vs = _video_stream(out, video_codec or v_default, rate, (w, h), pix_fmt, sar=sar, as_shown=as_shown,
+                               bit_rate=video_bit_rate, options=video_options, transfer=transfer)
             audio = _audio_stream(inp, out, *sound) if info.audio else None
             v_in = inp.streams.video[0]
             origin = _origin(v_in, info, as_shown)
-            frames = _source_frames(v_in, w, h, fit=fit, origin=origin, start_s=float(start_s), end_s=end_s)
+            frames = _source_frames(v_in, w, h, fit=fit, origin=origin, start_s=float(start_s), end_s=end_s, sar=sar)
             for (pts, time_base), rgb in _timed(frames, conversion, rate, as_shown):
                 frame = _picture(rgb, pix_fmt, transfer)
                 frame.pts, frame.time_base = pts, time_base
@@ -126,6 +123,23 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
                     _copy_audio(again.streams.audio[0], out, *audio, origin=origin, start_s=float(start_s), end_s=end_s,
                                 gain_db=audio_gain_db)
     return dst
+
+
+def _video_stream(out, codec: str, rate: Fraction, size: tuple[int, int], pix_fmt: str, *, sar: Fraction,
+                  as_shown: bool, bit_rate: int | None, options: dict | None, transfer: str):
+    """:func:`reencode`'s output video stream (``as_shown``: each kept frame at its own time, in ms)."""
+    vs = out.add_stream(codec, rate=rate)
+    (vs.width, vs.height), vs.pix_fmt = size, pix_fmt
+    if sar != 1:
+        vs.codec_context.sample_aspect_ratio = sar
+    if as_shown:  # a variable rate, or a cut: the picture keeps the film's time
+        vs.codec_context.time_base = _VFR_TIME_BASE
+    if bit_rate:
+        vs.bit_rate = int(bit_rate)
+    if options:
+        vs.options = dict(options)
+    grade.tag(vs.codec_context, transfer)
+    return vs
 
 
 def _picture(rgb: np.ndarray, pix_fmt: str, transfer: str) -> av.VideoFrame:
@@ -211,10 +225,10 @@ def _origin(v_in, info, as_shown: bool) -> float:
 
 
 def _source_frames(stream, width: int, height: int, *, fit: str = "stretch", origin: float = 0.0,
-                   start_s: float = 0.0, end_s: float | None = None):
+                   start_s: float = 0.0, end_s: float | None = None, sar: Fraction = Fraction(1)):
     """(time_s from ``start_s``, rgb uint8 [shape=(height, width, 3)]) of every decoded source frame
-    shown from ``start_s`` to ``end_s``, in order, fitted as :func:`reencode`'s ``fit`` says. Times
-    count from ``origin`` (s)."""
+    shown from ``start_s`` to ``end_s``, in order, fitted as :func:`reencode`'s ``fit`` says (to pixels
+    ``sar`` wide). Times count from ``origin`` (s)."""
     stream.thread_type = "AUTO"
     container = stream.container
     held = None  # the last frame before start_s: on screen at the cut
@@ -226,17 +240,18 @@ def _source_frames(stream, width: int, height: int, *, fit: str = "stretch", ori
             held = frame
             continue
         if held is not None and t > 1e-6:
-            yield 0.0, _fitted(held, width, height, fit)
+            yield 0.0, _fitted(held, width, height, fit, sar)
         held = None
-        yield t, _fitted(frame, width, height, fit)
+        yield t, _fitted(frame, width, height, fit, sar)
 
 
-def _fitted(frame: av.VideoFrame, width: int, height: int, fit: str) -> np.ndarray:
-    """``frame`` as rgb uint8 [shape=(height, width, 3)]: stretched, padded on black, or cropped to fill."""
+def _fitted(frame: av.VideoFrame, width: int, height: int, fit: str, sar: Fraction = Fraction(1)) -> np.ndarray:
+    """``frame`` as rgb uint8 [shape=(height, width, 3)] of pixels ``sar`` wide: stretched, padded on
+    black, or cropped to fill (the source's square pixels fitted to the picture as shown)."""
     if fit == "stretch":
         return frame.to_ndarray(width=width, height=height, format="rgb24", interpolation="AREA")
-    scale = (min if fit == "pad" else max)(width / frame.width, height / frame.height)
-    w = max(2, int(round(frame.width * scale / 2)) * 2)
+    scale = (min if fit == "pad" else max)(width * float(sar) / frame.width, height / frame.height)
+    w = max(2, int(round(frame.width * scale / float(sar) / 2)) * 2)
     h = max(2, int(round(frame.height * scale / 2)) * 2)
     rgb = frame.to_ndarray(width=w, height=h, format="rgb24", interpolation="AREA")
     out = np.zeros((height, width, 3), np.uint8)
