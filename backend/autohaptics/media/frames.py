@@ -7,6 +7,11 @@ after its first halving) and converted on the small proxy (BT.709 or BT.2020 for
 BT.601 otherwise, as FFmpeg's scaler does), within about 2 grey levels of FFmpeg's scaled conversion of the
 full frame and about 3x cheaper. HDR frames (PQ, HLG) give SDR proxies, luma and colour (:mod:`.hdr`).
 
+An interlaced frame (two fields, each a moment of its own: 1080i and 576i broadcasts, a hard-telecined
+DVD) gives its small proxies from its top field alone: both fields together show whatever moves twice,
+combed, and optical flow between such pictures reads the two copies (docs/BENCHMARKS.md, "Stop 57").
+Full-size copies (:meth:`Frame.full`, :meth:`Frame.fields`) keep both fields.
+
 A frame may be cropped to a rectangle (the active picture inside black bars,
 :mod:`autohaptics.media.active`): its size, proxies and copies are then those of the rectangle,
 read as a view of the decoded planes (a letterboxed film's bars are never read).
@@ -236,12 +241,13 @@ class Frame:
             return None
         k = self.rotation // 90
         dw, dh = (height, width) if k % 2 else (width, height)  # target (w, h) before rotation
+        field = f.interlaced_frame and 2 * dh <= f.height  # the top field alone (module docstring)
         out = []
         for i in range(3 if colour else 1):
             if i == 0 and not luma:
                 out.append(None)
                 continue
-            arr = _plane(f, i)
+            arr = _plane(f, i)[0::2] if field else _plane(f, i)
             ph, pw = arr.shape
             if self._crop is not None:  # a view of the rectangle, at the plane's own sub-sampling
                 x, y, cw_, ch_ = self._crop
