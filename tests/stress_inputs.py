@@ -84,12 +84,14 @@ def synth_clip(name: str, *, duration_s: float = CLIP_S, rgb=(200, 40, 30), movi
 def write_streams(path: Path, *, frames=None, fps: float | Fraction = 24, times_s=None, audio=None,
                   sample_rate: int = 48_000, layout: str = "stereo", audio_codec: str = "aac",
                   video_codec: str = "libx264", rotation: int | None = None, audio_start_s: float = 0.0,
-                  options: dict | None = None, pix_fmt: str = "yuv420p", container: str | None = None) -> Path:
+                  options: dict | None = None, pix_fmt: str = "yuv420p", container: str | None = None,
+                  video_options: dict | None = None) -> Path:
     """Write frames and samples exactly as given (PyAV), for what synth cannot express.
 
     frames : RGB uint8 arrays [shape=(h, w, 3)]; times_s : their presentation times, s (default
     i / fps; irregular times make a variable frame rate). audio : float32 [shape=(channels, n)],
     written as packed float (NaN and inf survive in pcm_f32le). rotation : display rotation, degrees.
+    options : the container's; video_options : the video encoder's (e.g. x264's ``interlaced=1``).
     """
     import av
 
@@ -99,6 +101,8 @@ def write_streams(path: Path, *, frames=None, fps: float | Fraction = 24, times_
             vs = c.add_stream(video_codec, rate=Fraction(fps).limit_denominator(1001))
             vs.height, vs.width = frames[0].shape[:2]
             vs.pix_fmt = pix_fmt
+            if video_options:
+                vs.options = dict(video_options)
             if times_s is not None:
                 vs.time_base = Fraction(1, 1000)
             if rotation is not None:

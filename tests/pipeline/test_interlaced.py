@@ -13,25 +13,21 @@ import pytest
 from autohaptics import media, pipeline
 from autohaptics.metrics import compare_timelines
 from shared_data import shared_clip
+from stress_inputs import write_streams
 
 FPS = 30  # frames a second, fields 60
 
 
 def _write(path, pictures, *, interlaced: bool):
     """``pictures`` (RGB uint8 frames) as H.264 at ``FPS``, coded interlaced (top field first) or not."""
-    with av.open(str(path), "w") as out:
-        vs = out.add_stream("libx264", rate=FPS)
-        vs.height, vs.width = pictures[0].shape[:2]
-        vs.pix_fmt = "yuv420p"
-        vs.options = {"preset": "veryfast", "crf": "14", **({"x264-params": "interlaced=1:tff=1"} if interlaced else {})}
-        for k, img in enumerate(pictures):
-            frame = av.VideoFrame.from_ndarray(img, format="rgb24")
-            frame.pts = k
-            for p in vs.encode(frame):
-                out.mux(p)
-        for p in vs.encode(None):
-            out.mux(p)
-    return path
+    coding = {"x264-params": "interlaced=1:tff=1"} if interlaced else {}
+    return write_streams(path, frames=pictures, fps=FPS, video_options={"preset": "veryfast", "crf": "14", **coding})
+
+
+def _flagged(path) -> list[bool]:
+    """Whether each decoded frame of ``path`` is flagged interlaced."""
+    with av.open(str(path)) as c:
+        return [f.interlaced_frame for f in c.decode(c.streams.video[0])]
 
 
 def _decoded(path) -> list[media.Frame]:
@@ -47,8 +43,9 @@ def test_an_interlaced_frames_small_proxies_are_its_top_field(tmp_path):
     img[0::2, 16:96] = 230  # top field
     img[1::2, 160:240] = 230  # bottom field
     for interlaced in (True, False):
-        frame = _decoded(_write(tmp_path / f"i{interlaced}.mp4", [img] * 4, interlaced=interlaced))[2]
-        assert frame._frame.interlaced_frame == interlaced
+        path = _write(tmp_path / f"i{interlaced}.mp4", [img] * 4, interlaced=interlaced)
+        assert _flagged(path) == [interlaced] * 4
+        frame = _decoded(path)[2]
         gray = frame.gray(64).astype(int)
         rgb = frame.rgb_and_gray(64, 64)[0].astype(int)
         left, right = gray[:, 8:20].mean(), gray[:, 44:56].mean()

@@ -1,6 +1,6 @@
-"""Re-encodes as the material matrix needs them: bars (pad), crop (fill), anamorphic pixels, 10 bits, HDR grades, a variable
-frame rate, a stretch cut out of a film, the sound alone mixed again with the picture's packets kept, the
-sound at another level, and a surround sound mixed to stereo at its own level."""
+"""Re-encodes as the material matrix needs them: bars (pad), crop (fill), anamorphic pixels, 10 bits, HDR
+grades, a variable frame rate, a stretch cut out of a film, the sound alone mixed again with the picture's
+packets kept, the sound at another level, and a surround sound mixed to stereo at its own level."""
 
 from __future__ import annotations
 
