@@ -7,8 +7,10 @@ rows: on that scene (all met) and on a shared film (three known misses, strict x
 from __future__ import annotations
 
 import hashlib
+import os
 import subprocess
 import sys
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -17,6 +19,7 @@ from autohaptics import pipeline
 from autohaptics import testing as synth
 from autohaptics.bench.matrix import (JOLT_MAX, TARGETS, VARIANTS, cut_analysis, misses, not_applicable, row_figures,
                                       silence_pair, variant_file)
+from autohaptics.errors import ParameterError
 from autohaptics.media import probe
 from autohaptics.testing.scenes import material_scene
 from shared_data import shared_clip
@@ -64,6 +67,22 @@ def test_rows_a_source_cannot_have_are_left_out(scene_file, tmp_path):
     assert [bool(not_applicable(v, probe(short))) for v in cuts] == [v.start_s > 6.5 for v in cuts]
     mute = synth.write_scene(tmp_path / "mute.mp4", material_scene(4.0), width=160, height=90, audio=False)
     assert {v.group for v in VARIANTS if not_applicable(v, probe(mute))} == {"sound"} | {"start"}
+
+
+def test_a_row_whose_encoder_changes_its_process_is_written_by_a_fresh_interpreter(tmp_path):
+    """FFmpeg's libsvtav1, run as root, leaves the thread that opened it real-time (every process
+    started from it later inherits that): the AV1 row is written by a child, and this process keeps
+    its scheduling."""
+    isolated = [v for v in VARIANTS if v.isolated]
+    assert [v.options["video_codec"] for v in isolated] == ["libsvtav1"]
+    src = synth.write_scene(tmp_path / "short.mp4", material_scene(3.0), width=160, height=90, fps=25)
+    before = os.sched_getscheduler(0), os.sched_getparam(0).sched_priority
+    path = variant_file(src, isolated[0], tmp_path / "variants")
+    info = probe(path)
+    assert info.video.codec in ("av1", "libdav1d") and info.audio.codec == "opus" and info.duration_s == pytest.approx(3.0, abs=0.1)
+    assert (os.sched_getscheduler(0), os.sched_getparam(0).sched_priority) == before
+    with pytest.raises(ParameterError, match="only a row of the matrix"):
+        variant_file(src, replace(isolated[0], name="another AV1"), tmp_path / "other")
 
 
 def test_a_cut_of_the_analysis_is_the_film_from_there(clean):

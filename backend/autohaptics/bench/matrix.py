@@ -3,9 +3,9 @@
 Each source (the shared film clips, or any file given) is written again as each :data:`VARIANTS` row says:
 re-encoded as it is (H.264); letterboxed and pillarboxed; at half size; at 23.976, 25, 29.97 and 50 fps and at a
 variable frame rate; in 10 bits (H.264, and a ProRes master with its sound in one stream or, as editing suites write
-it, each channel in a mono track); as an HDR10 grade; as HEVC; as DVDs (NTSC telecined, coded progressive and
-interlaced; PAL anamorphic); as VP9 and H.264 screeners; with its sound as mono, stereo (Opus, and AAC from FFmpeg's
-downmix), 5.1 and 7.1; cut to start mid-score. Every row's timeline is compared with the source's own (the clean
+it, each channel in a mono track); as an HDR10 grade; as HEVC and AV1; as DVDs (NTSC telecined, coded progressive
+and interlaced; PAL anamorphic); as VP9 and H.264 screeners; with its sound as mono, stereo (Opus, and AAC from
+FFmpeg's downmix), 5.1 and 7.1; cut to start mid-score. Every row's timeline is compared with the source's own (the clean
 variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what differs is the start of
 the file, not the context a whole film gives its film-relative levels): onset F1, fan-tick F1, tolerant fan IoU and
 temperature MAE against :data:`TARGETS`, and a cut's largest vibration in its first 0.5 s where the film itself does
@@ -20,6 +20,8 @@ Variant files are written once into ``--out`` and reused; nothing large is commi
 from __future__ import annotations
 
 import json
+import os
+import subprocess
 import sys
 import time
 from dataclasses import dataclass, field
@@ -57,6 +59,9 @@ class Variant:
         (``options`` then go to ``screener``: its height, frame rate).
     start_s : where a cut starts in the source, s (on the 100 ms grid); its ticks are compared with
         the clean film's from there.
+    isolated : written by a fresh interpreter, for an encoder that changes the process that runs it
+        (FFmpeg's libsvtav1, run as root, leaves the thread that opened it real-time, SCHED_FIFO 99,
+        and every process started from it later inherits that).
     """
 
     name: str
@@ -67,6 +72,7 @@ class Variant:
     screener: str | None = None
     crf: int | None = None
     start_s: float = 0.0
+    isolated: bool = False
 
     @property
     def slug(self) -> str:
@@ -101,6 +107,8 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("HEVC, x265 veryfast crf 18", "codec",
             options={"video_codec": "libx265",
                      "video_options": {"preset": "veryfast", "crf": "18", "x265-params": "log-level=error"}}),
+    Variant("AV1, SVT-AV1 preset 10 crf 35 (a streaming service's), Opus", "codec", ".mkv", isolated=True,
+            options={"video_codec": "libsvtav1", "video_options": {"preset": "10", "crf": "35"}, "audio_codec": "libopus"}),
     Variant("MPEG-2 with two B-frames (a DVD's), AC-3", "codec", ".mkv",
             options={"video_codec": "mpeg2video", "video_bit_rate": 6_000_000, "video_options": {"bf": "2", "g": "15"},
                      "audio_codec": "ac3"}),
@@ -157,6 +165,17 @@ def variant_file(src: Path, variant: Variant, out_dir: Path) -> Path:
     if dst.exists():
         return dst
     out_dir.mkdir(parents=True, exist_ok=True)
+    if variant.isolated:
+        if variant not in VARIANTS:
+            raise ParameterError(f"only a row of the matrix is written by a fresh interpreter, not {variant.name!r}")
+        code = ("import sys; from dataclasses import replace; from pathlib import Path; "
+                "from autohaptics.bench.matrix import VARIANTS, variant_file; "
+                "v = next(v for v in VARIANTS if v.slug == sys.argv[3]); "
+                "variant_file(Path(sys.argv[1]), replace(v, isolated=False), Path(sys.argv[2]))")
+        env = {**os.environ, "SVT_LOG": "2"}  # SVT-AV1's warnings and errors, not its banner
+        subprocess.run([sys.executable, "-c", code, str(src), str(out_dir), variant.slug], check=True, timeout=3600,
+                       env=env)
+        return dst
     if variant.screener is not None:
         return screener(src, dst, codec=variant.screener, crf=variant.crf, **variant.options)
     options = dict(variant.options)
