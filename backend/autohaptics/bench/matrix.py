@@ -1,15 +1,15 @@
 """``autohaptics bench matrix``: the material matrix, the forms a film reaches us in.
 
 Each source (the shared film clips, or any file given) is written again as each :data:`VARIANTS` row says:
-re-encoded as it is (H.264); letterboxed and pillarboxed; at half size; at 23.976, 25, 29.97 and 50 fps and at a
-variable frame rate; in 10 bits (H.264, and a ProRes master with its sound in one stream or, as editing suites write
-it, each channel in a mono track); as an HDR10 grade; as HEVC and AV1; as DVDs (NTSC telecined, coded progressive
-and interlaced; PAL anamorphic); as VP9 and H.264 screeners; with its sound as mono, stereo (Opus, and AAC from
-FFmpeg's downmix), 5.1 and 7.1; cut to start mid-score. Every row's timeline is compared with the source's own (the clean
-variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what differs is the start of
-the file, not the context a whole film gives its film-relative levels): onset F1, fan-tick F1, tolerant fan IoU and
-temperature MAE against :data:`TARGETS`, and a cut's largest vibration in its first 0.5 s where the film itself does
-not vibrate. With ``--speed`` each file's ``generate`` and its bare decode
+re-encoded as it is (H.264); letterboxed and pillarboxed; at half and double size; at 23.976, 25, 29.97 and 50 fps
+and at a variable frame rate; in 10 bits (H.264, and a ProRes master with its sound in one stream or, as editing
+suites write it, each channel in a mono track); as an HDR10 grade; as HEVC and AV1; as DVDs (NTSC telecined, coded
+progressive and interlaced; PAL anamorphic); as VP9 and H.264 screeners; with its sound as mono, stereo (Opus, and
+AAC from FFmpeg's downmix), 5.1 and 7.1; cut to start mid-score. Every row's timeline is compared with the source's
+own (the clean variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what differs
+is the start of the file, not the context a whole film gives its film-relative levels): onset F1, fan-tick F1,
+tolerant fan IoU and temperature MAE against :data:`TARGETS`, and a cut's largest vibration in its first 0.5 s where
+the film itself does not vibrate. With ``--speed`` each file's ``generate`` and its bare decode
 (:func:`~autohaptics.bench.decode.bare_decode`) also run as whole processes, and the row gives their ratio. The
 digital-silence pair (booms and blips over exact silence, and over a -100 dBFS floor) is a row of its own: the
 silence variant against the floor variant, and the ratio of their generate times.
@@ -91,6 +91,7 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("letterbox (bars top and bottom)", "picture", options={"fit": "pad"}, size=lambda w, h: (w, _even(h * 4 / 3))),
     Variant("pillarbox (bars left and right)", "picture", options={"fit": "pad"}, size=lambda w, h: (_even(w * 4 / 3), h)),
     Variant("half size", "picture", size=lambda w, h: (_even(w / 2), _even(h / 2))),
+    Variant("double size (a UHD master of an HD film)", "picture", size=lambda w, h: (_even(w * 2), _even(h * 2))),
     Variant("23.976 fps", "rate", options={"fps": Fraction(24000, 1001)}),
     Variant("25 fps", "rate", options={"fps": 25}),
     Variant("29.97 fps", "rate", options={"fps": Fraction(30000, 1001)}),
