@@ -1,6 +1,7 @@
-"""A master's mono tracks (``media.probe.channel_tracks``, ``media.audio``, ``media.mix``): the channels
-of one mix kept one per track are read as that mix, the same analysis signal as one stream of them;
-what is another version of the sound (an Lt/Rt downmix, a repeated channel, another language, an
+"""A file's sound tracks (``media.tracks``, ``media.audio``, ``media.mix``): of several tracks the
+film's mix is read, not a commentary, an audio description or a compatibility stereo track; the
+channels of one mix kept one per track are read as that mix, the same analysis signal as one stream of
+them; what is another version of the sound (an Lt/Rt downmix, a repeated channel, another language, an
 unlabelled track outside MXF) is left out; a track that ends early is silence after its end."""
 
 from __future__ import annotations
@@ -29,10 +30,12 @@ def _channels(n: int, seconds: float, seed: int = 3) -> np.ndarray:
 
 
 def _write(path, fmt: str, x: np.ndarray, layouts: list[str], *, languages: list[str] | None = None,
-           lengths_s: list[float] | None = None) -> None:
+           lengths_s: list[float] | None = None, flags: list[str] | None = None,
+           titles: list[str] | None = None) -> None:
     """A file with a small picture and one PCM track per entry of ``layouts``, track k holding the
     rows of ``x`` its layout has channels for, from row ``sum of the earlier tracks' channels`` on
-    (cut to ``lengths_s[k]`` seconds where given)."""
+    (cut to ``lengths_s[k]`` seconds where given; flagged with the disposition ``flags[k]`` and titled
+    ``titles[k]`` where not empty)."""
     with av.open(str(path), "w", format=fmt) as out:
         video = out.add_stream("mpeg2video", rate=25)
         video.width, video.height, video.pix_fmt = 64, 48, "yuv420p"
@@ -42,6 +45,10 @@ def _write(path, fmt: str, x: np.ndarray, layouts: list[str], *, languages: list
             stream = out.add_stream("pcm_s16le", rate=RATE, layout=layout)
             if languages:
                 stream.metadata["language"] = languages[k]
+            if flags and flags[k]:
+                stream.disposition = getattr(av.stream.Disposition, flags[k])
+            if titles and titles[k]:
+                stream.metadata["title"] = titles[k]
             n = int((lengths_s[k] if lengths_s else x.shape[1] / RATE) * RATE)
             tracks.append((stream, x[row:row + layout.nb_channels, :n]))
             row += layout.nb_channels
@@ -168,3 +175,55 @@ def test_a_track_that_falls_behind_never_holds_the_film_in_memory():
     mix.lane(1).emit(np.ones(500, np.float32))  # the late track's samples for time already mixed are dropped
     mix.close()
     assert out.n == 60 * 1000
+
+
+def _alone(tmp_path, x: np.ndarray, layout: str) -> np.ndarray:
+    """The analysis signal of ``x`` as the one track of a file."""
+    path = tmp_path / f"alone_{layout}_{x.shape[0]}.mkv"
+    _write(path, "matroska", x, [layout])
+    return read_audio(path)
+
+
+@pytest.mark.parametrize("flags, titles", [
+    (["comment", ""], ["", ""]),  # flagged as a commentary
+    (["visual_impaired", ""], ["", ""]),  # an audio description
+    (["default", ""], ["Director's Commentary", ""]),  # a rip's title alone, and the commentary the default
+])
+def test_the_mix_is_read_not_a_commentary_or_description_ahead_of_it(tmp_path, flags, titles):
+    """Track 1 is set aside (stereo), track 2 is the mix (stereo): the mix is read, as a file of it alone."""
+    x = _channels(4, 2.0)
+    path = tmp_path / "tracks.mkv"
+    _write(path, "matroska", x, ["stereo", "stereo"], flags=flags, titles=titles)
+    info = media.probe(path)
+    assert info.audio.index == 2  # stream 0 is the picture
+    assert np.abs(read_audio(path, info=info) - _alone(tmp_path, x[2:], "stereo")).max() < 1e-6
+
+
+def test_the_51_mix_is_read_before_a_compatibility_stereo_track(tmp_path):
+    """A stereo track ahead of the 5.1 mix (HandBrake's and iTunes' files, the stereo flagged default):
+    the mix is read, as FFmpeg's command line picks; of two mixes of as many channels, the default one,
+    else the first; a file whose every track is set aside is read from its first."""
+    x = _channels(8, 2.0)
+    compat = tmp_path / "compat.mp4"
+    _write(compat, "mp4", x, ["stereo", "5.1"], flags=["default", ""])
+    assert (media.probe(compat).audio.index, media.probe(compat).audio.channels) == (2, 6)
+    assert np.abs(read_audio(compat) - _alone(tmp_path, x[2:], "5.1")).max() < 1e-6
+    languages = tmp_path / "languages.mkv"
+    _write(languages, "matroska", x[:4], ["stereo", "stereo"], flags=["", "default"], languages=["fra", "eng"])
+    assert media.probe(languages).audio.index == 2
+    untagged = tmp_path / "untagged.mkv"
+    _write(untagged, "matroska", x[:4], ["stereo", "stereo"], flags=["", ""])
+    assert media.probe(untagged).audio.index == 1
+    aside = tmp_path / "aside.mkv"
+    _write(aside, "matroska", x[:4], ["stereo", "stereo"], flags=["comment", "visual_impaired"])
+    assert media.probe(aside).audio.index == 1
+
+
+def test_a_masters_mono_tracks_count_as_their_mix_against_a_stereo_track(tmp_path):
+    """Six labelled mono tracks and a stereo downmix after them: the six are the sound (6 channels), as
+    without the stereo track."""
+    x = _channels(8, 2.0)
+    path = tmp_path / "master.mov"
+    _write(path, "mov", x, list(FIVE_ONE) + ["stereo"])
+    info = media.probe(path)
+    assert (info.audio.tracks, info.audio.channels) == ((1, 2, 3, 4, 5, 6), 6)

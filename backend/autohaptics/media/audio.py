@@ -25,15 +25,16 @@ import numpy as np
 
 from autohaptics.errors import MediaError
 from autohaptics.media.mix import Mix, Sink
-from autohaptics.media.probe import (NO_ROLE, AudioReport, MediaInfo, decode_tolerant, open_container, probe,
+from autohaptics.media.probe import (AudioReport, MediaInfo, decode_tolerant, open_container, probe,
                                      stream_by_index)
+from autohaptics.media.tracks import NO_ROLE
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
 
 
 def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_gain_db: float = 10.0,
                chunk_s: float = 2.0, report: AudioReport | None = None) -> Iterator[np.ndarray]:
     """Decode the sound :func:`probe` chose (``info.audio``: the first audio stream FFmpeg can decode,
-    with the mono tracks that hold the other channels of its mix, :func:`~autohaptics.media.probe.channel_tracks`)
+    with the mono tracks that hold the other channels of its mix, :func:`~autohaptics.media.tracks.channel_tracks`)
     as float32 mono chunks at 48 kHz (digital full scale).
 
     Time 0 is the container start (``info.start_s``): gaps in the stream's timestamps are

@@ -17,6 +17,7 @@ from pathlib import Path
 import av
 
 from autohaptics.errors import MediaError
+from autohaptics.media.tracks import channel_tracks, sound_stream
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
 
 # Declared vs decoded duration: beyond this shortfall the file is called truncated.
@@ -79,7 +80,7 @@ class AudioInfo:
     codec: str
     duration_s: float | None
     # A master that keeps each channel in its own mono track: the streams read as the channels of one
-    # sound, in ``layout``'s order (``index`` first); empty for one stream (:func:`channel_tracks`).
+    # sound, in ``layout``'s order (``index`` first); empty for one stream (``media.tracks.channel_tracks``).
     tracks: tuple[int, ...] = ()
 
     @property
@@ -151,7 +152,7 @@ def probe(path: str | os.PathLike) -> MediaInfo:
         undecodable = [f"{s.type} stream #{s.index} ({_codec_name(s)})" for s in c.streams
                        if s.type in ("video", "audio") and s.codec_context is None]
         vs = next((s for s in c.streams.video if s.codec_context is not None and _is_real_video(s)), None)
-        as_ = next((s for s in c.streams.audio if s.codec_context is not None), None)
+        as_ = sound_stream(c)
         video = _video_info(vs) if vs is not None else None
         audio = _audio_info(as_, c) if as_ is not None else None
         if undecodable and ((video is None and any(u.startswith("video") for u in undecodable))
@@ -302,61 +303,6 @@ def _audio_info(s, c) -> AudioInfo:
     n = len(tracks) if len(tracks) > 1 else int(cc.layout.nb_channels)
     return AudioInfo(index=s.index, sample_rate=int(cc.sample_rate or 0), channels=n, layout=layout,
                      codec=cc.name, duration_s=dur, tracks=tuple(tracks) if len(tracks) > 1 else ())
-
-
-# Containers whose unlabelled mono tracks are the channels of one mix (broadcast MXF and GXF carry
-# each AES3 channel as a track); elsewhere such tracks are versions of the sound (languages, commentary).
-_CHANNEL_PER_TRACK = ("mxf", "gxf")
-# FFmpeg's names of a channel without a role (an unlabelled layout's channels)
-NO_ROLE = ("NONE", "NA", "UNKNOWN", "UNUSED")
-# Labels of a stereo downmix (Lt/Rt) beside the discrete channels it is made from.
-_DOWNMIX_LABELS = ("DL", "DR")
-
-
-def channel_tracks(c, first) -> tuple[list[int], str]:
-    """The stream indices read as one sound, starting with ``first`` (the probe's audio stream), and
-    FFmpeg's name of their layout.
-
-    A master often keeps each channel of its mix in a mono track of its own (QuickTime from an
-    editing suite, MXF from a broadcast deck). When ``first`` is mono, every later decodable mono
-    track at its sample rate and in its language joins it as a channel. QuickTime labels such tracks
-    (FL, FR, FC, LFE, ...): then each role is read from its first track, a repeated role being another
-    mix, and an Lt/Rt pair (DL, DR) beside discrete channels is left out as their downmix; a plain
-    mono track among labelled ones is the centre. Unlabelled tracks are channels only in MXF and GXF
-    (:data:`_CHANNEL_PER_TRACK`): one sound of that many unlabelled channels (``media.audio`` reads 6
-    or 8 in FFmpeg's 5.1 / 7.1 order, others as their equal mean). Anything else is ``first`` alone.
-    """
-    layout = first.codec_context.layout
-    if layout.nb_channels != 1:
-        return [first.index], str(layout.name)
-    rate, lang = first.codec_context.sample_rate, first.metadata.get("language")
-    same = [s for s in c.streams.audio if s.index >= first.index and s.codec_context is not None
-            and s.codec_context.layout.nb_channels == 1 and s.codec_context.sample_rate == rate
-            and s.metadata.get("language") == lang]
-    labels = [_track_label(s) for s in same]
-    if not any(labels):
-        if c.format.name not in _CHANNEL_PER_TRACK or len(same) == 1:
-            return [first.index], str(layout.name)
-        return [s.index for s in same], f"{len(same)} channels"
-    discrete = any(lab not in _DOWNMIX_LABELS for lab in labels)
-    kept: dict[str, int] = {}
-    for s, lab in zip(same, labels):
-        role = lab or "FC"
-        if role not in kept and not (discrete and role in _DOWNMIX_LABELS):
-            kept[role] = s.index
-    try:  # FFmpeg's channel order, which the tracks follow
-        merged = av.AudioLayout("+".join(kept))
-        return [kept[str(ch.name).upper()] for ch in merged.channels], str(merged.name)
-    except (ValueError, KeyError, av.error.FFmpegError):  # labels FFmpeg cannot join into one layout
-        return [first.index], str(layout.name)
-
-
-def _track_label(s) -> str:
-    """A mono track's channel role from the container ("FL", "LFE", ...); "" when it has none
-    (FFmpeg reads an unlabelled QuickTime track as plain mono, an MXF or Matroska one as NONE)."""
-    layout = s.codec_context.layout
-    name = str(layout.channels[0].name or "").upper() if layout.channels else ""
-    return "" if layout.name == "mono" or not name or name in NO_ROLE else name
 
 
 def _container_start(c) -> float:

@@ -22,9 +22,11 @@ from autohaptics.shots import Boundaries, detect
 # 29-40 fps (``media.video.REPEAT_MIN_FPS``); caches before it carry none and count as 0. 2: audio
 # frames placed on the container's clock without splices at rounded timestamps (``media.audio.AudioClock``).
 # 3: 10-bit and wider pictures read through the 8-bit proxies' path (``media.frames``); a master's mono
-# tracks read as its mix (``media.probe.channel_tracks``); HDR pictures read as SDR (``media.hdr``).
+# tracks read as its mix (``media.tracks.channel_tracks``); HDR pictures read as SDR (``media.hdr``).
 # 4: every frame decoded where skipping the non-reference ones leaves gaps (``media.video.SKIP_GAP_MAX``).
-ANALYSIS_REVISION = 4
+# 5: an interlaced frame's proxies read from its top field (``media.frames``); the film's mix picked among
+# several audio tracks, not the first (``media.tracks.sound_stream``).
+ANALYSIS_REVISION = 5
 
 
 @dataclass
