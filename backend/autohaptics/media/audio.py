@@ -82,6 +82,12 @@ def _mapping(report: AudioReport, layout, n: int, lfe_gain: float) -> np.ndarray
     return weights
 
 
+# Decoders that apply the dynamic range compression a Dolby encoder writes into the stream (DVDs, Blu-rays,
+# broadcasts, streaming services): FFmpeg applies all of it unless told not to, a home player's "night
+# mode" (loud passages cut, quiet ones raised). The film's own mix is read: none of it applied.
+_NO_DRC = {"ac3": {"drc_scale": "0"}, "ac3_fixed": {"drc_scale": "0"}, "eac3": {"drc_scale": "0"}}
+
+
 class _Track:
     """One audio stream's frames placed on the container's clock (:class:`AudioClock`) and downmixed
     into ``sink``, with ``weights`` or, when None, the weights of its first frame's layout."""
@@ -89,6 +95,9 @@ class _Track:
     def __init__(self, stream, start_s: float, rate: int, sink: Sink, report: AudioReport,
                  weights: np.ndarray | None = None):
         stream.thread_type = "AUTO"
+        options = _NO_DRC.get(stream.codec_context.name)
+        if options:
+            stream.codec_context.options = {**stream.codec_context.options, **options}
         self.clock = AudioClock(start_s, rate, timestamp_slack_s(stream.time_base, rate))
         self.sink, self.report, self.limit = sink, report, max(1, int(_DOWNMIX_S * rate))
         self.held = None if weights is None else _Held(self.limit, weights, report)

@@ -25,7 +25,8 @@ from autohaptics.shots import Boundaries, detect
 # tracks read as its mix (``media.tracks.channel_tracks``); HDR pictures read as SDR (``media.hdr``).
 # 4: every frame decoded where skipping the non-reference ones leaves gaps (``media.video.SKIP_GAP_MAX``).
 # 5: an interlaced frame's proxies read from its top field (``media.frames``); the film's mix picked among
-# several audio tracks, not the first (``media.tracks.sound_stream``).
+# several audio tracks, not the first (``media.tracks.sound_stream``); AC-3 and E-AC-3 read without the
+# stream's dynamic range compression (``media.audio``).
 ANALYSIS_REVISION = 5
 
 
