@@ -5,14 +5,14 @@ re-encoded as it is (H.264); letterboxed and pillarboxed; at half and double siz
 and at a variable frame rate; in 10 bits (H.264, and a ProRes master with its sound in one stream or, as editing
 suites write it, each channel in a mono track); as an HDR10 grade; as HEVC and AV1; as DVDs (NTSC telecined, coded
 progressive and interlaced; PAL anamorphic); as VP9 and H.264 screeners; with its sound as mono, stereo (Opus, and
-AAC from FFmpeg's downmix), 5.1 and 7.1; cut to start mid-score. Every row's timeline is compared with the source's
-own (the clean variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what differs
-is the start of the file, not the context a whole film gives its film-relative levels): onset F1, fan-tick F1,
-tolerant fan IoU and temperature MAE against :data:`TARGETS`, and a cut's largest vibration in its first 0.5 s where
-the film itself does not vibrate. With ``--speed`` each file's ``generate`` and its bare decode
-(:func:`~autohaptics.bench.decode.bare_decode`) also run as whole processes, and the row gives their ratio. The
-digital-silence pair (booms and blips over exact silence, and over a -100 dBFS floor) is a row of its own: the
-silence variant against the floor variant, and the ratio of their generate times.
+AAC from FFmpeg's downmix), 5.1 and 7.1, and as AC-3 carrying Dolby's dynamic range words; cut to start mid-score.
+Every row's timeline is compared with the source's own (the clean variant; for a cut, the clean analysis from the
+cut on derived as a film of its own, so what differs is the start of the file, not the context a whole film gives
+its film-relative levels): onset F1, fan-tick F1, tolerant fan IoU and temperature MAE against :data:`TARGETS`, and
+a cut's largest vibration in its first 0.5 s where the film itself does not vibrate. With ``--speed`` each file's
+``generate`` and its bare decode (:func:`~autohaptics.bench.decode.bare_decode`) also run as whole processes, and
+the row gives their ratio. The digital-silence pair (booms and blips over exact silence, and over a -100 dBFS floor)
+is a row of its own: the silence variant against the floor variant, and the ratio of their generate times.
 
 Variant files are written once into ``--out`` and reused; nothing large is committed.
 """
@@ -59,6 +59,8 @@ class Variant:
         (``options`` then go to ``screener``: its height, frame rate).
     start_s : where a cut starts in the source, s (on the 100 ms grid); its ticks are compared with
         the clean film's from there.
+    post : what is done to the file ``reencode`` wrote, (written, dst) -> dst (Dolby's dynamic range
+        words set into its AC-3, :func:`_film_drc`).
     isolated : written by a fresh interpreter, for an encoder that changes the process that runs it
         (FFmpeg's libsvtav1, run as root, leaves the thread that opened it real-time, SCHED_FIFO 99,
         and every process started from it later inherits that).
@@ -72,6 +74,7 @@ class Variant:
     screener: str | None = None
     crf: int | None = None
     start_s: float = 0.0
+    post: Callable[[Path, Path], Path] | None = None
     isolated: bool = False
 
     @property
@@ -83,6 +86,14 @@ def _sound(layout: str, bit_rate: int, codec: str = "libopus") -> dict:
     """A sound row's options: the picture's packets as they are, the sound mixed to ``layout`` as
     ``codec`` (Opus: a codec of its own, not the AAC of the picture rows)."""
     return {"video_codec": "copy", "audio_codec": codec, "audio_layout": layout, "audio_bit_rate": bit_rate}
+
+
+def _film_drc(written: Path, dst: Path) -> Path:
+    """``written`` with Dolby's Film Standard dynamic range words in its AC-3 (``testing.dolby``), as a
+    DVD's, a Blu-ray's or a broadcast's sound carries them and FFmpeg's encoder does not write them."""
+    from autohaptics.testing.dolby import with_film_drc
+
+    return with_film_drc(written, dst)
 
 
 ENCODE = {"preset": "veryfast", "crf": "18"}  # x264 settings of every row that re-encodes the picture itself
@@ -137,6 +148,8 @@ VARIANTS: tuple[Variant, ...] = (
     # as ``ffmpeg -ac 2 -c:a aac`` makes it: FFmpeg's float downmix, which a loud 5.1 mix takes past full
     # scale, and FFmpeg's AAC encoder then turns such blocks down (docs/BENCHMARKS.md, "Stop 57")
     Variant("sound stereo AAC 128 kb/s, FFmpeg's downmix", "sound", ".mkv", options=_sound("stereo", 128_000, "aac")),
+    Variant("sound AC-3 with Dolby's Film Standard DRC words (a DVD's, a broadcast's)", "sound", ".mkv",
+            options={"video_codec": "copy", "audio_codec": "ac3", "audio_bit_rate": 448_000}, post=_film_drc),
     Variant("cut mid-score at 7.3 s", "start", options={"start_s": 7.3}, start_s=7.3),
     Variant("cut mid-score at 13.7 s", "start", options={"start_s": 13.7}, start_s=13.7),
     Variant("cut mid-score at 21.1 s", "start", options={"start_s": 21.1}, start_s=21.1),
@@ -150,6 +163,8 @@ def not_applicable(variant: Variant, info) -> str | None:
         return "no sound"
     if info.video is None:
         return "no picture"
+    if variant.options.get("audio_codec") == "ac3" and info.audio is not None and info.audio.channels > 6:
+        return f"AC-3 carries at most 5.1, the sound has {info.audio.channels} channels"
     if variant.options.get("conversion") == "pulldown" and round(float(info.video.fps), 2) != 24:
         return f"3:2 pulldown telecines a 24 fps film, this one is {float(info.video.fps):g} fps"
     if variant.start_s and variant.start_s > info.duration_s - CUT_MIN_S:
@@ -185,7 +200,12 @@ def variant_file(src: Path, variant: Variant, out_dir: Path) -> Path:
     if variant.size is not None:
         w, h = probe(src).video.display_size
         options["width"], options["height"] = variant.size(int(w), int(h))
-    return reencode(src, dst, **options)
+    if variant.post is None:
+        return reencode(src, dst, **options)
+    written = reencode(src, dst.with_name(f"{dst.stem}.written{dst.suffix}"), **options)
+    variant.post(written, dst)
+    written.unlink()
+    return dst
 
 
 def cut_analysis(analysis, start_s: float, n_ticks: int):

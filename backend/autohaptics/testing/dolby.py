@@ -112,3 +112,65 @@ def write_ac3(path: str | os.PathLike, samples: np.ndarray, layout: str, *, gain
         frames = [with_drc(f, drc_code(gains_db[k])) if k < len(gains_db) else f for k, f in enumerate(frames)]
         path.write_bytes(b"".join(frames))
     return path
+
+
+# Dolby's "Film Standard" line-mode profile, levels against the dialogue normalisation: +6 dB below -12 dB,
+# 2:1 boost up to 0 dB, no change to +5 dB, 2:1 cut to +15 dB, 20:1 above (at most -24 dB)
+def film_standard_gain_db(level_db: np.ndarray) -> np.ndarray:
+    """The profile's static gain, dB, at ``level_db`` (dB against the dialogue normalisation)."""
+    x = np.asarray(level_db, np.float64)
+    gain = np.where(x < -12.0, 6.0, np.where(x < 0.0, -x / 2.0, 0.0))
+    gain = np.where(x >= 5.0, -(np.minimum(x, 15.0) - 5.0) / 2.0 - np.maximum(x - 15.0, 0.0) * 19.0 / 20.0, gain)
+    return np.maximum(gain, -24.0)
+
+
+def film_drc_gains(levels_db: np.ndarray, dialnorm_db: float, *, release_s: float = 1.0) -> np.ndarray:
+    """Per-frame gains, dB, of the Film Standard profile over frame levels ``levels_db`` (dBFS): a cut
+    follows at once, a release (the gain rising) over ``release_s`` (a one-pole smoother in dB)."""
+    static = film_standard_gain_db(np.asarray(levels_db, np.float64) - dialnorm_db)
+    out = np.empty_like(static)
+    a = 1.0 - math.exp(-SAMPLES_PER_FRAME / 48000.0 / release_s)
+    g = 0.0
+    for k, target in enumerate(static):
+        g = target if target < g else g + a * (target - g)
+        out[k] = g
+    return out
+
+
+def with_film_drc(src: str | os.PathLike, dst: str | os.PathLike, *, dialnorm_db: float | None = None) -> Path:
+    """``src`` (a file with an AC-3 sound, as FFmpeg writes it) with every AC-3 frame carrying the Film
+    Standard profile's gain for its level (:func:`film_drc_gains`), the other packets copied. A frame's
+    level is its power over the full-bandwidth channels, dBFS; ``dialnorm_db`` (default: the median level
+    of the frames that sound, where a film's dialogue and bed sit) is what the profile's levels are
+    against."""
+    dst = Path(dst)
+    with av.open(str(src)) as c:
+        a = c.streams.audio[0]
+        if a.codec_context.name != "ac3":
+            raise ParameterError(f"{src}: the sound is {a.codec_context.name}, not AC-3")
+        index = a.index  # a closed container's streams read nonsense
+        levels = []
+        for frame in c.decode(a):
+            lfe = [i for i, ch in enumerate(frame.layout.channels) if ch.name == "LFE"]
+            x = np.delete(frame.to_ndarray().astype(np.float64), lfe, axis=0)
+            levels.append(10.0 * math.log10(float((x ** 2).sum(axis=0).mean()) + 1e-12))
+    levels = np.asarray(levels)
+    if dialnorm_db is None:
+        sounding = levels[levels > -70.0]
+        dialnorm_db = float(np.median(sounding)) if sounding.size else -31.0
+    gains = film_drc_gains(levels, dialnorm_db)
+    with av.open(str(src)) as c, av.open(str(dst), "w") as out:
+        streams = {s.index: out.add_stream_from_template(s) for s in c.streams if s.type in ("video", "audio")}
+        k = 0
+        for packet in c.demux(*[s for s in c.streams if s.index in streams]):
+            if packet.size == 0:  # the demuxer's end of stream
+                continue
+            target = streams[packet.stream.index]
+            if packet.stream.index == index and bytes(packet)[:2] == b"\x0b\x77":
+                patched = av.Packet(with_drc(bytes(packet), drc_code(gains[min(k, gains.size - 1)])))
+                patched.pts, patched.dts, patched.time_base = packet.pts, packet.dts, packet.time_base
+                patched.duration = packet.duration
+                packet, k = patched, k + 1
+            packet.stream = target
+            out.mux(packet)
+    return dst
