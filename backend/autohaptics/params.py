@@ -41,19 +41,18 @@ from autohaptics.temperature import ThermalParams
 TRACKS = ("vibration", "temperature", "fans")
 ANALYSIS_MODES = ("tick", "every")
 ACTIVE_AREAS = ("auto", "full")
+STEREO_MODES = ("auto", "2d", "side_by_side", "top_bottom")
 
 
 @dataclass(frozen=True)
 class VideoParams(Record):
-    """Which frames the video pass analyses. Proxy sizes are the stages' own parameters: the gray
-    proxy (static check, flow, in-pair cuts) is ``flow.width_for(picture width)`` wide (at least
-    ``flow.proxy_width``; recorded as ``stats["flow"]["proxy_width"]``), the RGB proxy (colour,
-    saliency, depth, cuts between ticks) is ``max(saliency.proxy_width, depth.proxy_width)`` wide,
-    except that the spectral saliency (which reads the full frame's luma at 64 x 64) counts with
-    at most the gray proxy's width: its map is made ``saliency.proxy_width`` wide from that proxy.
+    """Which frames, and what of them, the video pass analyses. Proxy sizes are the stages' own parameters
+    (each proxy at the picture's aspect on screen): the gray proxy (static check, flow, in-pair cuts) is
+    ``flow.width_for(picture width)`` wide (``stats["flow"]["proxy_width"]``), the RGB proxy (colour,
+    saliency, depth, cuts between ticks) ``max(saliency.proxy_width, depth.proxy_width)``, but with the
+    spectral saliency (the full frame's luma at 64 x 64) at most the gray proxy's width.
 
-    analysis : "tick" (one frame plus its successor per 100 ms tick) or "every" (every decoded
-        frame; the reference preset).
+    analysis : "tick" (one frame plus its successor per 100 ms tick) or "every" (every decoded frame; reference).
     skip : skip what a scene does not need (see the module docstring). False computes everything.
     prefetch : frames decoded ahead in a background thread, overlapping decoding with analysis
         (0 = decode in the calling thread).
@@ -69,6 +68,8 @@ class VideoParams(Record):
         of the group gets its values (at most s x 50 ms off its own centre). Only with ``analysis="tick"``.
     active_area : "auto" (default): every stage reads only the picture inside constant black bars
         (:func:`media.find_active_area`, ``stats["active_area"]``); "full": the whole frame, bars included.
+    stereo : a 3D film's packed views: "auto" (default: as the file declares, else as its pictures show,
+        :mod:`media.stereo`), "2d", "side_by_side" or "top_bottom"; read from the first view.
     """
 
     STAGE: ClassVar[str] = ANALYSIS
@@ -80,6 +81,7 @@ class VideoParams(Record):
     decode: str = param("nonref", choices=DECODE_MODES)
     stride: int = param(1, 1, 10, unit="ticks", whole=True)
     active_area: str = param("auto", choices=ACTIVE_AREAS)
+    stereo: str = param("auto", choices=STEREO_MODES)
 
     def check(self) -> None:
         if self.stride > 1 and self.analysis != "tick":
@@ -280,7 +282,7 @@ def params_from_args(args):
 # Analysis-time fields whose default analyses otherwise than the analysis did before the field
 # existed: a document without the field was analysed with this value (dotted name -> value).
 ABSENT_AS = {"flow.min_span_frames": 0.0, "flow.cadence_ratio": 0.0, "depth.expansion_grain": 0.0,
-             "cuts.in_one_step": False}
+             "cuts.in_one_step": False, "video.stereo": "2d"}
 
 
 def analysis_key(doc: dict) -> dict:

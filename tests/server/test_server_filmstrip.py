@@ -133,6 +133,26 @@ def test_an_anamorphic_films_posters_show_it_as_it_is_shown(tmp_path):
     assert img.shape[:2] == (90, 160) and abs(int(xs.max() - xs.min()) - int(ys.max() - ys.min())) <= 3
 
 
+def test_a_3d_films_posters_show_one_view_as_it_is_shown(tmp_path):
+    """A 16:9 film packed half side by side (3D): its posters show the left view, stretched back to 16:9
+    (160 x 90, not the 80:90 view as stored), and a disc round on screen is round in them."""
+    from autohaptics import pipeline
+    from autohaptics.testing import Shape
+    from autohaptics.testing.stereo import write_packed
+
+    scene = Scene(2.0, background=(Segment(0, 2.0, (200, 180, 160)),),
+                  shapes=(Shape("circle", (20, 20, 200), t_on=0, t_off=2.0, xy0=(0.5, 0.5), size0=(0.2, 0.35)),))
+    flat = write_scene(tmp_path / "flat.mp4", scene, width=320, height=180, fps=25, audio=False)
+    sbs = write_packed(flat, tmp_path / "sbs.mkv", "side_by_side")
+    pipeline.analyse(sbs).save(tmp_path / "sbs.npz")
+    source = posters.film(sbs, tmp_path / "sbs.npz")
+    assert source.crop == (0, 0, 160, 180) and posters.poster_size(source) == (160, 90)
+    img = cv2.imdecode(np.frombuffer(posters.picture_jpeg(source, [5], (160, 90)), np.uint8), cv2.IMREAD_COLOR)
+    ys, xs = np.nonzero((img[..., 0] > 150) & (img[..., 2] < 90))  # BGR: the blue disc
+    assert img.shape[:2] == (90, 160) and abs(int(xs.max() - xs.min()) - int(ys.max() - ys.min())) <= 3
+    assert xs.min() > 40 and xs.max() < 120  # one disc, in the middle: one view
+
+
 def test_the_pictures_are_made_ahead_and_kept_on_disk(served):
     client, data, pid = served
     assert client.app.state.pictures.wait_idle(60)

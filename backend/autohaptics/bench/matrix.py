@@ -4,15 +4,16 @@ Each source (the shared film clips, or any file given) is written again as each 
 re-encoded as it is (H.264); letterboxed and pillarboxed; at half and double size; at 23.976, 25, 29.97 and 50 fps
 and at a variable frame rate; in 10 bits (H.264, and a ProRes master with its sound in one stream or, as editing
 suites write it, each channel in a mono track); as an HDR10 grade; as HEVC and AV1; as DVDs (NTSC telecined, coded
-progressive and interlaced; PAL anamorphic); as VP9 and H.264 screeners; with its sound as mono, stereo (Opus, and
-AAC from FFmpeg's downmix), 5.1 and 7.1, and as AC-3 carrying Dolby's dynamic range words; cut to start mid-score.
-Every row's timeline is compared with the source's own (the clean variant; for a cut, the clean analysis from the
-cut on derived as a film of its own, so what differs is the start of the file, not the context a whole film gives
-its film-relative levels): onset F1, fan-tick F1, tolerant fan IoU and temperature MAE against :data:`TARGETS`, and
-a cut's largest vibration in its first 0.5 s where the film itself does not vibrate. With ``--speed`` each file's
-``generate`` and its bare decode (:func:`~autohaptics.bench.decode.bare_decode`) also run as whole processes, and
-the row gives their ratio. The digital-silence pair (booms and blips over exact silence, and over a -100 dBFS floor)
-is a row of its own: the silence variant against the floor variant, and the ratio of their generate times.
+progressive and interlaced; PAL anamorphic); as 3D films, their two views packed side by side or top and bottom; as
+VP9 and H.264 screeners; with its sound as mono, stereo (Opus, and AAC from FFmpeg's downmix), 5.1 and 7.1, and as
+AC-3 carrying Dolby's dynamic range words; cut to start mid-score. Every row's timeline is compared with the
+source's own (the clean variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what
+differs is the start of the file, not the context a whole film gives its film-relative levels): onset F1, fan-tick
+F1, tolerant fan IoU and temperature MAE against :data:`TARGETS`, and a cut's largest vibration in its first 0.5 s
+where the film itself does not vibrate. With ``--speed`` each file's ``generate`` and its bare decode
+(:func:`~autohaptics.bench.decode.bare_decode`) also run as whole processes, and the row gives their ratio. The
+digital-silence pair (booms and blips over exact silence, and over a -100 dBFS floor) is a row of its own: the
+silence variant against the floor variant, and the ratio of their generate times.
 
 Variant files are written once into ``--out`` and reused; nothing large is committed.
 """
@@ -59,8 +60,8 @@ class Variant:
         (``options`` then go to ``screener``: its height, frame rate).
     start_s : where a cut starts in the source, s (on the 100 ms grid); its ticks are compared with
         the clean film's from there.
-    post : what is done to the file ``reencode`` wrote, (written, dst) -> dst (Dolby's dynamic range
-        words set into its AC-3, :func:`_film_drc`).
+    write : writes the row's file instead of ``reencode``, (source, dst, ``options``) -> dst (a 3D film
+        packed from the source, :func:`_packed`; AC-3 given Dolby's dynamic range words, :func:`_film_drc`).
     isolated : written by a fresh interpreter, for an encoder that changes the process that runs it
         (FFmpeg's libsvtav1, run as root, leaves the thread that opened it real-time, SCHED_FIFO 99,
         and every process started from it later inherits that).
@@ -74,7 +75,7 @@ class Variant:
     screener: str | None = None
     crf: int | None = None
     start_s: float = 0.0
-    post: Callable[[Path, Path], Path] | None = None
+    write: Callable[[Path, Path, dict], Path] | None = None
     isolated: bool = False
 
     @property
@@ -88,12 +89,24 @@ def _sound(layout: str, bit_rate: int, codec: str = "libopus") -> dict:
     return {"video_codec": "copy", "audio_codec": codec, "audio_layout": layout, "audio_bit_rate": bit_rate}
 
 
-def _film_drc(written: Path, dst: Path) -> Path:
-    """``written`` with Dolby's Film Standard dynamic range words in its AC-3 (``testing.dolby``), as a
-    DVD's, a Blu-ray's or a broadcast's sound carries them and FFmpeg's encoder does not write them."""
+def _film_drc(src: Path, dst: Path, options: dict) -> Path:
+    """``src`` re-encoded with ``options`` (an AC-3 sound), then given Dolby's Film Standard dynamic range
+    words (``testing.dolby``), as a DVD's, a Blu-ray's or a broadcast's sound carries them and FFmpeg's
+    encoder does not write them."""
     from autohaptics.testing.dolby import with_film_drc
+    from autohaptics.testing.reencode import reencode
 
-    return with_film_drc(written, dst)
+    written = reencode(src, dst.with_name(f"{dst.stem}.written{dst.suffix}"), **options)
+    with_film_drc(written, dst)
+    written.unlink()
+    return dst
+
+
+def _packed(src: Path, dst: Path, options: dict) -> Path:
+    """``src`` as a 3D film, its two views packed as ``options`` say (``testing.stereo.write_packed``)."""
+    from autohaptics.testing.stereo import write_packed
+
+    return write_packed(src, dst, **options)
 
 
 ENCODE = {"preset": "veryfast", "crf": "18"}  # x264 settings of every row that re-encodes the picture itself
@@ -134,6 +147,10 @@ VARIANTS: tuple[Variant, ...] = (
             size=lambda w, h: (720, 576),
             options={"fps": 25, "fit": "pad", "pixel_aspect": Fraction(64, 45), "video_codec": "mpeg2video",
                      "video_bit_rate": 6_000_000, "video_options": {"bf": "2", "g": "12"}, "audio_codec": "ac3"}),
+    Variant("3D half side-by-side, declared by H.264's frame-packing message (a 3D Blu-ray's rip)", "codec", ".mkv",
+            options={"packing": "side_by_side", "declared": "h264"}, write=_packed),
+    Variant("3D half top-and-bottom, not declared", "codec", ".mkv",
+            options={"packing": "top_bottom", "declared": "none"}, write=_packed),
     Variant("MPEG-4 Part 2 AVI with two B-frames (a DivX or Xvid copy), MP3 stereo", "codec", ".avi",
             options={"video_codec": "mpeg4", "video_bit_rate": 1_200_000, "video_options": {"bf": "2", "g": "250"},
                      "audio_codec": "libmp3lame", "audio_layout": "stereo"}),
@@ -149,7 +166,7 @@ VARIANTS: tuple[Variant, ...] = (
     # scale, and FFmpeg's AAC encoder then turns such blocks down (docs/BENCHMARKS.md, "Stop 57")
     Variant("sound stereo AAC 128 kb/s, FFmpeg's downmix", "sound", ".mkv", options=_sound("stereo", 128_000, "aac")),
     Variant("sound AC-3 with Dolby's Film Standard DRC words (a DVD's, a broadcast's)", "sound", ".mkv",
-            options={"video_codec": "copy", "audio_codec": "ac3", "audio_bit_rate": 448_000}, post=_film_drc),
+            options={"video_codec": "copy", "audio_codec": "ac3", "audio_bit_rate": 448_000}, write=_film_drc),
     Variant("cut mid-score at 7.3 s", "start", options={"start_s": 7.3}, start_s=7.3),
     Variant("cut mid-score at 13.7 s", "start", options={"start_s": 13.7}, start_s=13.7),
     Variant("cut mid-score at 21.1 s", "start", options={"start_s": 21.1}, start_s=21.1),
@@ -194,18 +211,15 @@ def variant_file(src: Path, variant: Variant, out_dir: Path) -> Path:
         return dst
     if variant.screener is not None:
         return screener(src, dst, codec=variant.screener, crf=variant.crf, **variant.options)
+    if variant.write is not None:
+        return variant.write(src, dst, dict(variant.options))
     options = dict(variant.options)
     if options.get("video_codec", "libx264") == "libx264" and variant.suffix in (".mp4", ".mkv"):
         options.setdefault("video_options", dict(ENCODE))
     if variant.size is not None:
         w, h = probe(src).video.display_size
         options["width"], options["height"] = variant.size(int(w), int(h))
-    if variant.post is None:
-        return reencode(src, dst, **options)
-    written = reencode(src, dst.with_name(f"{dst.stem}.written{dst.suffix}"), **options)
-    variant.post(written, dst)
-    written.unlink()
-    return dst
+    return reencode(src, dst, **options)
 
 
 def cut_analysis(analysis, start_s: float, n_ticks: int):

@@ -13,11 +13,12 @@ from autohaptics.media.probe import (AudioInfo, AudioReport, MediaInfo, VideoInf
 # Imported when first used: the video side brings OpenCV (~0.15 s), which the audio pass and
 # `autohaptics features` never need.
 _LAZY = {"iter_audio": "audio", "read_audio": "audio", "Frame": "frames", "DECODE_MODES": "video",
-         "SPARSE_MIN_FPS": "video", "iter_video": "video", "find_active_area": "active"}
+         "SPARSE_MIN_FPS": "video", "iter_video": "video", "find_active_area": "active",
+         "find_picture": "active"}
 
 __getattr__ = lazy_attributes(__name__, _LAZY)
 
 
 __all__ = ["AudioInfo", "AudioReport", "DECODE_MODES", "Frame", "MediaInfo", "SPARSE_MIN_FPS", "VideoInfo",
-           "check_complete", "check_truncation", "find_active_area", "iter_audio", "iter_video", "open_container",
-           "probe", "read_audio", "source_block"]
+           "check_complete", "check_truncation", "find_active_area", "find_picture", "iter_audio", "iter_video",
+           "open_container", "probe", "read_audio", "source_block"]

@@ -3,15 +3,15 @@ a pillarbox or both, a windowbox), so every stage reads the picture and never th
 
 :func:`active_area` decides from a few sampled frames' luma (pure, numpy in); :func:`sample_lumas`
 reads those frames (keyframes spread over the film, each a seek and one decoded frame);
-:func:`find_active_area` is both. A row (column) belongs to the picture when, in at least one
-sample, a good share of its pixels are brighter than black: the maximum over the samples sees
-through dark scenes, night shots and fades to black (a bar is black in every sample). Black is
-the bars' own level: a frame edge that is flat and dark in every sample (video-range black read
-as full range, a lifted master: 16-30) lifts it. Burnt-in subtitles in a bar light too small a
-share of its rows to count, or, bold or boxed, a short stretch of rows apart from the picture by
-black ones. Bars are accepted on an axis only when they are clearly bars (both sides at least
-``MIN_BAR`` of the size and roughly equal); otherwise that axis keeps the full frame, as a film
-without bars does.
+:func:`find_active_area` is both; :func:`find_picture` also finds a 3D film's packing and reads one
+view. A row (column) belongs to the picture when, in at least one sample, a good share of its pixels
+are brighter than black: the maximum over the samples sees through dark scenes, night shots and
+fades to black (a bar is black in every sample). Black is the bars' own level: a frame edge that is
+flat and dark in every sample (video-range black read as full range, a lifted master: 16-30) lifts
+it. Burnt-in subtitles in a bar light too small a share of its rows to count, or, bold or boxed, a
+short stretch of rows apart from the picture by black ones. Bars are accepted on an axis only when
+they are clearly bars (both sides at least ``MIN_BAR`` of the size and roughly equal); otherwise
+that axis keeps the full frame, as a film without bars does.
 """
 
 from __future__ import annotations
@@ -25,7 +25,8 @@ import numpy as np
 
 from autohaptics.media.frames import Frame
 from autohaptics.media.probe import MediaInfo, norm_rotation, open_container, stream_by_index
-from autohaptics.quantiles import percentile
+from autohaptics.media.stereo import MIN_SAMPLES, PACKINGS, SAME, SAME_FEW, halves, halves_alike, view_rect
+from autohaptics.quantiles import median, percentile
 
 Rect = tuple[int, int, int, int]  # (x, y, width, height) px in display orientation
 
@@ -204,8 +205,49 @@ def _next_keyframe(c, stream, seen: set, before_pts: float):
 def find_active_area(info: MediaInfo, samples: int = SAMPLES) -> Rect:
     """The active picture of ``info``'s video (:func:`active_area` of :func:`sample_lumas`); the
     full frame when nothing could be sampled."""
+    return find_picture(info, "2d", samples)[0]
+
+
+def find_picture(info: MediaInfo, stereo: str = "auto", samples: int = SAMPLES) -> tuple[Rect, str]:
+    """What the analysis reads of ``info``'s video: (the rectangle, the 3D packing it is read under).
+
+    stereo : "2d" (one picture), "side_by_side" or "top_bottom" (two views packed so), or "auto" (the
+        packing the file declares, else the one the sampled pictures show inside their bars,
+        :func:`~autohaptics.media.stereo.picture_packing`).
+    The rectangle is the active picture (:func:`active_area`) of the first view (the whole picture in
+    2D); the view itself when nothing could be sampled. The packing is "" in 2D."""
+    w, h = info.video.display_size if info.video is not None else (0, 0)
     lumas = sample_lumas(info, samples)
+    if lumas:
+        h, w = lumas[0].shape[:2]
+    packing = "" if stereo == "2d" else stereo
+    if stereo == "auto":
+        packing = info.video.stereo if info.video is not None else ""
+        if not packing and lumas:
+            packing = picture_packing(lumas)
+    vx, vy, vw, vh = view_rect(int(w), int(h), packing)
     if not lumas:
-        w, h = info.video.display_size if info.video is not None else (0, 0)
-        return 0, 0, int(w), int(h)
-    return active_area(lumas)
+        return (vx, vy, vw, vh), packing
+    x, y, ww, hh = active_area([lu[vy:vy + vh, vx:vx + vw] for lu in lumas])
+    return (vx + x, vy + y, ww, hh), packing
+
+
+def picture_packing(lumas: Sequence[np.ndarray]) -> str:
+    """The 3D packing the sampled frames' luma pictures (whole frames, one size) show: the one whose two
+    halves, each cut to its own active picture (:func:`active_area`: each view's own bars), are alike
+    (:func:`~autohaptics.media.stereo.halves_alike`) with a median over at least ``MIN_SAMPLES`` telling
+    samples reaching ``SAME`` (fewer: each reaching ``SAME_FEW``); "" for a 2D film (its halves are two
+    parts of one scene, and a letterbox's bars lie on opposite sides of its top and bottom halves)."""
+    for packing in PACKINGS:
+        parts = [[halves(lu, packing)[k] for lu in lumas] for k in (0, 1)]
+        rects = [active_area(p) for p in parts]
+        if rects[0][2:] != rects[1][2:]:
+            continue  # the views of one film have the same bars
+        cut = [[lu[y:y + h, x:x + w] for lu in p] for p, (x, y, w, h) in zip(parts, rects)]
+        pairs = [np.concatenate([a, b], axis=1 if packing == "side_by_side" else 0) for a, b in zip(*cut)]
+        alike = np.asarray([v for v in (halves_alike(pic, packing) for pic in pairs) if v is not None])
+        if alike.size >= MIN_SAMPLES and float(median(alike)) >= SAME:
+            return packing
+        if 0 < alike.size < MIN_SAMPLES and float(alike.min()) >= SAME_FEW:
+            return packing
+    return ""

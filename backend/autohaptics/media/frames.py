@@ -36,13 +36,16 @@ class Frame:
     """One decoded picture. It holds its own reference to the decoded planes, so it can be read after
     later frames are decoded (the video pass reads a flow pair's successor a few frames on)."""
 
-    __slots__ = ("_frame", "index", "time_s", "rotation", "width", "height", "_crop", "_ready", "_luma_kept", "ahead")
+    __slots__ = ("_frame", "index", "time_s", "rotation", "width", "height", "_crop", "_ready", "_luma_kept", "ahead",
+                 "_stretch")
 
     def __init__(self, frame: av.VideoFrame, index: int, time_s: float, rotation: int,
-                 crop: tuple[int, int, int, int] | None = None):
+                 crop: tuple[int, int, int, int] | None = None, shown_aspect: float | None = None):
         """crop : (x, y, width, height) px in display orientation, even: the frame is that
         rectangle of the decoded picture (None, or a rectangle that does not fit inside it, as
-        after a change of size mid-stream: the whole picture)."""
+        after a change of size mid-stream: the whole picture).
+        shown_aspect : that picture's width / height on screen, where its pixels are not square (an
+        anamorphic DVD, a 3D film's half-width view): a proxy's height keeps it (None: as stored)."""
         self._frame = frame
         self.index = index  # decoded frame number, 0-based
         self.time_s = time_s  # presentation time relative to the container start, seconds
@@ -58,6 +61,8 @@ class Frame:
         # decoded ahead in a thread that still held half its queue when the caller took this frame:
         # the caller's analysis, not the decoder, is the slower side then (media.video.iter_video)
         self.ahead = False
+        stretch = float(shown_aspect) * self.height / max(1, self.width) if shown_aspect else 1.0
+        self._stretch = stretch if abs(stretch - 1.0) > 1e-6 else None  # shown width / stored width
 
     def prepare(self, gray_width: int, rgb_width: int, luma_size: tuple[int, int] | None = None) -> None:
         """Make ahead the small planes that ``gray(gray_width)`` and ``rgb_and_gray(rgb_width,
@@ -76,7 +81,9 @@ class Frame:
 
     def _size(self, width: int, height: int | None) -> tuple[int, int]:
         width = max(1, int(width))
-        if height is None:
+        if height is None and self._stretch is not None:
+            height = max(1, int(round(width * self.height / (max(1, self.width) * self._stretch))))
+        elif height is None:
             height = max(1, int(round(width * self.height / max(1, self.width))))
         return width, max(1, int(height))
 
@@ -84,7 +91,7 @@ class Frame:
               interpolation: str = "AREA") -> np.ndarray:
         """Scaled, colour-converted copy in display orientation.
 
-        width, height : proxy size in pixels (height defaults to keep the display aspect).
+        width, height : proxy size in pixels (height defaults to keep the aspect shown on screen).
         fmt : "rgb24" -> uint8 [shape=(h, w, 3)]; "gray" -> uint8 [shape=(h, w)] (luma).
 
         For planar YUV smaller than the frame (nearly every film) the planes are area-averaged

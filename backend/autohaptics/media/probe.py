@@ -17,6 +17,7 @@ from pathlib import Path
 import av
 
 from autohaptics.errors import MediaError
+from autohaptics.media.stereo import declared_packing
 from autohaptics.media.tracks import channel_tracks, sound_stream
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
 
@@ -57,6 +58,8 @@ class VideoInfo:
     # a stored pixel's width over its height on screen (an anamorphic 16:9 PAL DVD's 720 x 576: 64/45);
     # 1 where the file says nothing (or something outside 0.1..10)
     pixel_aspect: float = 1.0
+    # the 3D packing the file declares ("side_by_side", "top_bottom"; "" none: ``media.stereo``)
+    stereo: str = ""
 
     @property
     def display_size(self) -> tuple[int, int]:
@@ -170,7 +173,8 @@ def probe(path: str | os.PathLike) -> MediaInfo:
             raise MediaError(f"{p}: zero-length media (no decodable duration)")
         if video is not None:
             c.seek(0)
-            video = replace(video, rotation=_first_frame_rotation(c, vs), variable_rate=_variable_rate(c, vs, video.fps))
+            rotation, stereo = _first_frame_facts(c, vs)
+            video = replace(video, rotation=rotation, stereo=stereo, variable_rate=_variable_rate(c, vs, video.fps))
         return MediaInfo(path=str(p), size_bytes=p.stat().st_size, container=c.format.name,
                          duration_s=float(duration), start_s=start_s, video=video, audio=audio)
 
@@ -256,14 +260,15 @@ def _video_info(s) -> VideoInfo:
                      pixel_aspect=float(sar) if sar and 0.1 <= float(sar) <= 10 else 1.0)
 
 
-def _first_frame_rotation(c, s) -> int:
-    """Display rotation (degrees counter-clockwise, 0/90/180/270) read from the first decoded frame."""
+def _first_frame_facts(c, s) -> tuple[int, str]:
+    """Display rotation (degrees counter-clockwise, 0/90/180/270) and the declared 3D packing
+    (:func:`~autohaptics.media.stereo.declared_packing`) read from the first decoded frame."""
     try:
         for frame in c.decode(s):
-            return norm_rotation(getattr(frame, "rotation", 0))
+            return norm_rotation(getattr(frame, "rotation", 0)), declared_packing(dict(s.metadata), frame)
     except av.error.FFmpegError:
-        return 0
-    return 0
+        pass
+    return 0, declared_packing(dict(s.metadata), None)
 
 
 def _variable_rate(c, s, fps: float) -> bool:

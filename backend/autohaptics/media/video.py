@@ -41,7 +41,7 @@ SKIP_GAP_MAX = 2.5
 def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefetch: int = 0,
                decode: str = "full", start_s: float = 0.0,
                prepare: Callable[[Frame], None] | None = None,
-               crop: tuple[int, int, int, int] | None = None) -> Iterator[Frame]:
+               crop: tuple[int, int, int, int] | None = None, shown_aspect: float | None = None) -> Iterator[Frame]:
     """Decode the video stream frame by frame (presentation order); nothing is converted here.
 
     decode : "full" decodes every frame exactly; "nonref" asks FFmpeg to skip non-reference frames (in
@@ -64,6 +64,7 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
         caller waits for frames. ``Frame.ahead``: the queue was still half full when it was taken.
     crop : (x, y, width, height) px in display orientation, even: each frame is that rectangle of
         the picture (:class:`Frame`; e.g. the active picture of :func:`autohaptics.media.active.find_active_area`).
+    shown_aspect : that picture's width / height on screen, which its proxies keep (:class:`Frame`).
     Raises MediaError when there is no video stream or no frame decodes.
     """
     info = info or probe(path)
@@ -72,10 +73,10 @@ def iter_video(path: str | os.PathLike, *, info: MediaInfo | None = None, prefet
     if decode not in DECODE_MODES:
         raise ParameterError(f"decode must be one of {DECODE_MODES}, got {decode!r}")
     if prefetch > 0:
-        yield from _prefetched(lambda: _iter_video(info, decode, start_s, beside=True, crop=crop), prefetch,
+        yield from _prefetched(lambda: _iter_video(info, decode, start_s, True, crop, shown_aspect), prefetch,
                                prepare)
     else:
-        yield from _iter_video(info, decode, start_s, crop=crop)
+        yield from _iter_video(info, decode, start_s, crop=crop, shown_aspect=shown_aspect)
 
 
 def decoder_threads(stream, decode: str, fps: float) -> int:
@@ -96,7 +97,7 @@ def decoder_threads(stream, decode: str, fps: float) -> int:
 
 
 def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0, beside: bool = False,
-                crop: tuple[int, int, int, int] | None = None) -> Iterator[Frame]:
+                crop: tuple[int, int, int, int] | None = None, shown_aspect: float | None = None) -> Iterator[Frame]:
     """The frames of :func:`iter_video`. beside : decoded ahead of an analysis (:func:`decoder_threads`).
 
     Where skipping the non-reference frames leaves a gap wider than ``SKIP_GAP_MAX`` the stream is
@@ -126,7 +127,8 @@ def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0, bes
                     resume_after = last_t
                     break
                 last_t = t
-                yield Frame(frame, n, t, norm_rotation(getattr(frame, "rotation", info.video.rotation)), crop)
+                yield Frame(frame, n, t, norm_rotation(getattr(frame, "rotation", info.video.rotation)), crop,
+                            shown_aspect)
                 n += 1
         if resume_after is None:
             break

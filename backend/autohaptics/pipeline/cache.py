@@ -26,7 +26,8 @@ from autohaptics.shots import Boundaries, detect
 # 4: every frame decoded where skipping the non-reference ones leaves gaps (``media.video.SKIP_GAP_MAX``).
 # 5: an interlaced frame's proxies read from its top field (``media.frames``); the film's mix picked among
 # several audio tracks, not the first (``media.tracks.sound_stream``); AC-3 and E-AC-3 read without the
-# stream's dynamic range compression (``media.audio``).
+# stream's dynamic range compression (``media.audio``); proxies at the picture's shown aspect (an
+# anamorphic DVD's, ``media.frames``); a 3D film read from its first view (``video.stereo``).
 ANALYSIS_REVISION = 5
 
 

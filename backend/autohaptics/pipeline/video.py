@@ -40,6 +40,7 @@ from autohaptics.imaging import resized
 from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.pairs import PairJudge
+from autohaptics.pipeline.picture import active_area, shown_aspect
 from autohaptics.pipeline.saliency_queue import LaterMask, SaliencyQueue
 from autohaptics.pipeline.ticks import TickSums, centre_frames, hold_missing
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel
@@ -129,7 +130,7 @@ def video_pass(info: media.MediaInfo, n: int, *, params: GenerateParams, need_sa
     try:
         vp = _Pass(info, n, params, need_saliency, need_flow, need_colour, cancel=cancel)
         stream = media.iter_video(info.path, info=info, prefetch=params.video.prefetch, decode=params.video.decode,
-                                  prepare=vp.prepare, crop=vp.area)
+                                  prepare=vp.prepare, crop=vp.area, shown_aspect=vp.shown_aspect)
         duration = max(info.duration_s, 1e-9)
         for frame, centre_tick in centre_frames(vp.timed(stream), n, int(params.video.stride)):
             vp.frame(frame, centre_tick)
@@ -151,7 +152,9 @@ class _Pass:
     def __init__(self, info: media.MediaInfo, n: int, params: GenerateParams, need_saliency: np.ndarray | LaterMask,
                  need_flow: bool, need_colour: bool, *, cancel: CancelToken | None = None):
         t0 = time.perf_counter()
-        self.area = active_area(info, params)  # (x, y, w, h) px read of each frame; None: all of it
+        # (x, y, w, h) px read of each frame (None: all of it), and the 3D packing ("": 2D)
+        self.area, self.stereo = active_area(info, params)
+        self.shown_aspect = shown_aspect(info, self.area, self.stereo)
         self.area_s = time.perf_counter() - t0
         self.frame_size = tuple(int(v) for v in info.video.display_size) if info.video is not None else (0, 0)
         flow_params = params.flow
@@ -388,7 +391,8 @@ class _Pass:
                                "last_time_s": round(self.last_time, 6)}
         rect = self.area if self.area is not None else (0, 0, *self.frame_size)
         out.stats["active_area"] = {"rect": [int(v) for v in rect], "frame": list(self.frame_size),
-                                    "mode": self.params.video.active_area, "seconds": round(self.area_s, 4)}
+                                    "mode": self.params.video.active_area, "stereo": self.stereo or "2d",
+                                    "seconds": round(self.area_s, 4)}
         return out
 
 
@@ -413,7 +417,8 @@ def frame_weights(info: media.MediaInfo, n: int, ticks: np.ndarray, *, params: G
     for run in np.split(targets, breaks) if targets.size else []:
         first, last = int(run[0]), int(run[-1])
         stream = media.iter_video(info.path, info=info, decode=params.video.decode,
-                                  start_s=max(0.0, (first - vp.stride - 1) * TICK_S), crop=vp.area)
+                                  start_s=max(0.0, (first - vp.stride - 1) * TICK_S), crop=vp.area,
+                                  shown_aspect=vp.shown_aspect)
         try:
             for frame, k in centre_frames(stream, n, vp.stride):
                 if frame.time_s > (last + vp.stride + 2) * TICK_S:
@@ -425,12 +430,3 @@ def frame_weights(info: media.MediaInfo, n: int, ticks: np.ndarray, *, params: G
         finally:
             stream.close()
     return out
-
-
-def active_area(info: media.MediaInfo, params: GenerateParams) -> tuple[int, int, int, int] | None:
-    """The rectangle (x, y, w, h) px, display orientation, that the pass reads of each frame: the
-    active picture inside black bars (``video.active_area="auto"``; the whole frame where there are
-    none); None for the whole frame as decoded ("full", or no video)."""
-    if info.video is None or params.video.active_area == "full":
-        return None
-    return media.find_active_area(info)

@@ -19,6 +19,7 @@ import numpy as np
 
 from autohaptics import media
 from autohaptics.errors import MediaError
+from autohaptics.media.stereo import PACKINGS, view_aspect
 from autohaptics.timebase import TICK_S
 
 WIDTH = 160  # px: a poster
@@ -33,8 +34,8 @@ class Cancelled(Exception):
 @dataclass(frozen=True)
 class Film:
     """What pictures are cut from: the media file, its probe, the active picture ``crop`` (x, y, w,
-    h px in display orientation; None: the whole frame) and its ``aspect`` (w / h on screen, the
-    pixels' own aspect applied: an anamorphic DVD's)."""
+    h px in display orientation; None: the whole frame; a 3D film's first view) and its ``aspect``
+    (w / h on screen, the pixels' own aspect applied: an anamorphic DVD's, a half-width 3D view's)."""
 
     path: Path
     info: media.MediaInfo
@@ -48,16 +49,18 @@ def film(media_path: Path, analysis_path: Path) -> Film:
     info = media.probe(media_path)
     if info.video is None:
         raise MediaError(f"{media_path.name} has no video stream to take pictures from")
-    crop = None
+    crop, packing = None, ""
     try:
         with np.load(analysis_path, allow_pickle=False) as z:
             header = json.loads(bytes(z["header"]).decode())
-        rect = header["stats"]["video"]["active_area"]["rect"]
-        if len(rect) == 4 and min(rect[2:]) > 0:
-            crop = tuple(int(v) for v in rect)
-    except (OSError, KeyError, TypeError, ValueError):
+        area = header["stats"]["video"]["active_area"]
+        packing = area["stereo"] if area.get("stereo") in PACKINGS else ""
+        if len(area["rect"]) == 4 and min(area["rect"][2:]) > 0:
+            crop = tuple(int(v) for v in area["rect"])
+    except (OSError, KeyError, TypeError, ValueError, AttributeError):
         pass
-    return Film(Path(media_path), info, crop, info.video.shown_aspect(*crop[2:]) if crop else info.video.shown_aspect())
+    aspect = info.video.shown_aspect(*crop[2:]) if crop else info.video.shown_aspect()
+    return Film(Path(media_path), info, crop, view_aspect(aspect, info.video.shown_aspect(), packing))
 
 
 def poster_tick(t0: int, t1: int) -> int:
