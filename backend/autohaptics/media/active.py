@@ -25,7 +25,7 @@ import numpy as np
 
 from autohaptics.media.frames import Frame
 from autohaptics.media.probe import MediaInfo, norm_rotation, open_container, stream_by_index
-from autohaptics.media.stereo import MIN_SAMPLES, PACKINGS, SAME, SAME_FEW, halves, halves_alike, view_rect
+from autohaptics.media.stereo import MIN_SAMPLES, PACKINGS, SAME, SAME_FEW, halves, view_rect, views_alike
 from autohaptics.quantiles import median, percentile
 
 Rect = tuple[int, int, int, int]  # (x, y, width, height) px in display orientation
@@ -43,6 +43,7 @@ GAP_COVER = 0.1  # a row (column) lit less than this share of the best one's par
 STRAY = 0.25  # an outer lit stretch shorter than this share of the longest is not picture (a subtitle)
 DARK_SHARE = 0.5  # keyframes lit on less than this share of their pixels, all of them: frames after are read too
 FORWARD_FRAMES = 300  # at most this many frames decoded from the start for them
+DETECT_WIDTH = 480  # px: the sampled pictures are looked at this wide for a 3D packing (:func:`picture_packing`)
 
 
 def active_area(lumas: Sequence[np.ndarray], *, black_level: float = BLACK_LEVEL, cover_share: float = COVER_SHARE,
@@ -233,21 +234,29 @@ def find_picture(info: MediaInfo, stereo: str = "auto", samples: int = SAMPLES) 
 
 
 def picture_packing(lumas: Sequence[np.ndarray]) -> str:
-    """The 3D packing the sampled frames' luma pictures (whole frames, one size) show: the one whose two
-    halves, each cut to its own active picture (:func:`active_area`: each view's own bars), are alike
-    (:func:`~autohaptics.media.stereo.halves_alike`) with a median over at least ``MIN_SAMPLES`` telling
+    """The 3D packing the sampled frames' luma pictures (whole frames, one size; looked at ``DETECT_WIDTH``
+    wide) show: the one whose two halves, each cut to its own active picture (:func:`active_area`: each view's own bars), are alike
+    (:func:`~autohaptics.media.stereo.views_alike`) with a median over at least ``MIN_SAMPLES`` telling
     samples reaching ``SAME`` (fewer: each reaching ``SAME_FEW``); "" for a 2D film (its halves are two
     parts of one scene, and a letterbox's bars lie on opposite sides of its top and bottom halves)."""
+    small = [_shrunk(lu, DETECT_WIDTH) for lu in lumas]
     for packing in PACKINGS:
-        parts = [[halves(lu, packing)[k] for lu in lumas] for k in (0, 1)]
+        parts = [[halves(lu, packing)[k] for lu in small] for k in (0, 1)]
         rects = [active_area(p) for p in parts]
-        if rects[0][2:] != rects[1][2:]:
+        if max(abs(a - b) for a, b in zip(rects[0][2:], rects[1][2:])) > 2:
             continue  # the views of one film have the same bars
         cut = [[lu[y:y + h, x:x + w] for lu in p] for p, (x, y, w, h) in zip(parts, rects)]
-        pairs = [np.concatenate([a, b], axis=1 if packing == "side_by_side" else 0) for a, b in zip(*cut)]
-        alike = np.asarray([v for v in (halves_alike(pic, packing) for pic in pairs) if v is not None])
+        alike = np.asarray([v for v in (views_alike(a, b) for a, b in zip(*cut)) if v is not None])
         if alike.size >= MIN_SAMPLES and float(median(alike)) >= SAME:
             return packing
         if 0 < alike.size < MIN_SAMPLES and float(alike.min()) >= SAME_FEW:
             return packing
     return ""
+
+
+def _shrunk(luma: np.ndarray, width: int) -> np.ndarray:
+    """``luma`` area-averaged to at most ``width`` px wide (its aspect kept)."""
+    h, w = luma.shape[:2]
+    if w <= width:
+        return luma
+    return cv2.resize(luma, (width, max(2, int(round(h * width / w)))), interpolation=cv2.INTER_AREA)
