@@ -5,15 +5,16 @@ re-encoded as it is (H.264); letterboxed and pillarboxed; at half and double siz
 and at a variable frame rate; in 10 bits (H.264, and a ProRes master with its sound in one stream or, as editing
 suites write it, each channel in a mono track); as an HDR10 grade; as HEVC and AV1; as DVDs (NTSC telecined, coded
 progressive and interlaced; PAL anamorphic); as 3D films, their two views packed side by side or top and bottom; as
-VP9 and H.264 screeners; with its sound as mono, stereo (Opus, and AAC from FFmpeg's downmix), 5.1 and 7.1, and as
-AC-3 carrying Dolby's dynamic range words; cut to start mid-score. Every row's timeline is compared with the
-source's own (the clean variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what
-differs is the start of the file, not the context a whole film gives its film-relative levels): onset F1, fan-tick
-F1, tolerant fan IoU and temperature MAE against :data:`TARGETS`, and a cut's largest vibration in its first 0.5 s
-where the film itself does not vibrate. With ``--speed`` each file's ``generate`` and its bare decode
-(:func:`~autohaptics.bench.decode.bare_decode`) also run as whole processes, and the row gives their ratio. The
-digital-silence pair (booms and blips over exact silence, and over a -100 dBFS floor) is a row of its own: the
-silence variant against the floor variant, and the ratio of their generate times.
+VP9 and H.264 screeners; with its sound as mono, stereo (Opus, and AAC from FFmpeg's downmix), 5.1 and 7.1, as AC-3
+carrying Dolby's dynamic range words, and behind a commentary and a compatibility stereo track; cut to start
+mid-score. Every row's timeline is compared with the source's own (the clean variant; for a cut, the clean analysis
+from the cut on derived as a film of its own, so what differs is the start of the file, not the context a whole film
+gives its film-relative levels): onset F1, fan-tick F1, tolerant fan IoU and temperature MAE against
+:data:`TARGETS`, and a cut's largest vibration in its first 0.5 s where the film itself does not vibrate. With
+``--speed`` each file's ``generate`` and its bare decode (:func:`~autohaptics.bench.decode.bare_decode`) also run as
+whole processes, and the row gives their ratio. The digital-silence pair (booms and blips over exact silence, and
+over a -100 dBFS floor) is a row of its own: the silence variant against the floor variant, and the ratio of their
+generate times.
 
 Variant files are written once into ``--out`` and reused; nothing large is committed.
 """
@@ -61,7 +62,8 @@ class Variant:
     start_s : where a cut starts in the source, s (on the 100 ms grid); its ticks are compared with
         the clean film's from there.
     write : writes the row's file instead of ``reencode``, (source, dst, ``options``) -> dst (a 3D film
-        packed from the source, :func:`_packed`; AC-3 given Dolby's dynamic range words, :func:`_film_drc`).
+        packed from the source, :func:`_packed`; AC-3 given Dolby's dynamic range words, :func:`_film_drc`;
+        the mix behind other tracks, :func:`_tracks_ahead`).
     isolated : written by a fresh interpreter, for an encoder that changes the process that runs it
         (FFmpeg's libsvtav1, run as root, leaves the thread that opened it real-time, SCHED_FIFO 99,
         and every process started from it later inherits that).
@@ -100,6 +102,14 @@ def _film_drc(src: Path, dst: Path, options: dict) -> Path:
     with_film_drc(written, dst)
     written.unlink()
     return dst
+
+
+def _tracks_ahead(src: Path, dst: Path, options: dict) -> Path:
+    """``src`` with a commentary and a compatibility stereo track ahead of its own mix
+    (``testing.tracks.with_tracks_ahead``)."""
+    from autohaptics.testing.tracks import with_tracks_ahead
+
+    return with_tracks_ahead(src, dst)
 
 
 def _packed(src: Path, dst: Path, options: dict) -> Path:
@@ -167,6 +177,8 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("sound stereo AAC 128 kb/s, FFmpeg's downmix", "sound", ".mkv", options=_sound("stereo", 128_000, "aac")),
     Variant("sound AC-3 with Dolby's Film Standard DRC words (a DVD's, a broadcast's)", "sound", ".mkv",
             options={"video_codec": "copy", "audio_codec": "ac3", "audio_bit_rate": 448_000}, write=_film_drc),
+    Variant("sound behind a commentary and a compatibility stereo track (a rip's, HandBrake's)", "sound", ".mkv",
+            write=_tracks_ahead),
     Variant("cut mid-score at 7.3 s", "start", options={"start_s": 7.3}, start_s=7.3),
     Variant("cut mid-score at 13.7 s", "start", options={"start_s": 13.7}, start_s=13.7),
     Variant("cut mid-score at 21.1 s", "start", options={"start_s": 21.1}, start_s=21.1),
