@@ -10,8 +10,8 @@ import pytest
 
 from autohaptics.timeline import Timeline
 from browser_support import (
-    copy_to_docs, lane_pixels, lane_rect, next_frame, open_editor, screenshot, settled_lane_pixels, state, values_at,
-    wait_revision_above,
+    copy_to_docs, lane_pixels, lane_rect, next_frame, open_editor, screenshot, settled_lane_pixels, state, upload,
+    values_at, wait_revision_above,
 )
 
 pytestmark = pytest.mark.browser
@@ -281,3 +281,37 @@ def test_importing_a_broken_file_says_why(page, project_copy, tmp_path):
     assert page.text_content("[data-testid=toast-error]").startswith("Not saved: ")
     assert page.get_attribute("[data-testid=save-state]", "data-state") == "error"
     assert state(page)["cursor"] == 0
+
+
+def test_the_fan_grid_lies_on_the_picture_the_analysis_read(page, api, tmp_path):
+    """A 2.4:1 film letterboxed in 16:9: the fans are the active picture's, so the overlay's grid covers it
+    and not the black bars (the timeline's header says where: ``picture``); it covered the whole frame."""
+    from autohaptics import testing as synth
+    from autohaptics.testing.reencode import reencode
+    from autohaptics.testing.scenes import material_scene
+
+    wide = synth.write_scene(tmp_path / "wide.mp4", material_scene(4.0), width=320, height=132, fps=25)
+    film = reencode(wide, tmp_path / "letterboxed.mp4", width=320, height=180, fit="pad")
+    project = upload(api, film, name="letterboxed")
+    try:
+        head = api.get(f"/api/projects/{project['id']}/timeline.bin?blocks=vibration").content
+        header = json.loads(head[12:12 + int.from_bytes(head[8:12], "little")])
+        box = header["picture"]
+        assert box["x"] == 0 and box["w"] == 1 and 0.1 < box["y"] < 0.15 and box["y"] + box["h"] < 0.9
+        open_editor(page, project["id"])
+        page.click("[data-testid=toggle-fan-overlay]")
+        page.wait_for_function("() => document.querySelector('[data-testid=video]').videoWidth > 0")
+        next_frame(page)
+        rows = page.evaluate("""() => {
+            const c = document.querySelector('[data-testid=fan-overlay]');
+            const v = document.querySelector('[data-testid=video]');
+            const k = c.width / c.getBoundingClientRect().width;
+            const s = Math.min(v.clientWidth / v.videoWidth, v.clientHeight / v.videoHeight);
+            const top = (v.clientHeight - v.videoHeight * s) / 2, ph = v.videoHeight * s;
+            const lit = (y) => { const d = c.getContext('2d').getImageData(0, Math.floor(y * k), c.width, 1).data;
+                                 let n = 0; for (let i = 3; i < d.length; i += 4) n += d[i] > 0; return n; };
+            return {bar: lit(top + 0.05 * ph), picture: lit(top + 0.5 * ph), low_bar: lit(top + 0.95 * ph)};
+        }""")
+        assert rows["picture"] > 0 and rows["bar"] == 0 and rows["low_bar"] == 0, rows
+    finally:
+        api.delete(f"/api/projects/{project['id']}")

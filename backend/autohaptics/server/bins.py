@@ -168,3 +168,17 @@ class BinFiles:
 def same_values(a, b) -> bool:
     """The same array, or the same shape, dtype and values."""
     return a is b or (a.shape == b.shape and a.dtype == b.dtype and bool(np.array_equal(a, b)))
+
+
+def picture_box(tl: Timeline) -> dict | None:
+    """Where the fan grid lies in the film's frame: the rectangle the analysis read (the active picture
+    inside black bars, a 3D film's first view; ``stats.video.active_area``) as fractions of the frame
+    as shown, {x, y, w, h} in 0..1; None when the timeline does not say (no picture analysed)."""
+    try:
+        area = tl.stats["video"]["active_area"]
+        (x, y, w, h), (fw, fh) = [float(v) for v in area["rect"]], [float(v) for v in area["frame"]]
+    except (KeyError, TypeError, ValueError):
+        return None
+    if not (fw > 0 and fh > 0 and w > 0 and h > 0):
+        return None
+    return {"x": round(x / fw, 6), "y": round(y / fh, 6), "w": round(w / fw, 6), "h": round(h / fh, 6)}

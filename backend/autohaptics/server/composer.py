@@ -32,7 +32,7 @@ from autohaptics.formats.importing import parse_timeline
 from autohaptics.timeline import edits as edit_ops
 from autohaptics.timeline.npz import load_npz
 from autohaptics.server import shots
-from autohaptics.server.bins import BinaryCache, BinFiles, same_values
+from autohaptics.server.bins import BinaryCache, BinFiles, picture_box, same_values
 from autohaptics.server.store import Conflict, NotFound, Store, file_key, new_id
 from autohaptics.server.styles import style_of
 from autohaptics.server.waveform import cached_peaks
@@ -433,6 +433,7 @@ class Composer:
         composed = self.compose(pid)
         tl = composed.timeline if layer == "composed" else self.require_generated(pid)
         header = {"markers": composed.markers} if layer == "composed" else {}
+        header["picture"] = picture_box(tl)
         data = self.bins.get(pid, layer, composed.revision, tl, header=header, names=names, gzipped=gzipped,
                              since=since)
         if kept and self.writer.pending(pid) is None:  # the generated layer it came from is on disk

@@ -1,7 +1,8 @@
 /**
- * The fan grid (17 x 9 on the chair) drawn over the video picture at the playhead (row 0 = top of the frame,
- * column 0 = left). The canvas covers the element; the grid covers only the picture inside it
- * (object-fit: contain leaves bars).
+ * The fan grid (17 x 9 on the chair) drawn over the video picture at the playhead (row 0 = top of the picture,
+ * column 0 = left). The canvas covers the element; the grid covers only the part of the picture the analysis
+ * read (the timeline's `picture` box: the active picture inside the film's own black bars, a 3D film's first
+ * view; the whole picture where it says nothing), inside the bars object-fit: contain leaves.
  *
  * It also picks a region of fans for the range operations: a drag selects a rectangle of cells,
  * Ctrl (Cmd) + drag paints cells as a brush and adds them, a click outside the picture or Escape
@@ -22,6 +23,8 @@ export class FanOverlay {
     this.ctx = /** @type {CanvasRenderingContext2D} */ (canvas.getContext("2d"));
     /** @type {Float32Array|null} */
     this.grid = null;
+    /** @type {{x: number, y: number, w: number, h: number}|null} the grid's part of the frame, 0..1 */
+    this.box = null;
     this.visible = false;
     /** @type {Set<number>} the picked cells, row * cols + col */
     this.region = new Set();
@@ -107,7 +110,18 @@ export class FanOverlay {
     if (this.visible) this.draw();
   }
 
-  /** The picture's rectangle inside the element (CSS px). */
+  /**
+   * The part of the frame the grid covers, fractions 0..1 (null or a box outside 0..1: all of it).
+   * @param {{x: number, y: number, w: number, h: number}|null|undefined} box
+   */
+  setBox(box) {
+    const ok = box && [box.x, box.y, box.w, box.h].every(Number.isFinite) && box.w > 0 && box.h > 0 &&
+      box.x >= 0 && box.y >= 0 && box.x + box.w <= 1.000001 && box.y + box.h <= 1.000001;
+    this.box = ok ? { x: box.x, y: box.y, w: box.w, h: box.h } : null;
+    if (this.visible) this.draw();
+  }
+
+  /** The grid's rectangle inside the element (CSS px): the picture's, or the part of it the box names. */
   pictureRect() {
     const w = this.video.clientWidth;
     const h = this.video.clientHeight;
@@ -116,7 +130,8 @@ export class FanOverlay {
     const s = Math.min(w / vw, h / vh);
     const pw = vw * s;
     const ph = vh * s;
-    return { x: (w - pw) / 2, y: (h - ph) / 2, w: pw, h: ph };
+    const b = this.box || { x: 0, y: 0, w: 1, h: 1 };
+    return { x: (w - pw) / 2 + b.x * pw, y: (h - ph) / 2 + b.y * ph, w: b.w * pw, h: b.h * ph };
   }
 
   draw() {

@@ -128,6 +128,8 @@ export class EditorMedia {
   /** Show the values at the playhead again (new data, or the overlay toggled). */
   refresh() {
     this.lastTick = -1;
+    const data = this.page.data;
+    this.fanOverlay.setBox(data && data.header ? data.header.picture : null);
     this.showAt(this.player.currentTime, this.player.playing);
   }
 
