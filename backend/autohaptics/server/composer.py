@@ -419,7 +419,7 @@ class Composer:
 
         ``blocks``: the block names to send (None: all; see :func:`binary.select_blocks`);
         ``since``: a revision the client holds, whose unchanged blocks are left out (:mod:`.bins`).
-        The composed layer's header carries the markers."""
+        The header carries the picture box (:func:`.bins.picture_box`); the composed layer's, the markers."""
         names = None if blocks is None else tuple(sorted(set(blocks)))
 
         def tag(revision: int) -> str:
@@ -432,8 +432,7 @@ class Composer:
             return data, tag(revision)
         composed = self.compose(pid)
         tl = composed.timeline if layer == "composed" else self.require_generated(pid)
-        header = {"markers": composed.markers} if layer == "composed" else {}
-        header["picture"] = picture_box(tl)
+        header = {"picture": picture_box(tl), **({"markers": composed.markers} if layer == "composed" else {})}
         data = self.bins.get(pid, layer, composed.revision, tl, header=header, names=names, gzipped=gzipped,
                              since=since)
         if kept and self.writer.pending(pid) is None:  # the generated layer it came from is on disk
