@@ -45,7 +45,8 @@ def test_a_2d_films_halves_are_not_taken_for_two_views(small):
     for path in (shared_clip("bbb_opening_30s_1280x720_vp8_vorbis.webm"),
                  shared_clip("sintel_trailer_640x272_vp8_vorbis.webm"), src):
         info = probe(path)
-        assert picture_packing(sample_lumas(info)) == "" and find_picture(info) == ((0, 0, *info.video.display_size), "")
+        assert picture_packing(sample_lumas(info)) == ""
+        assert find_picture(info) == ((0, 0, *info.video.display_size), "")
 
 
 def test_views_their_aspect_and_the_proxies_that_keep_it():

@@ -235,10 +235,11 @@ def find_picture(info: MediaInfo, stereo: str = "auto", samples: int = SAMPLES) 
 
 def picture_packing(lumas: Sequence[np.ndarray]) -> str:
     """The 3D packing the sampled frames' luma pictures (whole frames, one size; looked at ``DETECT_WIDTH``
-    wide) show: the one whose two halves, each cut to its own active picture (:func:`active_area`: each view's own bars), are alike
-    (:func:`~autohaptics.media.stereo.views_alike`) with a median over at least ``MIN_SAMPLES`` telling
-    samples reaching ``SAME`` (fewer: each reaching ``SAME_FEW``); "" for a 2D film (its halves are two
-    parts of one scene, and a letterbox's bars lie on opposite sides of its top and bottom halves)."""
+    wide) show: the one whose two halves, each cut to its own active picture (:func:`active_area`: each
+    view's own bars), are alike (:func:`~autohaptics.media.stereo.views_alike`) with a median over at least
+    ``MIN_SAMPLES`` telling samples reaching ``SAME`` (fewer: each reaching ``SAME_FEW``); "" for a 2D film
+    (its halves are two parts of one scene, and a letterbox's bars lie on opposite sides of its top and
+    bottom halves)."""
     small = [_shrunk(lu, DETECT_WIDTH) for lu in lumas]
     for packing in PACKINGS:
         parts = [[halves(lu, packing)[k] for lu in small] for k in (0, 1)]

@@ -6,8 +6,9 @@ says it comes first; they differ by a few pixels of parallax).
 The packing is what the file declares (Matroska's StereoMode, an H.264 or HEVC frame-packing message,
 which FFmpeg hands on as the frame's stereo side data), else what the picture shows: over the sampled
 frames the two halves are one picture but for the parallax (:func:`views_alike`;
-:func:`autohaptics.media.active.picture_packing`), which a 2D film's halves are not. A half-width (half-height) view, the usual packing in a 16:9 frame, is shown stretched
-back to the frame's aspect; a full one (a 32:9 or 8:9 frame) as it is stored (:func:`view_aspect`).
+:func:`autohaptics.media.active.picture_packing`), which a 2D film's halves are not. A half-width
+(half-height) view, the usual packing in a 16:9 frame, is shown stretched back to the frame's aspect; a
+full one (a 32:9 or 8:9 frame) as it is stored (:func:`view_aspect`).
 """
 
 from __future__ import annotations
@@ -59,7 +60,8 @@ def views_alike(a: np.ndarray, b: np.ndarray) -> float | None:
     picture flatter than ``MIN_SPREAD``."""
     import cv2  # here: the probe reads this module's declared packing, and needs no OpenCV
 
-    a, b = (cv2.resize(np.ascontiguousarray(x, dtype=np.float32), THUMB, interpolation=cv2.INTER_AREA) for x in (a, b))
+    a, b = (cv2.resize(np.ascontiguousarray(x, dtype=np.float32), THUMB, interpolation=cv2.INTER_AREA)
+            for x in (a, b))
     if min(a.std(), b.std()) < MIN_SPREAD:
         return None
     best = -1.0

@@ -18,7 +18,10 @@ def active_area(info: media.MediaInfo, params: GenerateParams) -> tuple[tuple[in
     stereo = params.video.stereo
     if params.video.active_area != "full":
         return media.find_picture(info, stereo)
-    packing = "" if stereo == "2d" else info.video.stereo or media.find_picture(info)[1] if stereo == "auto" else stereo
+    if stereo == "auto":
+        packing = info.video.stereo or media.find_picture(info)[1]
+    else:
+        packing = "" if stereo == "2d" else stereo
     return (view_rect(*info.video.display_size, packing), packing) if packing else (None, "")
 
 
