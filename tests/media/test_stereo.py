@@ -5,8 +5,11 @@ as its 2D release is (``testing.stereo`` writes the 3D films from 2D ones)."""
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from autohaptics import pipeline
 from autohaptics import testing as synth
@@ -87,3 +90,30 @@ def test_a_3d_film_gives_what_its_2d_release_gives(scene, packing):
         whole = pipeline.derive(pipeline.analyse(path, resolve_params(overrides={"video.stereo": "2d"})[0]))
         assert whole.stats["video"]["active_area"]["stereo"] == "2d"
         assert row_figures(clean, whole, VARIANTS[0])["fan_iou"] < 0.8
+
+
+def _scenes(seed: int, n: int = 5, size: tuple[int, int] = (320, 180)) -> list[np.ndarray]:
+    """``n`` pictures of one random 2D scene (smooth blobs of light over a smooth ground, drifting), RGB uint8."""
+    rng = np.random.default_rng(seed)
+    w, h = size
+    ground = cv2.resize(rng.integers(0, 256, (4, 6, 3), dtype=np.uint8), (w, h), interpolation=cv2.INTER_CUBIC)
+    out = []
+    for k in range(n):
+        pic = ground.copy()
+        for _ in range(int(rng.integers(2, 7))):
+            x, y = int(rng.integers(0, w)) + 8 * k, int(rng.integers(0, h))
+            cv2.circle(pic, (x % w, y), int(rng.integers(6, 40)), tuple(int(v) for v in rng.integers(0, 256, 3)), -1)
+        out.append(pic)
+    return out
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.sampled_from(["side_by_side", "top_bottom"]))
+def test_random_scenes_are_2d_and_their_packed_views_are_3d(seed, packing):
+    """Property: the pictures of a random 2D scene are never taken for a packing; the same pictures with a
+    parallax and packed (``testing.stereo.packed``) always are, and only as that packing."""
+    scenes = _scenes(seed)
+    gray = [cv2.cvtColor(p, cv2.COLOR_RGB2GRAY) for p in scenes]
+    assert picture_packing(gray) == ""
+    packed_gray = [cv2.cvtColor(packed(p, packing), cv2.COLOR_RGB2GRAY) for p in scenes]
+    assert picture_packing(packed_gray) == packing
