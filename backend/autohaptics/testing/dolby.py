@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import math
 import os
-from fractions import Fraction
 from pathlib import Path
 
 import av
 import numpy as np
 
 from autohaptics.errors import ParameterError
+from autohaptics.testing.encode import encode_samples
 
 SAMPLES_PER_FRAME = 1536
 _FULL_CHANNELS = (2, 1, 2, 3, 3, 4, 4, 5)  # full-bandwidth channels by acmod
@@ -95,16 +95,9 @@ def write_ac3(path: str | os.PathLike, samples: np.ndarray, layout: str, *, gain
         stream = out.add_stream("ac3", rate=rate, layout=layout)
         stream.bit_rate = bit_rate
         x = np.asarray(samples, np.float32)
-        for k in range(math.ceil(x.shape[1] / SAMPLES_PER_FRAME)):
-            part = np.zeros((x.shape[0], SAMPLES_PER_FRAME), np.float32)
-            chunk = x[:, k * SAMPLES_PER_FRAME:(k + 1) * SAMPLES_PER_FRAME]
-            part[:, :chunk.shape[1]] = chunk
-            frame = av.AudioFrame.from_ndarray(part, format="fltp", layout=layout)
-            frame.sample_rate, frame.pts, frame.time_base = rate, k * SAMPLES_PER_FRAME, Fraction(1, rate)
-            for packet in stream.encode(frame):
-                out.mux(packet)
-        for packet in stream.encode(None):
-            out.mux(packet)
+        whole = np.zeros((x.shape[0], math.ceil(x.shape[1] / SAMPLES_PER_FRAME) * SAMPLES_PER_FRAME), np.float32)
+        whole[:, :x.shape[1]] = x  # whole syncframes, the last one padded with silence
+        encode_samples(out, stream, whole, step=SAMPLES_PER_FRAME)
     if gains_db is not None:
         data = path.read_bytes()
         size = bit_rate // 1000 * 4  # bytes a frame at 48 kHz

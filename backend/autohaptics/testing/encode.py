@@ -204,3 +204,27 @@ def media_output(path: Path, what: str) -> Iterator[Path]:
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
+
+
+def encode_frames(out, stream, frames) -> None:
+    """Encode each of ``frames`` (``av`` frames, timed) into ``stream`` of ``out``, then flush the encoder."""
+    for frame in frames:
+        for packet in stream.encode(frame):
+            out.mux(packet)
+    for packet in stream.encode(None):
+        out.mux(packet)
+
+
+def encode_samples(out, stream, x: np.ndarray, *, step: int = 1024) -> None:
+    """Encode float samples ``x`` [shape=(channels, n)], -1..1, at ``stream``'s rate and layout into
+    ``stream`` of ``out`` from time 0, ``step`` samples a frame, and flush the encoder."""
+    rate, layout = stream.codec_context.sample_rate, stream.codec_context.layout.name
+    x = np.asarray(x, np.float32)
+
+    def frames():
+        for k in range(0, x.shape[1], step):
+            frame = av.AudioFrame.from_ndarray(np.ascontiguousarray(x[:, k:k + step]), format="fltp", layout=layout)
+            frame.sample_rate, frame.pts, frame.time_base = rate, k, Fraction(1, rate)
+            yield frame
+
+    encode_frames(out, stream, frames())

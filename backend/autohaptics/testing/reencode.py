@@ -26,7 +26,7 @@ from autohaptics.errors import ParameterError
 from autohaptics.media import probe
 from autohaptics.media.audio import AudioClock, timestamp_slack_s
 from autohaptics.testing import grade
-from autohaptics.testing.encode import CONTAINERS, media_output
+from autohaptics.testing.encode import CONTAINERS, encode_frames, media_output
 from autohaptics.testing.scenes import check_size, fps_fraction
 
 CONVERSIONS = ("repeat", "pulldown", "vfr")
@@ -111,13 +111,8 @@ def reencode(src: str | os.PathLike, dst: str | os.PathLike, *, width: int | Non
             v_in = inp.streams.video[0]
             origin = _origin(v_in, info, as_shown)
             frames = _source_frames(v_in, w, h, fit=fit, origin=origin, start_s=float(start_s), end_s=end_s, sar=sar)
-            for (pts, time_base), rgb in _timed(frames, conversion, rate, as_shown):
-                frame = _picture(rgb, pix_fmt, transfer)
-                frame.pts, frame.time_base = pts, time_base
-                for p in vs.encode(frame):
-                    out.mux(p)
-            for p in vs.encode(None):
-                out.mux(p)
+            timed = _timed(frames, conversion, rate, as_shown)
+            encode_frames(out, vs, (_picture(rgb, pix_fmt, transfer, t) for t, rgb in timed))
             if audio is not None:
                 with av.open(str(src)) as again:
                     _copy_audio(again.streams.audio[0], out, *audio, origin=origin, start_s=float(start_s), end_s=end_s,
@@ -142,12 +137,16 @@ def _video_stream(out, codec: str, rate: Fraction, size: tuple[int, int], pix_fm
     return vs
 
 
-def _picture(rgb: np.ndarray, pix_fmt: str, transfer: str) -> av.VideoFrame:
-    """One output picture from RGB, in ``pix_fmt`` (an HDR grade: :func:`~autohaptics.testing.grade.hdr_frame`)."""
+def _picture(rgb: np.ndarray, pix_fmt: str, transfer: str, timing: tuple) -> av.VideoFrame:
+    """One output picture from RGB, in ``pix_fmt`` (an HDR grade: :func:`~autohaptics.testing.grade.hdr_frame`),
+    at ``timing`` (pts, time base)."""
     if transfer != "sdr":
-        return grade.hdr_frame(rgb, transfer)
-    frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
-    return frame if pix_fmt == "yuv420p" else frame.reformat(format=pix_fmt)
+        frame = grade.hdr_frame(rgb, transfer)
+    else:
+        frame = av.VideoFrame.from_ndarray(rgb, format="rgb24")
+        frame = frame if pix_fmt == "yuv420p" else frame.reformat(format=pix_fmt)
+    frame.pts, frame.time_base = timing
+    return frame
 
 
 def _checked_options(conversion: str, fit: str, pix_fmt: str, audio_tracks: str, transfer: str, start_s: float,

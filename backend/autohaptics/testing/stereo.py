@@ -15,6 +15,7 @@ import numpy as np
 
 from autohaptics.errors import ParameterError
 from autohaptics.media.stereo import PACKINGS
+from autohaptics.testing.encode import encode_frames
 
 PARALLAX = 0.015  # the right view's largest shift, of the view's width (at the bottom; half that at the top)
 _X264_PACKING = {"side_by_side": "3", "top_bottom": "4"}  # H.264 frame-packing arrangement types
@@ -66,14 +67,7 @@ def write_packed(src: str | os.PathLike, dst: str | os.PathLike, packing: str, *
             v.metadata["stereo_mode"] = _MATROSKA[packing]
         a_in = c.streams.audio[0] if c.streams.audio else None
         a = out.add_stream_from_template(a_in) if a_in is not None else None
-        for frame in c.decode(v_in):
-            rgb = frame.to_ndarray(format="rgb24", width=v.width, height=v.height)
-            pic = av.VideoFrame.from_ndarray(np.ascontiguousarray(packed(rgb, packing)), format="rgb24")
-            pic.pts, pic.time_base = frame.pts, v_in.time_base
-            for p in v.encode(pic):
-                out.mux(p)
-        for p in v.encode(None):
-            out.mux(p)
+        encode_frames(out, v, (_packed_frame(frame, v.width, v.height, packing) for frame in c.decode(v_in)))
         if a is not None:
             with av.open(str(src)) as again:
                 for p in again.demux(again.streams.audio[0]):
@@ -81,3 +75,11 @@ def write_packed(src: str | os.PathLike, dst: str | os.PathLike, packing: str, *
                         p.stream = a
                         out.mux(p)
     return dst
+
+
+def _packed_frame(frame: av.VideoFrame, width: int, height: int, packing: str) -> av.VideoFrame:
+    """``frame`` at ``width`` x ``height`` as its two views packed (:func:`packed`), at its own time."""
+    rgb = frame.to_ndarray(format="rgb24", width=width, height=height)
+    pic = av.VideoFrame.from_ndarray(np.ascontiguousarray(packed(rgb, packing)), format="rgb24")
+    pic.pts, pic.time_base = frame.pts, frame.time_base
+    return pic

@@ -7,13 +7,13 @@ mix itself, its packets copied (``media.tracks.sound_stream`` must find it).
 from __future__ import annotations
 
 import os
-from fractions import Fraction
 from pathlib import Path
 
 import av
 import numpy as np
 
 from autohaptics.errors import ParameterError
+from autohaptics.testing.encode import encode_samples
 
 RATE = 48000
 VOICE_DBFS = -18.0  # the commentary's voice, rms
@@ -56,22 +56,10 @@ def with_tracks_ahead(src: str | os.PathLike, dst: str | os.PathLike) -> Path:
         own = out.add_stream_from_template(c.streams.audio[0])
         own.disposition = 0
         for stream, x in ((talk, commentary), (compat, mix)):
-            _encode(out, stream, x)
+            encode_samples(out, stream, x, step=960)
         for packet in c.demux(c.streams.video[0], c.streams.audio[0]):
             if packet.size:
                 packet.stream = video if packet.stream.type == "video" else own
                 out.mux(packet)
     return dst
 
-
-def _encode(out, stream, x: np.ndarray) -> None:
-    """Encode stereo float samples ``x`` [shape=(2, n)] into ``stream`` from time 0."""
-    step = 960
-    for k in range(0, x.shape[1], step):
-        part = np.ascontiguousarray(x[:, k:k + step].T.reshape(1, -1), dtype=np.float32)
-        frame = av.AudioFrame.from_ndarray(part, format="flt", layout="stereo")
-        frame.sample_rate, frame.pts, frame.time_base = RATE, k, Fraction(1, RATE)
-        for packet in stream.encode(frame):
-            out.mux(packet)
-    for packet in stream.encode(None):
-        out.mux(packet)
