@@ -112,6 +112,20 @@ def _tracks_ahead(src: Path, dst: Path, options: dict) -> Path:
     return with_tracks_ahead(src, dst)
 
 
+def _recording(src: Path, dst: Path, options: dict) -> Path:
+    """``src`` re-encoded as a channel sends it (``options``; H.264 with a keyframe every 12 frames), then
+    recorded (``testing.broadcast.as_recording``) from ``begin_s``, on a clock that wraps ``wrap_after_s`` later."""
+    from autohaptics.testing.broadcast import WRAP_S, as_recording
+    from autohaptics.testing.reencode import reencode
+
+    options = dict(options)
+    begin_s, wrap_after_s = options.pop("begin_s"), options.pop("wrap_after_s")
+    sent = reencode(src, dst.with_name(f"{dst.stem}.sent.mp4"), video_options={**ENCODE, "g": "12"}, **options)
+    as_recording(sent, dst, clock_s=WRAP_S - begin_s - wrap_after_s, begin_s=begin_s)
+    sent.unlink()
+    return dst
+
+
 def _packed(src: Path, dst: Path, options: dict) -> Path:
     """``src`` as a 3D film, its two views packed as ``options`` say (``testing.stereo.write_packed``)."""
     from autohaptics.testing.stereo import write_packed
@@ -182,6 +196,9 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("cut mid-score at 7.3 s", "start", options={"start_s": 7.3}, start_s=7.3),
     Variant("cut mid-score at 13.7 s", "start", options={"start_s": 13.7}, start_s=13.7),
     Variant("cut mid-score at 21.1 s", "start", options={"start_s": 21.1}, start_s=21.1),
+    Variant("broadcast recording begun mid-GOP at 4.3 s, its clock wrapping 10 s in: MPEG-TS, H.264 GOP 12, AC-3",
+            "start", ".ts", start_s=4.3, write=_recording,
+            options={"audio_codec": "ac3", "audio_bit_rate": 384_000, "begin_s": 4.3, "wrap_after_s": 10.0}),
 )
 
 

@@ -26,6 +26,9 @@ TRUNCATION_TOLERANCE_S = 0.5
 TRUNCATION_TOLERANCE_FRAC = 0.02
 VARIABLE_RATE_SHARE = 0.9  # an average frame rate under this share of the stream's own: frames come irregularly
 RATE_PACKETS = 48  # the packets whose intervals tell a stream's own frame rate
+# how far FFmpeg reads for a stream it found nothing of in its first look (a file opened so only when one is
+# undetermined): 10 minutes, 1 GB
+LATE_STREAM_PROBE = {"analyzeduration": str(600 * 1_000_000), "probesize": str(1 << 30)}
 
 
 def source_block(info: dict, *, sha256: str | None = None, name: str | None = None) -> dict:
@@ -137,11 +140,27 @@ def open_container(path: str | os.PathLike) -> av.container.InputContainer:
     if p.stat().st_size == 0:
         raise MediaError(f"{p}: file is empty (0 bytes)")
     try:
-        return av.open(str(p), mode="r", metadata_errors="ignore")
+        c = av.open(str(p), mode="r", metadata_errors="ignore")
+        if any(_undetermined(s) for s in c.streams):
+            c.close()
+            c = av.open(str(p), mode="r", metadata_errors="ignore", options=LATE_STREAM_PROBE)
+        return c
     except av.error.FFmpegError as exc:
         raise MediaError(f"{p}: not a readable media file ({ffmpeg_reason(exc)})") from None
     except (OSError, ValueError, UnicodeDecodeError) as exc:
         raise MediaError(f"{p}: cannot open ({exc})") from None
+
+
+def _undetermined(s) -> bool:
+    """A decodable audio or video stream whose rate, channels or size FFmpeg's first look (5 s of the file)
+    did not find: in a transport stream (a recording, a Blu-ray's) nothing but the stream's own packets
+    says them, and its first packets may come later."""
+    cc = s.codec_context
+    if cc is None:
+        return False
+    if s.type == "audio":
+        return not cc.sample_rate or not cc.layout.nb_channels
+    return s.type == "video" and not cc.width
 
 
 def probe(path: str | os.PathLike) -> MediaInfo:
@@ -310,10 +329,14 @@ def _audio_info(s, c) -> AudioInfo:
                      codec=cc.name, duration_s=dur, tracks=tuple(tracks) if len(tracks) > 1 else ())
 
 
+_UNSIGNED_CLOCKS = ("mpegts", "mpeg")  # MPEG-TS/PS: 33-bit timestamps that wrap every 26.5 h
+
+
 def _container_start(c) -> float:
     if c.start_time is not None:
         try:
-            return max(0.0, float(c.start_time) / av.time_base)
+            start = float(c.start_time) / av.time_base
+            return start if c.format.name in _UNSIGNED_CLOCKS else max(0.0, start)
         except (TypeError, OverflowError):
             return 0.0
     return 0.0

@@ -224,7 +224,8 @@ def check_complete(info: media.MediaInfo) -> None:
 
 _WEBM_CODECS = {"vp8", "vp9", "av1", "vorbis", "opus"}
 _SIMPLE = {"avi": (".avi", "video/x-msvideo"), "wav": (".wav", "audio/wav"), "mp3": (".mp3", "audio/mpeg"),
-           "flac": (".flac", "audio/flac"), "ogg": (".ogg", "video/ogg")}
+           "flac": (".flac", "audio/flac"), "ogg": (".ogg", "video/ogg"), "mpegts": (".ts", "video/mp2t"),
+           "mpeg": (".mpg", "video/mpeg")}
 
 
 def container_suffix(info: media.MediaInfo) -> tuple[str, str]:

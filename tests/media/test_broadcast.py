@@ -1,0 +1,81 @@
+"""Broadcast recordings (MPEG-TS, ``testing.broadcast`` writes them from the tests' scene): a clock hours in, a
+clock that wraps inside the file, a recording begun mid-GOP and a sound whose first packet comes after
+FFmpeg's first look at the file are all read as the film they hold."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from autohaptics import pipeline
+from autohaptics import testing as synth
+from autohaptics.bench.matrix import VARIANTS, Variant, cut_analysis, misses, row_figures
+from autohaptics.media import probe
+from autohaptics.testing.broadcast import WRAP_S, as_recording
+from autohaptics.testing.scenes import MATERIAL_IMPACTS_S, material_scene
+from autohaptics.timebase import TICK_S
+
+
+@pytest.fixture(scope="module")
+def film(tmp_path_factory):
+    d = tmp_path_factory.mktemp("broadcast")
+    src = synth.write_scene(d / "film.mp4", material_scene(), width=320, height=180, fps=25)
+    analysis = pipeline.analyse(src)
+    return d, src, analysis, pipeline.derive(analysis)
+
+
+def _same(a, b):
+    """The film's timeline ``a`` and a recording's ``b``: the same ticks, and figures that meet the matrix's
+    targets (a transport stream plays the AAC encoder's priming that MP4 skips: its sound starts 21 ms
+    earlier on the clock, the picture's frames with it)."""
+    assert abs(a.n_ticks - b.n_ticks) <= 1
+    fig = row_figures(a, b, Variant("recording", "codec"))
+    assert misses(fig) == [] and fig["onset_f1"] == 1.0, fig
+
+
+@pytest.mark.parametrize("clock_s, wraps", [(10 * 3600.0, False), (WRAP_S - 5.0, True)])
+def test_a_recording_on_the_broadcasters_clock_reads_as_the_film(film, clock_s, wraps):
+    """10 h into the clock, and 5 s before it wraps: the file's times fall back to 0 after 5 s (FFmpeg
+    reads the 5 s before as negative). Before, the wrapped file was refused as truncated (the times
+    before 0 were dropped)."""
+    d, src, _, timeline = film
+    rec = as_recording(src, d / f"clock_{int(clock_s)}.ts", clock_s=clock_s)
+    info = probe(rec)
+    assert info.start_s == pytest.approx(-5.0 if wraps else clock_s, abs=0.2)
+    assert info.duration_s == pytest.approx(probe(src).duration_s, abs=0.1)
+    _same(timeline, pipeline.generate(rec))
+
+
+def test_a_sound_that_comes_after_the_first_look_is_found(film):
+    """The sound's first packet 10 s after the picture's: past what FFmpeg reads (5 s of its clock) before
+    it says what a file holds, so its rate and channels were unknown and the file was refused. Now they are read, the
+    sound is silent until it comes and the film's sound from there."""
+    d, src, analysis, timeline = film
+    rec = as_recording(src, d / "late_sound.ts", sound_late_s=10.0)
+    info = probe(rec)
+    assert (info.audio.sample_rate, info.audio.channels) == (48000, 2)
+    got = pipeline.generate(rec)
+    k = int(round(10.0 / TICK_S))
+    assert got.vibration[:k - 1].max() == 0.0 < timeline.vibration[:k - 1].max()
+    for hit_s in (s for s in MATERIAL_IMPACTS_S if 11.0 < s < 21.0):  # the impacts after it vibrate as in the film
+        hit = slice(int(hit_s / TICK_S), int(hit_s / TICK_S) + 4)
+        assert got.vibration[hit].max() == pytest.approx(timeline.vibration[hit].max(), abs=0.1)
+    n = min(got.n_ticks, timeline.n_ticks)
+    np.testing.assert_allclose(got.fans[:n], timeline.fans[:n], atol=1e-6)
+
+
+def test_a_recording_begun_mid_gop_gives_the_film_from_there(film):
+    """Begun at 3.7 s, 0.3 s before the next keyframe (the scene's keyframes are 2 s apart): the frames
+    before it cannot be decoded (the screen is black there, as a player shows it); the sound is there
+    from 3.7 s. The figures of the matrix's broadcast row against the film from there, the clock
+    wrapping on the way."""
+    d, src, analysis, _ = film
+    rec = as_recording(src, d / "mid_gop.ts", clock_s=WRAP_S - 6.0, begin_s=3.7)
+    got = pipeline.analyse(rec)
+    assert got.n_ticks == pytest.approx(203, abs=1)
+    assert got.video.stats["frames"]["ticks_with_frame"] == pytest.approx(got.n_ticks - 3, abs=1)
+    row = next(v for v in VARIANTS if v.name.startswith("broadcast recording"))
+    assert row.suffix == ".ts" and row.start_s > 0
+    fig = row_figures(pipeline.derive(cut_analysis(analysis, 3.7, got.n_ticks)), pipeline.derive(got),
+                      Variant("mid-GOP", "start", start_s=3.7))
+    assert misses(fig) == [], fig
