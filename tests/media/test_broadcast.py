@@ -1,17 +1,19 @@
 """Broadcast recordings (MPEG-TS, ``testing.broadcast`` writes them from the tests' scene): a clock hours in, a
-clock that wraps inside the file, a recording begun mid-GOP and a sound whose first packet comes after
-FFmpeg's first look at the file are all read as the film they hold."""
+clock that wraps inside the file, a recording begun mid-GOP, a sound whose first packet comes after
+FFmpeg's first look at the file and an adaptive stream's renditions of several sizes are all read as the
+film they hold."""
 
 from __future__ import annotations
 
+import av
 import numpy as np
 import pytest
 
 from autohaptics import pipeline
 from autohaptics import testing as synth
 from autohaptics.bench.matrix import VARIANTS, Variant, cut_analysis, misses, row_figures
-from autohaptics.media import probe
-from autohaptics.testing.broadcast import WRAP_S, as_recording
+from autohaptics.media import iter_video, probe
+from autohaptics.testing.broadcast import WRAP_S, as_adaptive, as_recording
 from autohaptics.testing.scenes import MATERIAL_IMPACTS_S, material_scene
 from autohaptics.timebase import TICK_S
 
@@ -78,4 +80,20 @@ def test_a_recording_begun_mid_gop_gives_the_film_from_there(film):
     assert row.suffix == ".ts" and row.start_s > 0
     fig = row_figures(pipeline.derive(cut_analysis(analysis, 3.7, got.n_ticks)), pipeline.derive(got),
                       Variant("mid-GOP", "start", start_s=3.7))
+    assert misses(fig) == [], fig
+
+
+def test_a_picture_whose_size_changes_mid_file_is_read_at_the_size_it_declares(film):
+    """An adaptive stream's recording: the renditions' sizes in turn, 6 s each. Every frame comes at the
+    size the stream declares (its first), so crops, proxies and flow pairs keep one geometry; the film
+    gives what it gives at one size. Before, the bar search refused frames of two sizes (a ValueError)."""
+    d, src, _, timeline = film
+    rec = as_adaptive(src, d / "adaptive.ts", scales=(1.0, 0.5, 0.75))
+    info = probe(rec)
+    assert (info.video.width, info.video.height) == (320, 180)
+    sizes = {(f.width, f.height) for f in iter_video(rec)}
+    assert sizes == {(320, 180)}
+    with av.open(str(rec)) as c:
+        assert {(f.width, f.height) for f in c.decode(video=0)} == {(320, 180), (160, 90), (240, 136)}
+    fig = row_figures(timeline, pipeline.generate(rec), Variant("adaptive", "picture"))
     assert misses(fig) == [], fig

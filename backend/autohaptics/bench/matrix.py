@@ -1,20 +1,21 @@
 """``autohaptics bench matrix``: the material matrix, the forms a film reaches us in.
 
 Each source (the shared film clips, or any file given) is written again as each :data:`VARIANTS` row says:
-re-encoded as it is (H.264); letterboxed and pillarboxed; at half and double size; at 23.976, 25, 29.97 and 50 fps
-and at a variable frame rate; in 10 bits (H.264, and a ProRes master with its sound in one stream or, as editing
-suites write it, each channel in a mono track); as an HDR10 grade; as HEVC and AV1; as DVDs (NTSC telecined, coded
-progressive and interlaced; PAL anamorphic); as 3D films, their two views packed side by side or top and bottom; as
-VP9 and H.264 screeners; with its sound as mono, stereo (Opus, and AAC from FFmpeg's downmix), 5.1 and 7.1, as AC-3
-carrying Dolby's dynamic range words, and behind a commentary and a compatibility stereo track; cut to start
-mid-score. Every row's timeline is compared with the source's own (the clean variant; for a cut, the clean analysis
-from the cut on derived as a film of its own, so what differs is the start of the file, not the context a whole film
-gives its film-relative levels): onset F1, fan-tick F1, tolerant fan IoU and temperature MAE against
-:data:`TARGETS`, and a cut's largest vibration in its first 0.5 s where the film itself does not vibrate. With
-``--speed`` each file's ``generate`` and its bare decode (:func:`~autohaptics.bench.decode.bare_decode`) also run as
-whole processes, and the row gives their ratio. The digital-silence pair (booms and blips over exact silence, and
-over a -100 dBFS floor) is a row of its own: the silence variant against the floor variant, and the ratio of their
-generate times.
+re-encoded as it is (H.264); letterboxed and pillarboxed; at half and double size, and at a size that changes every
+six seconds (an adaptive stream's recording); at 23.976, 25, 29.97 and 50 fps and at a variable frame rate; in 10
+bits (H.264, and a ProRes master with its sound in one stream or, as editing suites write it, each channel in a mono
+track); as an HDR10 grade; as HEVC and AV1; as DVDs (NTSC telecined, coded progressive and interlaced; PAL
+anamorphic); as 3D films, their two views packed side by side or top and bottom; as VP9 and H.264 screeners; with
+its sound as mono, stereo (Opus, and AAC from FFmpeg's downmix), 5.1 and 7.1, as AC-3 carrying Dolby's dynamic range
+words, and behind a commentary and a compatibility stereo track; cut to start mid-score, and as a broadcast
+recording begun mid-GOP on a clock that wraps. Every row's timeline is compared with the source's own (the clean
+variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what differs is the start of
+the file, not the context a whole film gives its film-relative levels): onset F1, fan-tick F1, tolerant fan IoU and
+temperature MAE against :data:`TARGETS`, and a cut's largest vibration in its first 0.5 s where the film itself does
+not vibrate. With ``--speed`` each file's ``generate`` and its bare decode
+(:func:`~autohaptics.bench.decode.bare_decode`) also run as whole processes, and the row gives their ratio. The
+digital-silence pair (booms and blips over exact silence, and over a -100 dBFS floor) is a row of its own: the
+silence variant against the floor variant, and the ratio of their generate times.
 
 Variant files are written once into ``--out`` and reused; nothing large is committed.
 """
@@ -112,16 +113,20 @@ def _tracks_ahead(src: Path, dst: Path, options: dict) -> Path:
     return with_tracks_ahead(src, dst)
 
 
-def _recording(src: Path, dst: Path, options: dict) -> Path:
-    """``src`` re-encoded as a channel sends it (``options``; H.264 with a keyframe every 12 frames), then
-    recorded (``testing.broadcast.as_recording``) from ``begin_s``, on a clock that wraps ``wrap_after_s`` later."""
-    from autohaptics.testing.broadcast import WRAP_S, as_recording
+def _broadcast(src: Path, dst: Path, options: dict) -> Path:
+    """``src`` re-encoded as a channel sends it (H.264, a keyframe every 12 frames; the sound as ``options``
+    say), then kept as ``options["kept"]`` says (``testing.broadcast``): "recording", begun at ``begin_s`` on
+    a clock that wraps ``wrap_after_s`` later; "adaptive", an adaptive stream's renditions in turn."""
+    from autohaptics.testing.broadcast import WRAP_S, as_adaptive, as_recording
     from autohaptics.testing.reencode import reencode
 
     options = dict(options)
-    begin_s, wrap_after_s = options.pop("begin_s"), options.pop("wrap_after_s")
+    kept, begin_s, wrap_after_s = options.pop("kept"), options.pop("begin_s", 0.0), options.pop("wrap_after_s", 0.0)
     sent = reencode(src, dst.with_name(f"{dst.stem}.sent.mp4"), video_options={**ENCODE, "g": "12"}, **options)
-    as_recording(sent, dst, clock_s=WRAP_S - begin_s - wrap_after_s, begin_s=begin_s)
+    if kept == "recording":
+        as_recording(sent, dst, clock_s=WRAP_S - begin_s - wrap_after_s, begin_s=begin_s)
+    else:
+        as_adaptive(sent, dst)
     sent.unlink()
     return dst
 
@@ -140,6 +145,8 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("pillarbox (bars left and right)", "picture", options={"fit": "pad"}, size=lambda w, h: (_even(w * 4 / 3), h)),
     Variant("half size", "picture", size=lambda w, h: (_even(w / 2), _even(h / 2))),
     Variant("double size (a UHD master of an HD film)", "picture", size=lambda w, h: (_even(w * 2), _even(h * 2))),
+    Variant("an adaptive stream's recording (HLS): the picture's size changing every 6 s, MPEG-TS, H.264, AAC",
+            "picture", ".ts", write=_broadcast, options={"kept": "adaptive"}),
     Variant("23.976 fps", "rate", options={"fps": Fraction(24000, 1001)}),
     Variant("25 fps", "rate", options={"fps": 25}),
     Variant("29.97 fps", "rate", options={"fps": Fraction(30000, 1001)}),
@@ -197,8 +204,9 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("cut mid-score at 13.7 s", "start", options={"start_s": 13.7}, start_s=13.7),
     Variant("cut mid-score at 21.1 s", "start", options={"start_s": 21.1}, start_s=21.1),
     Variant("broadcast recording begun mid-GOP at 4.3 s, its clock wrapping 10 s in: MPEG-TS, H.264 GOP 12, AC-3",
-            "start", ".ts", start_s=4.3, write=_recording,
-            options={"audio_codec": "ac3", "audio_bit_rate": 384_000, "begin_s": 4.3, "wrap_after_s": 10.0}),
+            "start", ".ts", start_s=4.3, write=_broadcast,
+            options={"kept": "recording", "audio_codec": "ac3", "audio_bit_rate": 384_000, "begin_s": 4.3,
+                     "wrap_after_s": 10.0}),
 )
 
 

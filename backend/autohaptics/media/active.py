@@ -151,7 +151,7 @@ def sample_lumas(info: MediaInfo, samples: int = SAMPLES) -> list[np.ndarray]:
             frame = _next_keyframe(c, stream, seen, (times[i + 1] + info.start_s) / base if base else math.inf)
             if frame is not None:
                 rotation = norm_rotation(getattr(frame, "rotation", info.video.rotation))
-                out.append(Frame(frame, i, times[i], rotation).luma())
+                out.append(Frame(frame, i, times[i], rotation, size=(info.video.width, info.video.height)).luma())
     if len(out) < n and all(np.count_nonzero(lu > BLACK_LEVEL) < DARK_SHARE * lu.size for lu in out):
         out += _forward_lumas(info, times[:n])
     return out
@@ -172,7 +172,7 @@ def _forward_lumas(info: MediaInfo, times: list[float]) -> list[np.ndarray]:
                 t = (frame.time - info.start_s) if frame.time is not None else j / max(info.video.fps or 1.0, 1e-3)
                 if t >= times[k]:
                     rotation = norm_rotation(getattr(frame, "rotation", info.video.rotation))
-                    out.append(Frame(frame, j, t, rotation).luma())
+                    out.append(Frame(frame, j, t, rotation, size=(info.video.width, info.video.height)).luma())
                     while k < len(times) and times[k] <= t:
                         k += 1
         except av.error.FFmpegError:

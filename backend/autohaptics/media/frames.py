@@ -40,12 +40,19 @@ class Frame:
                  "_stretch")
 
     def __init__(self, frame: av.VideoFrame, index: int, time_s: float, rotation: int,
-                 crop: tuple[int, int, int, int] | None = None, shown_aspect: float | None = None):
+                 crop: tuple[int, int, int, int] | None = None, shown_aspect: float | None = None,
+                 size: tuple[int, int] | None = None):
         """crop : (x, y, width, height) px in display orientation, even: the frame is that
-        rectangle of the decoded picture (None, or a rectangle that does not fit inside it, as
-        after a change of size mid-stream: the whole picture).
+        rectangle of the decoded picture (None, or a rectangle that does not fit inside it: the
+        whole picture).
         shown_aspect : that picture's width / height on screen, where its pixels are not square (an
-        anamorphic DVD, a 3D film's half-width view): a proxy's height keeps it (None: as stored)."""
+        anamorphic DVD, a 3D film's half-width view): a proxy's height keeps it (None: as stored).
+        size : the stream's stored (width, height) px (``VideoInfo``): a picture decoded at another
+        size (a stream whose size changes mid-file: an adaptive stream's recording, a channel's SD
+        and HD programmes) is scaled to it, so crops, proxies and the frames compared with each
+        other keep one geometry (None: as decoded)."""
+        if size is not None and min(size) > 0 and (frame.width, frame.height) != tuple(size):
+            frame = frame.reformat(width=int(size[0]), height=int(size[1]))
         self._frame = frame
         self.index = index  # decoded frame number, 0-based
         self.time_s = time_s  # presentation time relative to the container start, seconds

@@ -128,7 +128,7 @@ def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0, bes
                     break
                 last_t = t
                 yield Frame(frame, n, t, norm_rotation(getattr(frame, "rotation", info.video.rotation)), crop,
-                            shown_aspect)
+                            shown_aspect, (info.video.width, info.video.height))
                 n += 1
         if resume_after is None:
             break

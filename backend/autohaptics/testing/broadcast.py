@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import os
+from fractions import Fraction
 from pathlib import Path
 
 import av
@@ -54,3 +55,62 @@ def as_recording(src: str | os.PathLike, dst: str | os.PathLike, *, clock_s: flo
                 p.stream = streams[p.stream.index]
                 out.mux(p)
     return dst
+
+
+def as_adaptive(src: str | os.PathLike, dst: str | os.PathLike, *, scales: tuple[float, ...] = (1.0, 0.5, 0.75, 1 / 3),
+                segment_s: float = 6.0, crf: int = 20) -> Path:
+    """``src`` as a recording of an adaptive stream (HLS) holds it, the MPEG-TS ``dst``: its picture re-encoded
+    (H.264, x264 veryfast at ``crf``) at each of ``scales`` of its size in turn, ``segment_s`` each (the
+    rendition a player picks as its bandwidth changes), each segment opening on a keyframe with parameter
+    sets of its own; the sound's packets copied (a codec a transport stream carries). Returns ``dst``."""
+    if not scales or min(scales) <= 0 or segment_s <= 0:
+        raise ParameterError(f"scales are > 0 and segment_s > 0, got {scales}, {segment_s}")
+    dst = Path(dst)
+    with av.open(str(src)) as c, av.open(str(dst), "w", format="mpegts") as out:
+        if not c.streams.video or not c.streams.audio:
+            raise ParameterError(f"{src}: a film with picture and sound is needed")
+        v_in, a_in = c.streams.video[0], c.streams.audio[0]
+        width, height = v_in.codec_context.width, v_in.codec_context.height
+        rate = v_in.average_rate or Fraction(25)
+        video = out.add_stream("h264", rate=rate)
+        video.width, video.height, video.time_base = width, height, _CLOCK
+        sound = out.add_stream_from_template(a_in)
+        segment, encoder = -1, None
+        for packet in c.demux(v_in, a_in):
+            if packet.stream.type == "audio":
+                if packet.size and packet.dts is not None:
+                    packet.stream = sound
+                    out.mux(packet)
+                continue
+            for frame in packet.decode():
+                t = max(0.0, float(frame.time or 0.0))
+                if encoder is None or int(t // segment_s) != segment:
+                    if encoder is not None:
+                        _flush(out, video, encoder)
+                    segment = int(t // segment_s)
+                    s = scales[segment % len(scales)]
+                    encoder = _encoder(max(2, round(width * s / 2) * 2), max(2, round(height * s / 2) * 2), rate, crf)
+                sized = frame.reformat(width=encoder.width, height=encoder.height, format="yuv420p")
+                sized.pts, sized.time_base = int(round(t / _CLOCK)), _CLOCK
+                for p in encoder.encode(sized):
+                    p.stream = video
+                    out.mux(p)
+        if encoder is not None:
+            _flush(out, video, encoder)
+    return dst
+
+
+_CLOCK = Fraction(1, 90_000)
+
+
+def _encoder(width: int, height: int, rate: Fraction, crf: int) -> av.CodecContext:
+    e = av.CodecContext.create("libx264", "w")
+    e.width, e.height, e.pix_fmt, e.time_base, e.framerate = width, height, "yuv420p", _CLOCK, rate
+    e.options = {"preset": "veryfast", "crf": str(crf), "repeat-headers": "1"}
+    return e
+
+
+def _flush(out, stream, encoder: av.CodecContext) -> None:
+    for p in encoder.encode(None):
+        p.stream = stream
+        out.mux(p)
