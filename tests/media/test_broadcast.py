@@ -13,6 +13,7 @@ from autohaptics import pipeline
 from autohaptics import testing as synth
 from autohaptics.bench.matrix import VARIANTS, Variant, cut_analysis, misses, row_figures
 from autohaptics.media import iter_video, probe
+from autohaptics.server import posters
 from autohaptics.testing.broadcast import WRAP_S, as_adaptive, as_recording
 from autohaptics.testing.scenes import MATERIAL_IMPACTS_S, material_scene
 from autohaptics.timebase import TICK_S
@@ -97,3 +98,61 @@ def test_a_picture_whose_size_changes_mid_file_is_read_at_the_size_it_declares(f
         assert {(f.width, f.height) for f in c.decode(video=0)} == {(320, 180), (160, 90), (240, 136)}
     fig = row_figures(timeline, pipeline.generate(rec), Variant("adaptive", "picture"))
     assert misses(fig) == [], fig
+
+
+def _joined(d, src, name: str, second_clock_s: float):
+    """Two recordings of the film joined byte for byte (``cat a.ts b.ts``): the first on a clock at 100 s,
+    the second at ``second_clock_s``."""
+    a = as_recording(src, d / f"{name}_a.ts", clock_s=100.0)
+    b = as_recording(src, d / f"{name}_b.ts", clock_s=second_clock_s)
+    path = d / f"{name}.ts"
+    path.write_bytes(a.read_bytes() + b.read_bytes())
+    return path
+
+
+@pytest.fixture(scope="module")
+def continuous(film):
+    """The two recordings on one running clock: the second begins where the first ends."""
+    d, src, _, _ = film
+    length = probe(as_recording(src, d / "length.ts", clock_s=100.0)).duration_s
+    path = _joined(d, src, "continuous", 100.0 + length)
+    return path, pipeline.generate(path)
+
+
+@pytest.mark.parametrize("second_clock_s", [30.0, 5000.0, WRAP_S - 50.0], ids=["back", "on", "past_the_wrap"])
+def test_joined_recordings_play_on_across_the_jump(film, continuous, second_clock_s):
+    """The second recording's clock 70 s back, 81 minutes on, or a day on (FFmpeg takes a step back for its
+    clock's wrap): the file plays on across the jump, as a player and FFmpeg's command line play it, and
+    gives what the join on one running clock gives. Before, the step was taken as it stands: a timeline
+    of 26.5 h, or of 81 minutes, for a film of 48 s."""
+    d, src, _, _ = film
+    path = _joined(d, src, f"joined_{int(second_clock_s)}", second_clock_s)
+    info = probe(path)
+    assert info.duration_s == pytest.approx(probe(continuous[0]).duration_s, abs=0.15)  # where the second goes on
+    assert info.clock.jump_positions and info.to_dict()["clock"]["jump_positions"]
+    got = pipeline.generate(path)
+    assert abs(got.n_ticks - continuous[1].n_ticks) <= 1
+    fig = row_figures(continuous[1], got, Variant("joined", "codec"))
+    assert misses(fig) == [] and fig["onset_f1"] == 1.0 and fig["vibration_mae"] < 0.01, fig
+
+
+def test_a_transport_streams_pictures_are_found_at_their_time(film, continuous):
+    """FFmpeg seeks in a transport stream by a search over its bytes that stops near the time, not at the
+    keyframe before it: a poster at 0.5 s showed the picture at 2 s (the next keyframe), and one in the
+    last GOP none at all. ``media.clock`` keeps the keyframes' bytes: each picture is the film's own, on
+    a joined recording's second half too."""
+    d, src, _, _ = film
+    rec = as_recording(src, d / "posters.ts", clock_s=100.0)
+    assert probe(rec).clock.key_positions and "clock" not in probe(rec).to_dict()  # no jump: nothing to say
+    ticks = [5, 45, 95, 118]
+    want = posters.frames_at(_film(src), ticks, (160, 90))
+    second = int(round(probe(rec).duration_s / TICK_S))  # the joined recording's second half
+    for path, offset in ((rec, 0), (continuous[0], 0), (continuous[0], second)):
+        got = posters.frames_at(_film(path), [t + offset for t in ticks], (160, 90))
+        for w, g in zip(want, got):
+            assert np.abs(w.astype(int) - g).mean() < 2.0
+
+
+def _film(path):
+    info = probe(path)
+    return posters.Film(path, info, None, info.video.shown_aspect())

@@ -23,8 +23,11 @@ import av
 import cv2
 import numpy as np
 
+from autohaptics.errors import MediaError
+from autohaptics.media import clock
+from autohaptics.media.clock import Clock
 from autohaptics.media.frames import Frame
-from autohaptics.media.probe import MediaInfo, norm_rotation, open_container, stream_by_index
+from autohaptics.media.probe import AudioReport, MediaInfo, decode_tolerant, norm_rotation, open_container, stream_by_index
 from autohaptics.media.stereo import MIN_SAMPLES, PACKINGS, SAME, SAME_FEW, halves, view_rect, views_alike
 from autohaptics.quantiles import median, percentile
 
@@ -147,8 +150,8 @@ def sample_lumas(info: MediaInfo, samples: int = SAMPLES) -> list[np.ndarray]:
         base = stream.time_base or 0
         for i in range(n):
             if base:
-                c.seek(int((times[i] + info.start_s) / base), backward=True, any_frame=False, stream=stream)
-            frame = _next_keyframe(c, stream, seen, (times[i + 1] + info.start_s) / base if base else math.inf)
+                clock.seek(c, stream, info.clock, times[i] + info.start_s)
+            frame = _next_keyframe(c, stream, seen, times[i + 1] + info.start_s if base else math.inf, info.clock)
             if frame is not None:
                 rotation = norm_rotation(getattr(frame, "rotation", info.video.rotation))
                 out.append(Frame(frame, i, times[i], rotation, size=(info.video.width, info.video.height)).luma())
@@ -166,7 +169,7 @@ def _forward_lumas(info: MediaInfo, times: list[float]) -> list[np.ndarray]:
         stream = stream_by_index(c, info.video.index)
         stream.thread_type = "AUTO"
         try:
-            for j, frame in enumerate(c.decode(stream)):
+            for j, frame in enumerate(decode_tolerant(c, stream, AudioReport(), info.path, clock=info.clock)):
                 if j >= FORWARD_FRAMES or k >= len(times):
                     break
                 t = (frame.time - info.start_s) if frame.time is not None else j / max(info.video.fps or 1.0, 1e-3)
@@ -175,21 +178,24 @@ def _forward_lumas(info: MediaInfo, times: list[float]) -> list[np.ndarray]:
                     out.append(Frame(frame, j, t, rotation, size=(info.video.width, info.video.height)).luma())
                     while k < len(times) and times[k] <= t:
                         k += 1
-        except av.error.FFmpegError:
-            pass
+        except MediaError:
+            pass  # what was decoded stands
     return out
 
 
-def _next_keyframe(c, stream, seen: set, before_pts: float):
+def _next_keyframe(c, stream, seen: set, before_s: float, file_clock: Clock | None = None):
     """The picture of the first keyframe packet read from ``c`` (after a seek) whose timestamp is
-    not in ``seen`` (then added) and is below ``before_pts``; None when there is none."""
+    not in ``seen`` (then added) and is before ``before_s`` (on the file's clock: ``file_clock``); None when
+    there is none."""
     try:
         for pkt in c.demux(stream):
             if pkt.pts is None:
                 if pkt.size == 0:
                     return None  # the end
                 continue
-            if pkt.pts >= before_pts:
+            if file_clock is not None:
+                file_clock.fix(pkt)
+            if pkt.pts * pkt.time_base >= before_s:
                 return None
             if not pkt.is_keyframe or pkt.pts in seen:
                 continue

@@ -61,7 +61,7 @@ def iter_audio(path: str | os.PathLike, *, info: MediaInfo | None = None, lfe_ga
             mix = Mix(len(streams), sr_in, out)
             tracks = {s.index: _Track(s, start_s, sr_in, mix.lane(k), report, weights[k:k + 1])
                       for k, s in enumerate(streams)}
-        for index, frame in decode_tolerant(c, streams, report, info.path, tagged=True):
+        for index, frame in decode_tolerant(c, streams, report, info.path, tagged=True, clock=info.clock):
             if tracks[index].add(frame, lfe_gain):
                 yield from out.drain(False)
         for track in tracks.values():

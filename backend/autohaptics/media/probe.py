@@ -17,6 +17,7 @@ from pathlib import Path
 import av
 
 from autohaptics.errors import MediaError
+from autohaptics.media.clock import TRANSPORT_FORMATS, Clock, read_clock
 from autohaptics.media.stereo import declared_packing
 from autohaptics.media.tracks import channel_tracks, sound_stream
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
@@ -104,13 +105,19 @@ class MediaInfo:
     start_s: float  # container start time; t = 0 of every analysis is this instant
     video: VideoInfo | None
     audio: AudioInfo | None
+    # a transport stream's clock (``media.clock``): its jumps, its keyframes; None for other containers
+    clock: Clock | None = None
 
     def source_block(self, *, sha256: str | None = None, name: str | None = None) -> dict:
         """The timeline's ``source`` object (TIMELINE.md)."""
         return source_block(self.to_dict(), sha256=sha256, name=name)
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        out = asdict(replace(self, clock=None))
+        del out["clock"]
+        if self.clock is not None and self.clock.jump_positions:
+            out["clock"] = self.clock.to_dict()
+        return out
 
 
 @dataclass
@@ -194,8 +201,13 @@ def probe(path: str | os.PathLike) -> MediaInfo:
             c.seek(0)
             rotation, stereo = _first_frame_facts(c, vs)
             video = replace(video, rotation=rotation, stereo=stereo, variable_rate=_variable_rate(c, vs, video.fps))
+        clock = None
+        if c.format.name in TRANSPORT_FORMATS:
+            clock, end = read_clock(c, [s for s in (vs, as_) if s is not None])
+            if clock.jump_positions and end is not None:
+                duration = end - start_s
         return MediaInfo(path=str(p), size_bytes=p.stat().st_size, container=c.format.name,
-                         duration_s=float(duration), start_s=start_s, video=video, audio=audio)
+                         duration_s=float(duration), start_s=start_s, video=video, audio=audio, clock=clock)
 
 
 def check_truncation(info: MediaInfo, decoded_s: float, stream: str) -> None:
@@ -224,6 +236,8 @@ def check_complete(info: MediaInfo) -> None:
             for pkt in c.demux(*streams):
                 if pkt.pts is None or pkt.time_base is None:
                     continue
+                if info.clock is not None:
+                    info.clock.fix(pkt)
                 t = float((pkt.pts + (pkt.duration or 0)) * pkt.time_base)
                 end = t if end is None else max(end, t)
         except av.error.FFmpegError as exc:
@@ -329,14 +343,12 @@ def _audio_info(s, c) -> AudioInfo:
                      codec=cc.name, duration_s=dur, tracks=tuple(tracks) if len(tracks) > 1 else ())
 
 
-_UNSIGNED_CLOCKS = ("mpegts", "mpeg")  # MPEG-TS/PS: 33-bit timestamps that wrap every 26.5 h
-
-
 def _container_start(c) -> float:
     if c.start_time is not None:
         try:
             start = float(c.start_time) / av.time_base
-            return start if c.format.name in _UNSIGNED_CLOCKS else max(0.0, start)
+            # a transport stream's clock is unsigned: a start below 0 is FFmpeg reading it across its wrap
+            return start if c.format.name in TRANSPORT_FORMATS else max(0.0, start)
         except (TypeError, OverflowError):
             return 0.0
     return 0.0
@@ -363,9 +375,10 @@ def _scan_duration(c, streams, start_s: float) -> float | None:
     return None if end is None else end - start_s
 
 
-def decode_tolerant(c, streams, report: AudioReport, path: str, *, tagged: bool = False):
+def decode_tolerant(c, streams, report: AudioReport, path: str, *, tagged: bool = False, clock: Clock | None = None):
     """Decode packets of ``streams``; a damaged packet is counted and skipped, never fatal here.
-    Yields frames, or (stream index, frame) pairs when ``tagged``."""
+    Yields frames, or (stream index, frame) pairs when ``tagged``; with ``clock``, timed on the file's
+    continuous clock (``media.clock``)."""
     try:
         packets = c.demux(streams)
         while True:
@@ -377,6 +390,8 @@ def decode_tolerant(c, streams, report: AudioReport, path: str, *, tagged: bool 
                 report.decode_errors += 1
                 report.first_error = report.first_error or ffmpeg_reason(exc)
                 break  # the demuxer cannot go on after a read error
+            if clock is not None:
+                clock.fix(pkt)
             try:
                 frames = pkt.decode()
             except av.error.FFmpegError as exc:

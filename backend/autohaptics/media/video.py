@@ -11,6 +11,7 @@ import threading
 from collections.abc import Callable, Iterator
 
 from autohaptics.errors import MediaError, ParameterError
+from autohaptics.media import clock
 from autohaptics.media.frames import Frame
 from autohaptics.media.probe import AudioReport, MediaInfo, decode_tolerant, norm_rotation, open_container, probe, stream_by_index
 
@@ -113,9 +114,9 @@ def _iter_video(info: MediaInfo, decode: str = "full", start_s: float = 0.0, bes
             stream = stream_by_index(c, info.video.index)
             watch_gaps = _configure(stream, info, decode, beside, skip_allowed)
             seek_s = start_s if resume_after is None else resume_after
-            if seek_s > 0 and stream.time_base:
-                c.seek(int((seek_s + info.start_s) / stream.time_base), backward=True, any_frame=False, stream=stream)
-            for frame in decode_tolerant(c, stream, report, info.path):
+            if seek_s > 0:
+                clock.seek(c, stream, info.clock, seek_s + info.start_s)
+            for frame in decode_tolerant(c, stream, report, info.path, clock=info.clock):
                 t = float(frame.time) - info.start_s if frame.time is not None else n / max(info.video.fps, 1e-9)
                 if resume_after is not None:
                     if t <= resume_after:

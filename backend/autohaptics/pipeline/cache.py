@@ -28,7 +28,10 @@ from autohaptics.shots import Boundaries, detect
 # several audio tracks, not the first (``media.tracks.sound_stream``); AC-3 and E-AC-3 read without the
 # stream's dynamic range compression (``media.audio``); proxies at the picture's shown aspect (an
 # anamorphic DVD's, ``media.frames``); a 3D film read from its first view (``video.stereo``).
-ANALYSIS_REVISION = 5
+# 6: a transport stream read on its continuous clock, across its wrap and jumps, its pictures found at their
+# keyframes' bytes (``media.clock``); a picture decoded at another size than its stream's scaled to it
+# (``media.frames``).
+ANALYSIS_REVISION = 6
 
 
 @dataclass

@@ -1,0 +1,58 @@
+"""``media.clock.continuous_times``: packets of two streams in runs on clocks that jump (any step, back
+or on, past the wrap) come out on one clock that runs on, each run as it was, and a clock that runs on
+(a stream pausing the while) is left as it is."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from autohaptics.media.clock import DISCONTINUITY_S, continuous_times
+
+FRAME_S, BLOCK_S = 0.04, 0.032  # a picture's and a sound block's duration
+
+
+def _run(start_s: float, length_s: float):
+    """A run of interleaved picture (stream 0) and sound (stream 1) packets from ``start_s``, in the order
+    a muxer writes them."""
+    v = start_s + np.arange(0.0, length_s, FRAME_S)
+    a = start_s + np.arange(0.0, length_s, BLOCK_S)
+    t = np.concatenate([v, a])
+    order = np.argsort(t, kind="stable")
+    dt = np.concatenate([np.full(v.size, FRAME_S), np.full(a.size, BLOCK_S)])
+    return t[order], dt[order], np.concatenate([np.zeros(v.size, np.int64), np.ones(a.size, np.int64)])[order]
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.floats(-95_000.0, 95_000.0), st.floats(1.0, 30.0)), min_size=1, max_size=5))
+def test_runs_on_jumping_clocks_come_out_on_one_clock(runs):
+    """Each run's clock differs from the one before by more than the threshold (else it is not a jump)."""
+    parts, starts, begin = [], [], None
+    for start, length in runs:
+        if begin is not None and abs(start - begin) <= 2 * DISCONTINUITY_S + 30.0:
+            start = begin + 3 * DISCONTINUITY_S + 30.0  # a step that is a jump
+        parts.append(_run(start, length))
+        starts.append(sum(p[0].size for p in parts[:-1]))
+        begin = start
+    t0, dt, stream = (np.concatenate([p[k] for p in parts]) for k in range(3))
+    out, jumps = continuous_times(t0, dt, stream)
+    assert np.isfinite(out).all()
+    assert [i for i, _ in jumps] == starts[1:]  # a new clock where each run begins, and nowhere else
+    for s in (0, 1):
+        steps = np.diff(out[stream == s])
+        assert (steps > 0).all() and steps.max() <= 2 * max(FRAME_S, BLOCK_S) + 1e-6  # runs on
+    for k, first in enumerate(starts):  # each run as it was
+        last = starts[k + 1] if k + 1 < len(starts) else t0.size
+        np.testing.assert_allclose(np.diff(out[first:last]), np.diff(t0[first:last]), atol=1e-6)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.floats(0.0, 1e5), st.floats(2.0, 40.0))
+def test_a_clock_that_runs_on_is_left_as_it_is_though_a_stream_pauses(start, pause):
+    """The sound stops for ``pause`` s (longer than the threshold, too) while the picture goes on."""
+    t0, dt, stream = _run(start, 60.0)
+    gone = (stream == 1) & (t0 > start + 10.0) & (t0 < start + 10.0 + pause)
+    t0, dt, stream = t0[~gone], dt[~gone], stream[~gone]
+    out, jumps = continuous_times(t0, dt, stream)
+    assert jumps == [] and np.array_equal(out, t0)
