@@ -3,9 +3,9 @@
 MPEG transport and program streams (a broadcast recording, a Blu-ray's M2TS, a DVD's VOB) carry the
 broadcaster's clock, which may jump: two recordings joined (``cat a.ts b.ts``), a channel's splice
 into another programme. FFmpeg's demuxer takes a jump back for its clock's wrap (26.5 h on). A player
-plays on across such a jump, and so does FFmpeg's command line: a step of more than
-:data:`DISCONTINUITY_S` between two packets of a stream is a new clock, and the times after it go on
-from where the stream's last packet ended. The file's time here does the same.
+plays on across such a jump, and FFmpeg's command line takes a step of more than :data:`DISCONTINUITY_S`
+as a new clock. The file's time here does the same: the new clock goes on from where what came before
+it ends (:func:`continuous_times`).
 
 Such a file has no index, and FFmpeg seeks in it by a search over its bytes that stops near the time
 asked for, not at the keyframe before it: the first picture decoded then may come seconds after that
@@ -25,6 +25,8 @@ import numpy as np
 
 TRANSPORT_FORMATS = ("mpegts", "mpeg")  # FFmpeg's demuxers of MPEG-TS/M2TS and MPEG-PS/VOB
 DISCONTINUITY_S = 10.0  # a step between a stream's packets beyond this is a jump (FFmpeg's dts_delta_threshold)
+WRAP_S = 2**33 / 90_000  # the transport stream clock's period, s (33 bits of 90 kHz ticks: 26.5 h)
+LOOK_AHEAD = 64  # packets read on from a jump for the new clock's earliest
 
 
 @dataclass(frozen=True)
@@ -71,61 +73,65 @@ def read_clock(c, streams) -> tuple[Clock, float | None]:
     got = _packets(c, streams)
     if got is None:
         return Clock(), None
-    at, t0, dt, stream, keys = got
-    times, jumps = continuous_times(t0, dt, stream)
+    at, t0, dt, keys = got
+    times, jumps = continuous_times(t0, dt)
     by_time = np.argsort(times[keys], kind="stable")
     return Clock(tuple(int(at[i]) for i, _ in jumps), tuple(offset for _, offset in jumps),
                  tuple(times[keys][by_time].tolist()), tuple(at[keys][by_time].tolist())), float(np.max(times + dt))
 
 
-def continuous_times(t0: np.ndarray, dt: np.ndarray, stream: np.ndarray) -> tuple[np.ndarray, list[tuple[int, float]]]:
-    """Packet times on a continuous clock: ``t0`` their times s, ``dt`` their durations s and ``stream``
-    their streams, each [shape=(n,)] in the order of their bytes. Returns (the times s [shape=(n,)], the
-    jumps: (index of the packet where a new clock starts, seconds added from it on)). A packet more than
-    :data:`DISCONTINUITY_S` from the latest end so far of any stream starts a new clock, going on from
-    where its stream's last packet ended (the latest end, for a stream's first packet)."""
+def continuous_times(t0: np.ndarray, dt: np.ndarray) -> tuple[np.ndarray, list[tuple[int, float]]]:
+    """Packet times on a continuous clock: ``t0`` their presentation times s and ``dt`` their durations s, each
+    [shape=(n,)] in the order of their bytes. Returns (the times s [shape=(n,)], the jumps: (index of the packet
+    where a new clock starts, seconds added from it on)). A packet more than :data:`DISCONTINUITY_S` from the
+    latest end so far of any stream starts a new clock, its earliest packet going on from there (what came
+    before has all been shown: a player plays the first recording to its end, then the second). A step of whole
+    :data:`WRAP_S` (within that) is FFmpeg's demuxer taking a clock that fell back for a wrap, only for the
+    times under its guess: undone exactly."""
     t0, dt = np.asarray(t0, np.float64), np.asarray(dt, np.float64)
     ends = np.maximum.accumulate(t0 + dt)
     if not np.any(np.abs(t0[1:] - ends[:-1]) > DISCONTINUITY_S):  # the clock runs on (most files)
         return t0.copy(), []
-    offset, latest, jumps, expected = 0.0, None, [], {}
+    offset, latest, jumps = 0.0, None, []
     out = np.empty_like(t0)
     for i in range(t0.size):
         t = t0[i] + offset
         if latest is not None and abs(t - latest) > DISCONTINUITY_S:
-            offset += expected.get(int(stream[i]), latest) - t  # as FFmpeg's command line goes on
+            wraps = round((t - latest) / WRAP_S)
+            if wraps and abs(t - latest - wraps * WRAP_S) <= DISCONTINUITY_S:
+                offset -= wraps * WRAP_S  # FFmpeg's guess at a wrap, undone to the tick
+            else:  # the new clock's earliest packet among the next few (their bytes' order is not their times')
+                ahead = t0[i:i + LOOK_AHEAD]
+                offset = latest - float(ahead[np.abs(ahead - t0[i]) <= DISCONTINUITY_S].min())
             t = t0[i] + offset
             jumps.append((i, float(offset)))
         out[i] = t
-        expected[int(stream[i])] = t + dt[i]
         latest = t + dt[i] if latest is None else max(latest, t + dt[i])
     return out, jumps
 
 
 def _packets(c, streams):
     """The timed packets of ``streams`` in ``c`` from its start, in the order of their bytes: (byte
-    position int64, decoding time s, duration s, stream index int64, a picture's keyframe bool), each
-    [shape=(n,)]; None where there is none."""
-    pos, start, length, key, which = array("q"), array("d"), array("d"), array("b"), array("q")
+    position int64, presentation time s, duration s, a picture's keyframe bool), each [shape=(n,)]; None
+    where there is none."""
+    pos, start, length, key = array("q"), array("d"), array("d"), array("b")
     c.seek(0)
     try:
         for p in c.demux(*streams):
-            stamp = p.dts if p.dts is not None else p.pts
+            stamp = p.pts if p.pts is not None else p.dts
             if stamp is None or p.time_base is None or p.pos is None or p.pos < 0:
                 continue
             pos.append(int(p.pos))
             start.append(float(stamp * p.time_base))
             length.append(float((p.duration or 0) * p.time_base))
             key.append(1 if p.is_keyframe and p.stream.type == "video" else 0)
-            which.append(int(p.stream.index))
     except av.error.FFmpegError:
         pass  # a damaged tail: what was read stands
     if not pos:
         return None
     order = np.argsort(np.frombuffer(pos, np.int64), kind="stable")
     return (np.frombuffer(pos, np.int64)[order], np.frombuffer(start, np.float64)[order],
-            np.frombuffer(length, np.float64)[order], np.frombuffer(which, np.int64)[order],
-            np.frombuffer(key, np.int8)[order].astype(bool))
+            np.frombuffer(length, np.float64)[order], np.frombuffer(key, np.int8)[order].astype(bool))
 
 
 def seek(c, stream, clock: Clock | None, t_s: float) -> None:

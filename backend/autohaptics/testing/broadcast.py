@@ -18,8 +18,8 @@ from pathlib import Path
 import av
 
 from autohaptics.errors import ParameterError
+from autohaptics.media.clock import WRAP_S
 
-WRAP_S = 2**33 / 90_000  # the transport stream clock's period, s
 
 
 def as_recording(src: str | os.PathLike, dst: str | os.PathLike, *, clock_s: float = 0.0, begin_s: float = 0.0,
