@@ -156,3 +156,28 @@ def test_a_transport_streams_pictures_are_found_at_their_time(film, continuous):
 def _film(path):
     info = probe(path)
     return posters.Film(path, info, None, info.video.shown_aspect())
+
+
+def test_a_channel_that_carries_nothing_beside_the_sound_costs_no_further_look(film, monkeypatch):
+    """A recorder's audio description channel without a packet, beside the film's sound: the sound is read,
+    and the file is opened once, not again with the longer look (which would read up to 1 GB at every
+    open); a sound that comes late, alone, is looked for further."""
+    d, src, _, _ = film
+    rec = as_recording(src, d / "with_empty.ts")
+    empty = d / "empty_channel.ts"
+    with av.open(str(rec)) as c, av.open(str(empty), "w", format="mpegts") as out:
+        streams = {s.index: out.add_stream_from_template(s) for s in (c.streams.video[0], c.streams.audio[0])}
+        out.add_stream("mp2", rate=48000, layout="stereo")  # declared, never sent
+        for p in c.demux(c.streams.video[0], c.streams.audio[0]):
+            if p.size and p.dts is not None:
+                p.stream = streams[p.stream.index]
+                out.mux(p)
+    opened = []
+    real_open = av.open
+    monkeypatch.setattr(av, "open", lambda *a, **k: opened.append(k.get("options")) or real_open(*a, **k))
+    info = probe(empty)
+    assert (info.audio.sample_rate, info.audio.channels) == (48000, 2) and info.audio.codec == "aac"
+    assert opened and not any(opened)
+    opened.clear()
+    probe(as_recording(src, d / "late_alone.ts", sound_late_s=10.0))
+    assert any(o for o in opened)

@@ -148,7 +148,7 @@ def open_container(path: str | os.PathLike) -> av.container.InputContainer:
         raise MediaError(f"{p}: file is empty (0 bytes)")
     try:
         c = av.open(str(p), mode="r", metadata_errors="ignore")
-        if any(_undetermined(s) for s in c.streams):
+        if _look_further(c):
             c.close()
             c = av.open(str(p), mode="r", metadata_errors="ignore", options=LATE_STREAM_PROBE)
         return c
@@ -158,16 +158,24 @@ def open_container(path: str | os.PathLike) -> av.container.InputContainer:
         raise MediaError(f"{p}: cannot open ({exc})") from None
 
 
+def _look_further(c) -> bool:
+    """Whether every decodable audio stream, or every decodable video stream, of ``c`` is one whose rate,
+    channels or size FFmpeg's first look (5 s of the file) did not find: in a transport stream (a
+    recording, a Blu-ray's) nothing but a stream's own packets says them, and its first packets may come
+    later. One such stream beside a usable one (a recorder's audio description channel that carries
+    nothing) is passed over: looking further would read up to :data:`LATE_STREAM_PROBE` at every open."""
+    for kind in ("audio", "video"):
+        decodable = [s for s in c.streams if s.type == kind and s.codec_context is not None]
+        if decodable and all(_undetermined(s) for s in decodable):
+            return True
+    return False
+
+
 def _undetermined(s) -> bool:
-    """A decodable audio or video stream whose rate, channels or size FFmpeg's first look (5 s of the file)
-    did not find: in a transport stream (a recording, a Blu-ray's) nothing but the stream's own packets
-    says them, and its first packets may come later."""
     cc = s.codec_context
-    if cc is None:
-        return False
     if s.type == "audio":
         return not cc.sample_rate or not cc.layout.nb_channels
-    return s.type == "video" and not cc.width
+    return not cc.width
 
 
 def probe(path: str | os.PathLike) -> MediaInfo:
