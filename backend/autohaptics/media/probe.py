@@ -27,8 +27,8 @@ TRUNCATION_TOLERANCE_S = 0.5
 TRUNCATION_TOLERANCE_FRAC = 0.02
 VARIABLE_RATE_SHARE = 0.9  # an average frame rate under this share of the stream's own: frames come irregularly
 RATE_PACKETS = 48  # the packets whose intervals tell a stream's own frame rate
-# how far FFmpeg reads for a stream it found nothing of in its first look (a file opened so only when one is
-# undetermined): 10 minutes, 1 GB
+# how far FFmpeg reads for a stream it found nothing of in its first look (a file is opened so only where every
+# audio or every video stream is undetermined, ``_look_further``): 10 minutes, 1 GB
 LATE_STREAM_PROBE = {"analyzeduration": str(600 * 1_000_000), "probesize": str(1 << 30)}
 
 
