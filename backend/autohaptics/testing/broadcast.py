@@ -6,6 +6,9 @@ may, with its sound's first packet later than its picture's.
 The clock counts 33 bits of 90 kHz ticks, so it wraps every :data:`WRAP_S` (26.5 h): a recording across the wrap
 holds times that fall back to 0 in its middle. FFmpeg's demuxer reads the times before the wrap as negative, so
 such a file's clock starts below 0.
+
+:func:`as_adaptive` writes a recording of an adaptive stream (HLS): the picture at the renditions a player
+picks in turn, its size changing from segment to segment.
 """
 
 from __future__ import annotations
@@ -19,7 +22,6 @@ import av
 
 from autohaptics.errors import ParameterError
 from autohaptics.media.clock import WRAP_S
-
 
 
 def as_recording(src: str | os.PathLike, dst: str | os.PathLike, *, clock_s: float = 0.0, begin_s: float = 0.0,
