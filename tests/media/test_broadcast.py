@@ -1,9 +1,11 @@
 """Broadcast recordings (MPEG-TS, ``testing.broadcast`` writes them from the tests' scene): a clock hours in, a
 clock that wraps inside the file, a recording begun mid-GOP, a sound whose first packet comes after
-FFmpeg's first look at the file and an adaptive stream's renditions of several sizes are all read as the
-film they hold."""
+FFmpeg's first look at the file, an adaptive stream's renditions of several sizes and a channel's sound
+that changes layout are all read as the film they hold."""
 
 from __future__ import annotations
+
+from fractions import Fraction
 
 import av
 import numpy as np
@@ -181,3 +183,55 @@ def test_a_channel_that_carries_nothing_beside_the_sound_costs_no_further_look(f
     opened.clear()
     probe(as_recording(src, d / "late_alone.ts", sound_late_s=10.0))
     assert any(o for o in opened)
+
+
+def _channel_sound(path, first: str, second: str):
+    """A channel's recording whose sound changes layout at 10 s (AC-3 ``first``, then ``second``; a 5.1
+    part carries the sound in its centre, as a film's dialogue and effects sit there): a 220 Hz bed and a
+    60 Hz boom every 2 s from 1 s, over a still picture. MPEG-TS, 20 s."""
+    rate, half = 48000, 480000
+    t = np.arange(2 * half) / rate
+    x = 0.02 * np.sin(2 * np.pi * 220 * t)
+    for k in range(10):
+        s0, n = int((1.0 + 2 * k) * rate), int(0.3 * rate)
+        x[s0:s0 + n] += 0.6 * np.sin(2 * np.pi * 60 * t[:n]) * np.exp(-t[:n] * 8)
+    packets = []
+    for layout, start in ((first, 0), (second, half)):
+        enc = av.CodecContext.create("ac3", "w")
+        enc.sample_rate, enc.layout, enc.format, enc.bit_rate = rate, layout, "fltp", 384_000
+        n = av.AudioLayout(layout).nb_channels
+        for k in range(start, start + half, 1536):
+            chunk = np.zeros((n, 1536), np.float32)
+            seg = x[k:min(k + 1536, start + half)]
+            chunk[[0, 1] if n == 2 else [2], :seg.size] = seg
+            frame = av.AudioFrame.from_ndarray(chunk, format="fltp", layout=layout)
+            frame.sample_rate, frame.pts, frame.time_base = rate, k, Fraction(1, rate)
+            packets += enc.encode(frame)
+        packets += enc.encode(None)
+    with av.open(str(path), "w", format="mpegts") as out:
+        video = out.add_stream("mpeg2video", rate=25)
+        video.width, video.height, video.pix_fmt = 64, 36, "yuv420p"
+        sound = out.add_stream("ac3", rate=rate, layout=first)
+        items = [(float(p.pts * p.time_base), p, sound) for p in packets]
+        still = av.VideoFrame.from_ndarray(np.full((36, 64, 3), 90, np.uint8), format="rgb24").reformat(format="yuv420p")
+        for i in range(500):
+            still.pts, still.time_base = i, Fraction(1, 25)
+            items += [(float(p.pts * p.time_base), p, video) for p in video.encode(still)]
+        items += [(float(p.pts * p.time_base), p, video) for p in video.encode(None)]
+        for _, p, stream in sorted(items, key=lambda item: item[0]):
+            p.stream = stream
+            out.mux(p)
+    return path
+
+
+@pytest.mark.parametrize("first, second", [("stereo", "5.1"), ("5.1", "stereo")])
+def test_a_sound_that_changes_layout_mid_stream_is_read_in_each(tmp_path, first, second):
+    """Advertisements in stereo, then the film in 5.1, or the other way: each part downmixed by its own
+    layout. Before, the first part's weights held for the whole stream: stereo then 5.1 lost the 5.1
+    part's centre (its booms did not vibrate), and 5.1 then stereo raised an IndexError."""
+    got = pipeline.generate(_channel_sound(tmp_path / f"{first}_{second}.ts", first, second))
+    chair = got.vibration.max(axis=1)
+    booms = [chair[int(round(s / TICK_S)):int(round(s / TICK_S)) + 4].max() for s in np.arange(1.0, 20.0, 2.0)]
+    assert min(booms) >= 0.5, booms
+    beds = [chair[int(round(s / TICK_S)) - 4:int(round(s / TICK_S))].max() for s in np.arange(3.0, 20.0, 2.0)]
+    assert max(beds) == 0.0, beds

@@ -90,7 +90,8 @@ _NO_DRC = {"ac3": {"drc_scale": "0"}, "ac3_fixed": {"drc_scale": "0"}, "eac3": {
 
 class _Track:
     """One audio stream's frames placed on the container's clock (:class:`AudioClock`) and downmixed
-    into ``sink``, with ``weights`` or, when None, the weights of its first frame's layout."""
+    into ``sink``, with ``weights`` or, when None, the weights of each frame's layout (a channel's sound
+    changes layout where a programme does: stereo advertisements, then a film in 5.1)."""
 
     def __init__(self, stream, start_s: float, rate: int, sink: Sink, report: AudioReport,
                  weights: np.ndarray | None = None):
@@ -101,6 +102,7 @@ class _Track:
         self.clock = AudioClock(start_s, rate, timestamp_slack_s(stream.time_base, rate))
         self.sink, self.report, self.limit = sink, report, max(1, int(_DOWNMIX_S * rate))
         self.held = None if weights is None else _Held(self.limit, weights, report)
+        self.layout = None if weights is None else ()  # the layout the weights are of; () fixed weights
         self.interleave = _Interleaver()
         self.pending = None  # (time, samples) of the frame placed when the next one's time is known
 
@@ -108,9 +110,14 @@ class _Track:
         """Take one decoded frame; True when the output may hold chunks ready."""
         frame_time = frame.time  # before _samples: interleaving clears the frame's pts
         x = _samples(frame, self.interleave)
+        layout = (frame.layout.name, x.shape[0])
         if self.held is None:
-            self.held = _Held(self.limit, _mapping(self.report, frame.layout, x.shape[0], lfe_gain), self.report)
+            self.held, self.layout = _Held(self.limit, _mapping(self.report, frame.layout, x.shape[0], lfe_gain),
+                                           self.report), layout
         ready = self.pending is not None and _place(self.clock, *self.pending, frame_time, self.held, self.sink)
+        if self.layout != () and layout != self.layout:  # this frame on: the weights of its layout
+            self.held.reweigh(_mapping(self.report, frame.layout, x.shape[0], lfe_gain))
+            self.layout = layout
         self.pending = (frame_time, x)
         return ready
 
@@ -208,6 +215,12 @@ class _Held:
         self.parts.append(x)
         self.n += x.shape[1]
         return self.n >= self.limit
+
+    def reweigh(self, weights: np.ndarray) -> None:
+        """Downmix the samples added from now on with ``weights`` (those held keep theirs)."""
+        if self.parts:
+            self.mono.append(self._run())
+        self.weights = weights
 
     def _run(self) -> np.ndarray:
         x = self.parts[0] if len(self.parts) == 1 else np.concatenate(self.parts, axis=1)

@@ -30,7 +30,7 @@ from autohaptics.shots import Boundaries, detect
 # anamorphic DVD's, ``media.frames``); a 3D film read from its first view (``video.stereo``).
 # 6: a transport stream read on its continuous clock, across its wrap and jumps, its pictures found at their
 # keyframes' bytes (``media.clock``); a picture decoded at another size than its stream's scaled to it
-# (``media.frames``).
+# (``media.frames``); a sound that changes layout mid-stream downmixed by each layout (``media.audio``).
 ANALYSIS_REVISION = 6
 
 
