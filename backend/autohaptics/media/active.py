@@ -25,7 +25,6 @@ import numpy as np
 
 from autohaptics.errors import MediaError
 from autohaptics.media import clock
-from autohaptics.media.clock import Clock
 from autohaptics.media.frames import Frame
 from autohaptics.media.probe import AudioReport, MediaInfo, decode_tolerant, norm_rotation, open_container, stream_by_index
 from autohaptics.media.stereo import MIN_SAMPLES, PACKINGS, SAME, SAME_FEW, halves, view_rect, views_alike
@@ -183,7 +182,7 @@ def _forward_lumas(info: MediaInfo, times: list[float]) -> list[np.ndarray]:
     return out
 
 
-def _next_keyframe(c, stream, seen: set, before_s: float, file_clock: Clock | None = None):
+def _next_keyframe(c, stream, seen: set, before_s: float, file_clock: clock.Clock | None = None):
     """The picture of the first keyframe packet read from ``c`` (after a seek) whose timestamp is
     not in ``seen`` (then added) and is before ``before_s`` (on the file's clock: ``file_clock``); None when
     there is none."""

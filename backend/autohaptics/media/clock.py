@@ -9,7 +9,7 @@ it ends (:func:`continuous_times`).
 
 Such a file has no index, and FFmpeg seeks in it by a search over its bytes that stops near the time
 asked for, not at the keyframe before it: the first picture decoded then may come seconds after that
-time, or none at all near the end. :func:`read_clock` reads the packets once (no decoding, a few ms per
+time, or none at all near the end. :func:`read_clock` reads the packets once (no decoding, about 30 ms a
 minute of film) and keeps each keyframe's time and byte, so :func:`seek` lands on the keyframe at or
 before a time, on a clock that jumps or not.
 """
