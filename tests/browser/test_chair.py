@@ -169,7 +169,9 @@ def test_the_editor_plays_on_the_virtual_chair(cpage, chair_api, chair_server, f
     wait_until(lambda: chair_api.get("/api/chair/settings").json()["comfort"] == {
         "scale": 0.8, "mute": {"back": False, "armrests": True, "seat": False, "heat": False, "fans": False}},
         "the panel's comfort settings reach the server")
-    assert pg.get_attribute("[data-testid=chair-mute-armrests]", "aria-pressed") == "true"
+    # the chip shows what the server answered (its answer may come a moment after the server has it)
+    pg.wait_for_function("() => document.querySelector('[data-testid=chair-mute-armrests]')"
+                         ".getAttribute('aria-pressed') === 'true'")
 
     seek_video(pg, 2.0)
     start = log_index(chair)

@@ -103,6 +103,8 @@ export class ChairPanel extends Emitter {
     this._unwatch = null;
     /** @type {Promise<void>|null} */
     this._settingsChain = null;
+    /** Settings changes sent and not yet answered: a status event meanwhile may hold older settings. */
+    this._settingsInFlight = 0;
     this._render();
   }
 
@@ -210,11 +212,14 @@ export class ChairPanel extends Emitter {
    * @param {{latency_ms?: number, comfort?: {scale?: number, mute?: Record<string, boolean>}}} change
    */
   putSettings(change) {
+    this._settingsInFlight += 1;
     this._settingsChain = (this._settingsChain || Promise.resolve()).then(async () => {
       try {
         const settings = await this.api.putChairSettings(change);
+        this._settingsInFlight -= 1;
         if (this.status) this._setStatus({ ...this.status, settings });
       } catch (err) {
+        this._settingsInFlight -= 1;
         toast(`The chair settings were not changed: ${errorText(err)}`, "error");
         if (this.status) this._renderSettings(this.status.settings, true);
       }
@@ -321,7 +326,7 @@ export class ChairPanel extends Emitter {
    * @param {boolean} force also overwrite a field the user is typing in
    */
   _renderSettings(settings, force) {
-    if (!settings) return;
+    if (!settings || (!force && this._settingsInFlight > 0)) return;
     if (force || document.activeElement !== this.latencyInput) {
       this.latencyInput.value = String(settings.latency_ms);
       this.latencyInput.removeAttribute("aria-invalid");
