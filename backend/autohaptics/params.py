@@ -57,12 +57,12 @@ class VideoParams(Record):
     prefetch : frames decoded ahead in a background thread, overlapping decoding with analysis
         (0 = decode in the calling thread).
     decode : "full" (every frame, exactly), "nonref" (default: FFmpeg skips non-reference frames, about half the
-        decoding work on H.264; the frames it decodes are exact), "fast" (also skips the deblocking filter) or
-        "sparse" (the fast preset: also every B-frame at 40 fps and up, so P-frames that referenced one come out
-        approximate; see :func:`media.iter_video`). With skipped frames the analysed frame is the decoded one
-        nearest the tick's centre and a flow pair ends on a decoded frame (``flow.min_span_frames``), timed by
-        its real interval. None is skipped in a variable-rate stream, at 29 to 40 fps but in "sparse" (a film's
-        repeats), nor after skipping has left two frames in a row out (MPEG-2, x265).
+        decoding work on H.264; the frames it decodes are exact), "fast" (also skips the deblocking filter) or "sparse"
+        (the fast preset: also every B-frame at 40 fps and up, so P-frames that referenced one come out approximate;
+        :func:`media.iter_video`). With skipped frames the analysed frame is the decoded one nearest the tick's centre
+        and a flow pair ends on a decoded frame (``flow.min_span_frames``), timed by its real interval. None is skipped
+        in a variable-rate stream, at 29-40 fps but in "sparse" (a film's repeats), from 40 fps where the pictures
+        repeat (``stats["frames"]["decode"]``), or after skipping left two frames in a row out (MPEG-2, x265).
     stride : ticks per analysed frame, 1..10 (default 1; the fast preset: 3): in groups of s ticks,
         the frame nearest the group's centre is analysed (plus its successor for flow) and every tick
         of the group gets its values (at most s x 50 ms off its own centre). Only with ``analysis="tick"``.

@@ -1,21 +1,19 @@
 """The repeated pictures of a frame-rate conversion, and a flow pair's time in the picture's own steps.
 
-A 24 or 25 fps film shown at 30 or 50 fps repeats a picture at a fixed period (24 -> 30: one frame
-in 5; 25 -> 30: one in 6; 25 -> 50: one in 2). Two frames two apart then hold one picture step or
-two, and motion divided by the stream's time alternates 0.6 / 1.2 x. :class:`Cadence` finds the
-repeats from each decoded frame's difference to the frame before (a coarse luma sample): a frame
-that differs far less than both its neighbours do is a repeat (where the cadence places one beside
-a still frame, far less than the other neighbour: a 24 fps film made 25 fps by repeating a picture a
-second, then shown at 30, puts two repeats side by side). A pair's time leaves out the intervals
-that end on a repeat, and three repeats at one period (a cadence) make each picture
-step last period / (period - 1) intervals: a pair of a 25 -> 30 fps conversion then reads its
-steps over 40 ms each, whether it takes in a repeat or not, and a stretch animated on twos reads
-as a 12 fps picture, as pairs of consecutive frames read it. Until three repeats are seen a pair
-reads its steps over the stream's intervals (1.2 x at 25 -> 30 fps, uniform too). A pair's last
-frame has no successor to be judged by yet: the video pass holds the pair one frame, and the
-cadence places a repeat where a frame cannot be judged. A still picture or a slow one differs
-from its neighbours too little, or too evenly, to be a repeat. docs/BENCHMARKS.md, "Screener
-encodes", fifth stop.
+A 24 or 25 fps film shown at another rate repeats its pictures: 25 -> 30 fps one frame in 6, 24 -> 50 each picture
+twice and every twelfth three times, 24 -> 59.94 (a US 720p broadcast) in runs of 2 and 3 in turn, 24 -> 120 five
+times. Two frames a fixed number apart then hold a varying number of picture steps, and motion divided by the
+stream's time reads up to 2.5 x where a pair ends on a picture's first frame. :class:`Cadence` judges each decoded
+frame from its difference to the frame before (a coarse luma sample): it is a repeat when that is coding noise (under
+``REPEAT_MAX``) and far less than the largest difference within ``REACH`` frames before it and the largest within
+``REACH`` frames after it both are (a run of up to ``REACH`` repeats has a step on either side within that reach; a
+picture that slows down or speeds up has no step on one side, so its small differences are steps; action beside a
+flash or a cut differs by more than noise). A frame is judged once ``REACH`` frames after it are seen. A pair's time
+counts the frames after its first that are steps, each lasting the picture's mean step over its last ``MEAN_STEPS``
+steps (frame interval x frames / steps of whole runs: 2.5 intervals at 24 -> 59.94, 1.2 at 25 -> 30, 2 on a
+stretch animated on twos); a frame that could not be judged (no frame right before it, a still picture) counts its
+own interval, which is what it lasts on average either way. docs/BENCHMARKS.md, "Screener encodes" (fifth stop)
+and "Stop 60".
 """
 
 from __future__ import annotations
@@ -24,9 +22,15 @@ from collections import deque
 
 import numpy as np
 
-MAX_PERIOD = 12  # frames; the longest cadence looked for (24 -> 25 fps repeats every 25th: not one)
-FLOOR = 0.1  # mean grey levels; neighbours' differences below this are too small to judge a repeat by
-_HISTORY_S = 2.0  # how far back the frames' repeat marks are kept, s
+REACH = 5  # frames on either side of a frame in which a step is looked for (24 fps at 120: runs of 5)
+MAX_STEP_FRAMES = 6.0  # the longest mean step, frame intervals (24 fps at 144 Hz)
+FLOOR = 1.0  # mean grey levels; steps around a frame below this are too small to judge a repeat by
+REPEAT_MAX = 2.5  # mean grey levels; a repeat differs by coding noise at most (beside a flash or a cut,
+# action's large differences are small)
+HISTORY_S = 2.0  # how far back the frames' judgements are kept, s
+MEAN_STEPS = 24  # the picture's latest steps the mean step is taken over (or the history's, where fewer)
+MIN_STEPS = 6  # steps judged in the history before their mean step replaces the frame interval
+WAIT_S = 1.0  # how long a pair waits for the mean step while fewer steps are judged, s
 
 
 class Cadence:
@@ -34,7 +38,7 @@ class Cadence:
 
     interval_s : the stream's nominal frame interval, s (0: unknown; the stream's time always).
     ratio : a frame is a repeat when its difference to the frame before is under ``ratio`` times
-        both neighbours' (0: never; the stream's time always, the thesis).
+        the level of the steps around it (0: never; the stream's time always, the thesis).
     """
 
     def __init__(self, interval_s: float, ratio: float):
@@ -42,10 +46,11 @@ class Cadence:
         self.ratio = float(ratio) if self.interval > 0 else 0.0
         self.count = 0  # frames seen
         self.found = 0  # repeats found
+        self.judged = 0  # frames judged (a repeat or a step)
         self._prev: tuple | None = None  # (time, sample) of the frame before
-        self._diffs: deque = deque(maxlen=3)  # differences of the last three frames to their frames before
-        self._repeats: deque = deque(maxlen=3)  # indices of the last repeats found
+        self._diffs: deque = deque(maxlen=2 * REACH + 1)  # recent frames' differences to their frames before
         self._frames: deque = deque()  # [index, time, interval to the frame before, repeat] of recent frames
+        self._step: tuple[int, float, int] = (-1, 1.0, 0)  # (frames seen, _mean() then)
 
     def add(self, time_s: float, sample: np.ndarray | None) -> None:
         """Take the next decoded frame: its time, s, and a coarse luma sample (None: unknown)."""
@@ -60,52 +65,101 @@ class Cadence:
         self._frames.append([i, time_s, time_s - self._prev[0] if self._prev else 0.0, None])
         self._prev = (time_s, sample)
         self._diffs.append(d)
-        while self._frames[0][1] < time_s - _HISTORY_S:
+        while len(self._frames) > REACH + 1 and self._frames[0][1] < time_s - HISTORY_S:
             self._frames.popleft()
-        if len(self._diffs) == 3 and None not in self._diffs:
-            j = i - 1  # the middle frame, judged now that both its neighbours are known
-            d0, d1, d2 = self._diffs
-            if min(d0, d2) > FLOOR:
-                repeat = d1 < self.ratio * min(d0, d2)
-            elif max(d0, d2) > FLOOR and self.predicted(j):  # a repeat of the film's own beside it
-                repeat = d1 < self.ratio * max(d0, d2)
-            else:
-                return
-            if len(self._frames) > 1:
-                self._frames[-2][3] = repeat
-            if repeat:
-                self._repeats.append(j)
-                self.found += 1
-            elif self.predicted(j):  # the cadence broke (an edit, a new rate): found again from scratch
-                self._repeats.clear()
+        if len(self._diffs) == 2 * REACH + 1:
+            for pos in range(1, REACH) if self.count == 2 * REACH + 1 else ():
+                self._judge(pos)  # the first frames, by the fewer frames before them
+            self._judge(REACH)  # the frame REACH frames back, now that the differences after it are known
 
-    def period(self) -> int:
-        """The cadence's period, frames, while one holds (the last three repeats equally apart), else 0."""
-        if len(self._repeats) < 3:
-            return 0
-        a, b, c = self._repeats
-        return c - b if 2 <= c - b <= MAX_PERIOD and b - a == c - b else 0
+    def finish(self) -> None:
+        """Judge the last frames, fewer than ``REACH`` frames from the end, by the frames after them there
+        are, or by the ones before alone where those hold no step (the file ends inside a run as often
+        as a picture slows down in its last frames)."""
+        if self.ratio <= 0:
+            return
+        for pos in range(max(0, len(self._diffs) - REACH), len(self._diffs)):
+            self._judge(pos, ended=True)
+        self._diffs.clear()
+        self._step = (-1, 1.0, 0)
 
-    def predicted(self, index: int) -> bool:
-        """Whether the cadence places a repeat at frame ``index`` (0-based, in decoding order)."""
-        p = self.period()
-        return bool(p) and (index - self._repeats[-1]) % p == 0
+    def _judge(self, pos: int, ended: bool = False) -> None:
+        """Judge the frame whose difference is ``self._diffs[pos]`` (``ended``: the last frames seen)."""
+        diffs = list(self._diffs)
+        before = [x for x in diffs[max(0, pos - REACH):pos] if x is not None]
+        after = [x for x in diffs[pos + 1:] if x is not None]
+        if diffs[pos] is None or not before or not (after or ended):
+            return
+        # the last frames: a file that ends inside a run has no step after them
+        level = min(max(before), max(after)) if after and (max(after) > FLOOR or not ended) else max(before)
+        if level <= FLOOR:
+            return
+        repeat = diffs[pos] < min(self.ratio * level, REPEAT_MAX)
+        self._frames[pos - len(diffs)][3] = repeat
+        self.found += repeat
+        self.judged += 1
+
+    @property
+    def settled_s(self) -> float:
+        """The time up to which pairs may be timed, s: the newest frame whose judgement is final (judged,
+        or never to be), or ``WAIT_S`` before it while the history holds fewer than ``MIN_STEPS`` judged
+        steps (the mean step still unknown: at 120 fps a pair's two steps would read as 2 intervals,
+        5 x); -inf before the first such frame."""
+        if not self.ratio or len(self._frames) <= REACH:
+            return -np.inf
+        t = self._frames[-1 - REACH][1]
+        return t if self._mean()[1] >= MIN_STEPS else t - WAIT_S
+
+    def step_s(self) -> float:
+        """The picture's mean step over the history, s: the frame interval x judged frames / steps
+        over the latest ``MEAN_STEPS`` steps (the frame interval until ``MIN_STEPS`` are judged), at most
+        ``MAX_STEP_FRAMES`` intervals."""
+        return self.interval * self._mean()[0]
+
+    def _mean(self) -> tuple[float, int]:
+        """The mean step over the latest ``MEAN_STEPS`` steps in the history, frame intervals, and the
+        steps it is taken over."""
+        if self._step[0] != self.count:
+            frames = runs = pending = 0  # whole runs (a step and the repeats after it) before the
+            started = False  # newest step, back to a frame not judged
+            for _, _, _, rep in reversed(self._frames):
+                if started and rep is None:
+                    break
+                if started and rep:
+                    pending += 1
+                elif started:
+                    frames, runs, pending = frames + pending + 1, runs + 1, 0
+                    if runs == MEAN_STEPS:
+                        break
+                started = started or rep is False
+            mean = min(frames / runs, MAX_STEP_FRAMES) if runs >= MIN_STEPS else 1.0
+            self._step = (self.count, mean, runs)
+        return self._step[1], self._step[2]
+
+    def least_span_s(self, steps: float) -> float:
+        """A flow pair's least span for ``steps`` of the picture's steps, s: ``steps`` frame intervals
+        where each frame is a step, else to the frame that ends ``steps`` + 1/2 steps (at 24 -> 59.94
+        fps, 1.5 steps: 5 frames, always two of the picture's steps, as 2 frames are at 24 fps)."""
+        step = self.step_s() if self.ratio else self.interval
+        return steps * self.interval if step <= self.interval else (steps + 0.5) * step - 0.5 * self.interval
 
     def pair_time(self, t0: float, t1: float) -> float:
-        """A flow pair's time from a frame at ``t0`` to one at ``t1``, s: the intervals of the frames
-        after the first that are not repeats (as judged, or where a frame could not be judged, as
-        the cadence places them), times period / (period - 1) while a cadence holds (each picture
-        step then lasts that many frame intervals); ``t1 - t0`` when none is left."""
+        """A flow pair's time from a frame at ``t0`` to one at ``t1``, s: each frame after the first
+        that is a step lasts :meth:`step_s`, a repeat nothing, a frame not judged its own interval;
+        ``t1 - t0`` when that leaves nothing (every frame a repeat)."""
         span = max(t1 - t0, 1e-3)
         if self.ratio <= 0:
             return span
-        moving = 0.0
-        for i, t, dt, rep in reversed(self._frames):  # newest first: a pair spans the last few frames
+        step = None
+        total = 0.0
+        for _, t, dt, rep in reversed(self._frames):  # newest first: a pair spans the last few frames
             if t <= t0:
                 break
-            if t <= t1 and not (rep if rep is not None else self.predicted(i)):
-                moving += dt
-        if moving <= 1e-3:
-            return span
-        p = self.period()
-        return moving * p / (p - 1) if p else moving
+            if t > t1 or rep:
+                continue
+            if rep is None:
+                total += dt
+            else:
+                step = self.step_s() if step is None else step
+                total += step
+        return total if total > 1e-3 else span

@@ -46,14 +46,15 @@ class FlowParams:
         frames, 3:2 pulldown to 60 fps, animation on twos, also where the decoder skips the
         non-reference frames between; 0 = always the next frame, the thesis).
     min_span_frames : a flow pair's successor is the first decoded frame at least this many frame
-        intervals (the stream's average rate; a variable-rate stream: its next frame) after its first,
-        0..10 (an analysed frame always ends the pair before it). 0 = the next decoded frame (the
-        thesis); 1.5 (default) pairs frames two apart whether or not the decoder skips the non-reference
-        frames (quick flutter reads otherwise over one): docs/BENCHMARKS.md, "Screener encodes".
-    cadence_ratio : a frame that differs from the frame before by under this share of what both its
-        neighbours differ is a repeat (a frame-rate conversion): a flow pair's time counts the
-        picture's steps, not the repeats (:mod:`autohaptics.airflow.cadence`); 0..1 (default 0.35;
-        0 = the stream's time, the thesis).
+        intervals (the stream's average rate; a variable-rate stream: its next frame; under a repeat
+        cadence this many of the picture's steps, :meth:`Cadence.least_span_s`) after its first, 0..10
+        (an analysed frame always ends the pair before it). 0 = the next decoded frame (the thesis); 1.5
+        (default) pairs frames two apart whether or not the decoder skips the non-reference frames
+        (quick flutter reads otherwise over one): docs/BENCHMARKS.md, "Screener encodes".
+    cadence_ratio : a frame that differs from the frame before by under this share of the steps
+        around it is a repeat (a frame-rate conversion): a flow pair's time counts the picture's
+        steps, not the repeats (:mod:`autohaptics.airflow.cadence`); 0..1 (default 0.35; 0 = the
+        stream's time, the thesis).
     """
 
     STAGE: ClassVar[str] = ANALYSIS

@@ -2,17 +2,17 @@
 
 Each source (the shared film clips, or any file given) is written again as each :data:`VARIANTS` row says:
 re-encoded as it is (H.264); letterboxed and pillarboxed; at half and double size, and at a size that changes every
-six seconds (an adaptive stream's recording); at 23.976, 25, 29.97 and 50 fps and at a variable frame rate; in 10
-bits (H.264, and a ProRes master with its sound in one stream or, as editing suites write it, each channel in a mono
-track); as an HDR10 grade; as HEVC and AV1; as DVDs (NTSC telecined, coded progressive and interlaced; PAL
-anamorphic); as 3D films, their two views packed side by side or top and bottom; as VP9 and H.264 screeners; with
-its sound as mono, stereo (Opus, and AAC from FFmpeg's downmix), 5.1 and 7.1, as AC-3 carrying Dolby's dynamic range
-words, and behind a commentary and a compatibility stereo track; cut to start mid-score, and as a broadcast
-recording begun mid-GOP on a clock that wraps. Every row's timeline is compared with the source's own (the clean
-variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what differs is the start of
-the file, not the context a whole film gives its film-relative levels): onset F1, fan-tick F1, tolerant fan IoU and
-temperature MAE against :data:`TARGETS`, and a cut's largest vibration in its first 0.5 s where the film itself does
-not vibrate. With ``--speed`` each file's ``generate`` and its bare decode
+six seconds (an adaptive stream's recording); at 23.976, 25, 29.97, 50, 59.94 and 120 fps and at a variable frame
+rate; in 10 bits (H.264, and a ProRes master with its sound in one stream or, as editing suites write it, each
+channel in a mono track); as an HDR10 grade; as HEVC and AV1; as DVDs (NTSC telecined, coded progressive and
+interlaced; PAL anamorphic); as 3D films, their two views packed side by side or top and bottom; as VP9 and H.264
+screeners; with its sound as mono, stereo (Opus, and AAC from FFmpeg's downmix), 5.1 and 7.1, as AC-3 carrying
+Dolby's dynamic range words, and behind a commentary and a compatibility stereo track; cut to start mid-score, and
+as a broadcast recording begun mid-GOP on a clock that wraps. Every row's timeline is compared with the source's own
+(the clean variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what differs is
+the start of the file, not the context a whole film gives its film-relative levels): onset F1, fan-tick F1, tolerant
+fan IoU and temperature MAE against :data:`TARGETS`, and a cut's largest vibration in its first 0.5 s where the film
+itself does not vibrate. With ``--speed`` each file's ``generate`` and its bare decode
 (:func:`~autohaptics.bench.decode.bare_decode`) also run as whole processes, and the row gives their ratio. The
 digital-silence pair (booms and blips over exact silence, and over a -100 dBFS floor) is a row of its own: the
 silence variant against the floor variant, and the ratio of their generate times.
@@ -151,6 +151,9 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("25 fps", "rate", options={"fps": 25}),
     Variant("29.97 fps", "rate", options={"fps": Fraction(30000, 1001)}),
     Variant("50 fps", "rate", options={"fps": 50}),
+    Variant("59.94 fps (a 720p broadcast: each picture repeated 2 and 3 times in turn)", "rate",
+            options={"fps": Fraction(60000, 1001)}),
+    Variant("120 fps (each picture repeated 5 times)", "rate", options={"fps": 120}),
     Variant("variable frame rate", "rate", options={"conversion": "vfr"}),
     Variant("10-bit H.264", "depth", options={"pix_fmt": "yuv420p10le"}),
     Variant("ProRes 422 HQ master, 24-bit PCM", "depth", ".mov",

@@ -23,8 +23,8 @@ DECODE_MODES = ("full", "nonref", "fast", "sparse")
 SPARSE_MIN_FPS = 40.0
 # from this rate up to SPARSE_MIN_FPS a stream may hold a film shown by repeated pictures (24 or 25 fps
 # at 30): "nonref" and "fast" decode every frame there, since the repeats are told from each frame's
-# difference to the one before (airflow.cadence) and a skipped B-frame hides them. From 40 fps up
-# decoding every frame costs more than it gains (docs/BENCHMARKS.md, "The material matrix").
+# difference to the one before (airflow.cadence) and a skipped B-frame hides them. From 40 fps up the
+# pipeline asks for every frame only where a few stretches show repeats (pipeline.picture.decode_mode).
 REPEAT_MIN_FPS = 29.0
 # the interpreter's switch interval while a decoding thread runs beside the caller, s: each return of
 # that thread from FFmpeg needs the interpreter lock, which a caller busy in Python otherwise keeps

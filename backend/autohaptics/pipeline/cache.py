@@ -31,7 +31,9 @@ from autohaptics.shots import Boundaries, detect
 # 6: a transport stream read on its continuous clock, across its wrap and jumps, its pictures found at their
 # keyframes' bytes (``media.clock``); a picture decoded at another size than its stream's scaled to it
 # (``media.frames``); a sound that changes layout mid-stream downmixed by each layout (``media.audio``).
-ANALYSIS_REVISION = 6
+# 7: repeats told in runs and a pair timed by the picture's mean step, its least span in steps (``airflow.cadence``);
+# every frame decoded from 40 fps up where the pictures repeat (``pipeline.picture.decode_mode``).
+ANALYSIS_REVISION = 7
 
 
 @dataclass

@@ -1,9 +1,12 @@
 """What the video pass reads of each frame: the rectangle (the active picture inside black bars, a 3D
-film's first view) and the aspect on screen its proxies keep."""
+film's first view) and the aspect on screen its proxies keep; and which frames it decodes."""
 
 from __future__ import annotations
 
+from itertools import islice
+
 from autohaptics import media
+from autohaptics.airflow.cadence import Cadence
 from autohaptics.media.stereo import view_aspect, view_rect
 from autohaptics.params import GenerateParams
 
@@ -33,3 +36,40 @@ def shown_aspect(info: media.MediaInfo, area: tuple[int, int, int, int] | None, 
         return None
     w, h = area[2:] if area is not None else info.video.display_size
     return view_aspect(info.video.shown_aspect(w, h), info.video.shown_aspect(), packing)
+
+
+SAMPLE_AT = (0.25, 0.5, 0.75)  # where the stretches :func:`repeat_share` decodes begin, fractions of the film
+SAMPLE_S = 0.5  # each stretch's length, s
+CONVERSION_SHARE = 0.3  # repeats among the judged frames from which a stream is a film's conversion
+MIN_JUDGED = 24  # judged frames a share needs (still pictures judge none)
+
+
+def decode_mode(info: media.MediaInfo, params: GenerateParams, need_flow: bool) -> str:
+    """``video.decode``, but "full" for a stream of ``media.SPARSE_MIN_FPS`` and up that repeats its
+    pictures (a 24 fps film at 50, 59.94 or 120 fps: :func:`repeat_share` at least ``CONVERSION_SHARE``)
+    where the fans want motion: the repeats are told from each frame's difference to the one before
+    (``airflow.cadence``), which skipping the non-reference frames hides. Below that rate "nonref"
+    already decodes every frame of a 29-40 fps stream (``media.video.REPEAT_MIN_FPS``)."""
+    decode, v = params.video.decode, info.video
+    if not need_flow or decode not in ("nonref", "fast") or v is None or v.variable_rate \
+            or v.fps < media.SPARSE_MIN_FPS or params.flow.cadence_ratio <= 0:
+        return decode
+    return "full" if repeat_share(info, params.flow.cadence_ratio) >= CONVERSION_SHARE else decode
+
+
+def repeat_share(info: media.MediaInfo, ratio: float) -> float:
+    """The share of repeats (``airflow.cadence``, ``ratio``) among the judged frames of ``SAMPLE_S``
+    stretches of every frame decoded at ``SAMPLE_AT``; 0 where fewer than ``MIN_JUDGED`` are judged.
+    A quarter of a second of decoding at 1080p60."""
+    fps = float(info.video.fps)
+    found = judged = 0
+    for at in SAMPLE_AT:
+        cadence = Cadence(1.0 / fps, ratio)
+        frames = media.iter_video(info.path, info=info, decode="full", start_s=at * info.duration_s)
+        try:
+            for frame in islice(frames, max(3, round(SAMPLE_S * fps))):
+                cadence.add(frame.time_s, frame.luma_sample())
+        finally:
+            frames.close()
+        found, judged = found + cadence.found, judged + cadence.judged
+    return found / judged if judged >= MIN_JUDGED else 0.0

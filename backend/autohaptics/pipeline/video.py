@@ -25,6 +25,7 @@ tick of a ``video.stride`` group) holds the values of the analysed tick before i
 from __future__ import annotations
 
 import time
+from collections import deque
 from dataclasses import dataclass, field, replace
 
 import cv2
@@ -40,7 +41,7 @@ from autohaptics.imaging import resized
 from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.pairs import PairJudge
-from autohaptics.pipeline.picture import active_area, shown_aspect
+from autohaptics.pipeline.picture import active_area, decode_mode, shown_aspect
 from autohaptics.pipeline.saliency_queue import LaterMask, SaliencyQueue
 from autohaptics.pipeline.ticks import TickSums, centre_frames, hold_missing
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel
@@ -129,7 +130,7 @@ def video_pass(info: media.MediaInfo, n: int, *, params: GenerateParams, need_sa
     vp = None
     try:
         vp = _Pass(info, n, params, need_saliency, need_flow, need_colour, cancel=cancel)
-        stream = media.iter_video(info.path, info=info, prefetch=params.video.prefetch, decode=params.video.decode,
+        stream = media.iter_video(info.path, info=info, prefetch=params.video.prefetch, decode=vp.decode,
                                   prepare=vp.prepare, crop=vp.area, shown_aspect=vp.shown_aspect)
         duration = max(info.duration_s, 1e-9)
         for frame, centre_tick in centre_frames(vp.timed(stream), n, int(params.video.stride)):
@@ -156,6 +157,8 @@ class _Pass:
         self.area, self.stereo = active_area(info, params)
         self.shown_aspect = shown_aspect(info, self.area, self.stereo)
         self.area_s = time.perf_counter() - t0
+        self.decode = decode_mode(info, params, need_flow)  # the frames decoded: every one for a film's conversion
+        self.decode_s = time.perf_counter() - t0 - self.area_s
         self.frame_size = tuple(int(v) for v in info.video.display_size) if info.video is not None else (0, 0)
         flow_params = params.flow
         if info.video is not None:  # the gray proxy's width follows the picture's (FlowParams.width_for)
@@ -194,7 +197,7 @@ class _Pass:
         fps = float(info.video.fps) if info.video is not None and info.video.fps else 0.0
         # a pair's least span, s; a variable-rate stream has no frame period to span: its next frame
         self.min_span_s = float(flow_params.min_span_frames) / fps if fps > 0 and not info.video.variable_rate else 0.0
-        self.held = None  # a flow pair waiting for the frame after its successor (cadence)
+        self.held: deque = deque()  # flow pairs waiting for their successors to be judged (cadence), oldest first
         self.between = None  # (frame, colour signature or None): the last pair's successor, if not analysed
         self.spread = 0  # changes between two ticks' frames read as a cut but spread over both steps
         self.cadence = Cadence(1.0 / fps if fps > 0 else 0.0, flow_params.cadence_ratio if need_flow else 0.0)
@@ -218,13 +221,16 @@ class _Pass:
         self.last_time = frame.time_s
         if self.cadence.ratio:
             self.cadence.add(frame.time_s, frame.luma_sample())
-            if self.held is not None:  # the held pair's successor is judged now (a repeat or not)
-                held, self.held = self.held, None
-                self._motion(*held)
+            settled = self.cadence.settled_s
+            while self.held and self.held[0][1].time_s <= settled:  # its successor is judged now (a repeat or not)
+                self._motion(*self.held.popleft())
         k = min(int(tick_of_time(frame.time_s)), self.n - 1)
         analyse_this = k >= 0 and (centre_tick is not None or self.every)
-        # a successor closer than the pair's least span (flow.min_span_frames) is passed over unread
-        is_successor = self.pending is not None and (analyse_this or frame.time_s - self.pending[4] >= self.min_span_s)
+        # a successor closer than the pair's least span (flow.min_span_frames, in the picture's steps
+        # under a repeat cadence) is passed over unread
+        span = self.cadence.least_span_s(self.flow_params.min_span_frames) if self.min_span_s and self.cadence.ratio \
+            else self.min_span_s
+        is_successor = self.pending is not None and (analyse_this or frame.time_s - self.pending[4] >= span)
         if not (analyse_this or is_successor):
             return
         if centre_tick is not None:
@@ -260,8 +266,9 @@ class _Pass:
         """The waiting flow pair's motion, now that its successor frame is here; or, when that frame
         repeats the pair's first one (a frame-rate conversion, pulldown), wait for the next frame
         (``flow.repeat_wait_s``; an analysed frame starts a pair of its own, so it never waits).
-        With ``flow.cadence_ratio`` the pair is held until the next frame tells whether its
-        successor is a repeat (:mod:`autohaptics.airflow.cadence`): its time depends on that."""
+        With ``flow.cadence_ratio`` the pair is held until the frames after its successor tell
+        whether that is a repeat (:mod:`autohaptics.airflow.cadence`, ``REACH`` frames): its time
+        depends on that."""
         pgray, pt = self.pending[1], self.pending[4]
         if not analysed and frame.time_s - pt < self.flow_params.repeat_wait_s and \
                 self.stages["static"].run(is_static, pgray, gray, params=self.params.airflow):
@@ -270,7 +277,7 @@ class _Pass:
         pair, self.pending = (self.pending, frame, gray, sig), None
         self.between = None if analysed else (frame, sig)
         if self.cadence.ratio:
-            self.held = pair
+            self.held.append(pair)
         else:
             self._motion(*pair)
 
@@ -359,9 +366,9 @@ class _Pass:
     def finish(self) -> VideoAnalysis:
         """The per-tick results with their stats (ticks held, skipped, computed per stage)."""
         out, n = self.out, self.n
-        if self.held is not None:
-            held, self.held = self.held, None  # no decoded frame outlives the pass
-            self._motion(*held)
+        self.cadence.finish()
+        while self.held:  # no decoded frame outlives the pass
+            self._motion(*self.held.popleft())
         self.pairs.finish()
         self.saliency.finish(n)
         self.acc.finish()
@@ -388,7 +395,8 @@ class _Pass:
         out.stats["flow"]["cadence_repeats"] = int(self.cadence.found)
         out.stats["cuts"].update({"cuts": int(out.cut.sum()), "spread": int(self.spread)})
         out.stats["frames"] = {"ticks_with_frame": int(out.frame_mask.sum()), "ticks": n,
-                               "last_time_s": round(self.last_time, 6)}
+                               "last_time_s": round(self.last_time, 6), "decode": self.decode,
+                               "decode_choice_s": round(self.decode_s, 4)}
         rect = self.area if self.area is not None else (0, 0, *self.frame_size)
         out.stats["active_area"] = {"rect": [int(v) for v in rect], "frame": list(self.frame_size),
                                     "mode": self.params.video.active_area, "stereo": self.stereo or "2d",
@@ -416,7 +424,7 @@ def frame_weights(info: media.MediaInfo, n: int, ticks: np.ndarray, *, params: G
     breaks = np.flatnonzero(np.diff(targets) * TICK_S > group_s) + 1
     for run in np.split(targets, breaks) if targets.size else []:
         first, last = int(run[0]), int(run[-1])
-        stream = media.iter_video(info.path, info=info, decode=params.video.decode,
+        stream = media.iter_video(info.path, info=info, decode=vp.decode,
                                   start_s=max(0.0, (first - vp.stride - 1) * TICK_S), crop=vp.area,
                                   shown_aspect=vp.shown_aspect)
         try:
