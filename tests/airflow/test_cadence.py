@@ -52,7 +52,7 @@ def judged_pairs(content_fps: int, stream_fps: float, seconds: float, span: int)
             yield a / stream_fps, cad.pair_time(a / stream_fps, b / stream_fps) / steps
 
 
-@pytest.mark.parametrize("content_fps,stream_fps", [(25, 30), (24, 30), (24, 25), (25, 50), (24, 50),
+@pytest.mark.parametrize("content_fps,stream_fps", [(25, 30), (24, 30), (25, 50), (24, 50),
                                                     (24, 60000 / 1001), (24, 120)])
 def test_a_conversion_times_every_pair_by_its_picture_steps(content_fps, stream_fps):
     """One repeat a period (25 -> 30), runs of two with a three now and then (24 -> 50), of two and
@@ -64,6 +64,16 @@ def test_a_conversion_times_every_pair_by_its_picture_steps(content_fps, stream_
         assert len(pairs) > 20 and all(0.92 <= r <= 1.08 for _, r in pairs), (span, pairs)
         # from 1 s on the mean step is taken over MEAN_STEPS of the picture's steps
         assert all(0.96 <= r <= 1.04 for t, r in pairs if t >= 1.0), (span, pairs)
+
+
+def test_a_repeat_every_25th_frame_is_a_picture_held():
+    """24 -> 25 fps (one repeat in 25 frames, under MIN_REPEATS) reads as a picture held now and then
+    in a stream of its own rate: a repeat lasts nothing, each step its own interval (4 % short)."""
+    cad = Cadence(1 / 25, 0.35)
+    pairs = [(t, r) for t, r in judged_pairs(24, 25, 4.0, 2) if t >= 0.1]
+    assert pairs and all(0.95 <= r <= 1.0 + 1e-9 for _, r in pairs), pairs
+    feed(cad, shown(24, 25, 100), 25)
+    assert cad.found == 3 and cad.step_s() == pytest.approx(1 / 25)
 
 
 def test_a_film_that_repeats_pictures_of_its_own_is_timed_by_its_own_steps_at_30_fps():
@@ -162,6 +172,22 @@ def test_a_picture_at_its_own_rate_after_a_conversion_reads_the_streams_time_aga
     times = feed(cad, [pics[-1] + 1 + j for j in range(70)], 30, start=60)  # then a picture every frame
     assert cad.step_s() == pytest.approx(1 / 30)
     assert cad.pair_time(times[60], times[62]) == pytest.approx(2 / 30)
+
+
+def test_a_variable_rate_stream_keeps_its_own_intervals():
+    """Frames 0.8-1.4 nominal intervals apart, a picture held one frame longer now and then (a 24 fps
+    film made 25 fps, then recorded at a variable rate): a step lasts its own interval, a repeat
+    nothing (the mean step of a constant-rate conversion would stretch every step by 8 frames in 7)."""
+    rng = np.random.default_rng(2)
+    times = np.cumsum(rng.uniform(0.8, 1.4, 60)) / 24
+    pics = [j - j // 8 for j in range(60)]  # frames 8, 16, ... repeat the frame before
+    cad = Cadence(1 / 24, 0.35, variable=True)
+    for t, k in zip(times, pics):
+        cad.add(float(t), picture(k, step=1))
+    assert cad.found >= 4 and cad.judged > 40
+    for a in (38, 40, 44):  # pairs of 3 frames, one of them a repeat (frames 40 and 48) or none
+        steps = sum(times[j] - times[j - 1] for j in range(a + 1, a + 4) if pics[j] != pics[j - 1])
+        assert cad.pair_time(times[a], times[a + 3]) == pytest.approx(steps), a
 
 
 def test_off_or_without_a_frame_rate_the_pair_time_is_the_span():

@@ -4,16 +4,16 @@ A 24 or 25 fps film shown at another rate repeats its pictures: 25 -> 30 fps one
 twice and every twelfth three times, 24 -> 59.94 (a US 720p broadcast) in runs of 2 and 3 in turn, 24 -> 120 five
 times. Two frames a fixed number apart then hold a varying number of picture steps, and motion divided by the
 stream's time reads up to 2.5 x where a pair ends on a picture's first frame. :class:`Cadence` judges each decoded
-frame from its difference to the frame before (a coarse luma sample): it is a repeat when that is coding noise (under
-``REPEAT_MAX``) and far less than the largest difference within ``REACH`` frames before it and the largest within
-``REACH`` frames after it both are (a run of up to ``REACH`` repeats has a step on either side within that reach; a
-picture that slows down or speeds up has no step on one side, so its small differences are steps; action beside a
-flash or a cut differs by more than noise). A frame is judged once ``REACH`` frames after it are seen. A pair's time
-counts the frames after its first that are steps, each lasting the picture's mean step over its last ``MEAN_STEPS``
-steps (frame interval x frames / steps of whole runs: 2.5 intervals at 24 -> 59.94, 1.2 at 25 -> 30, 2 on a
-stretch animated on twos); a frame that could not be judged (no frame right before it, a still picture) counts its
-own interval, which is what it lasts on average either way. docs/BENCHMARKS.md, "Screener encodes" (fifth stop)
-and "Stop 60".
+frame from its difference to the frame before (a coarse luma sample): it is a repeat when that is coding noise
+(under ``REPEAT_MAX``) and far less than the largest difference within ``REACH`` frames before it and the largest
+within ``REACH`` frames after it both are (a run of up to ``REACH`` repeats has a step on either side within that
+reach; a picture that slows down or speeds up has no step on one side, so its small differences are steps; action
+beside a flash or a cut differs by more than noise). A frame is judged once ``REACH`` frames after it are seen. A
+pair's time counts the frames after its first that are steps, each lasting its own interval times the picture's mean
+step over its last ``MEAN_STEPS`` steps (frames / steps of whole runs: 2.5 at 24 -> 59.94, 1.2 at 25 -> 30, 2 on a
+stretch animated on twos, about 1 in a variable-rate stream, whose intervals are its own); a frame that could not be
+judged (no frame right before it, a still picture) counts its own interval, which is what it lasts on average either
+way. docs/BENCHMARKS.md, "Screener encodes" (fifth stop) and "Stop 60".
 """
 
 from __future__ import annotations
@@ -24,11 +24,12 @@ import numpy as np
 
 REACH = 5  # frames on either side of a frame in which a step is looked for (24 fps at 120: runs of 5)
 MAX_STEP_FRAMES = 6.0  # the longest mean step, frame intervals (24 fps at 144 Hz)
-FLOOR = 1.0  # mean grey levels; steps around a frame below this are too small to judge a repeat by
+FLOOR = 0.5  # mean grey levels; steps around a frame below this are too small to judge a repeat by
 REPEAT_MAX = 2.5  # mean grey levels; a repeat differs by coding noise at most (beside a flash or a cut,
 # action's large differences are small)
 HISTORY_S = 2.0  # how far back the frames' judgements are kept, s
 MEAN_STEPS = 24  # the picture's latest steps the mean step is taken over (or the history's, where fewer)
+MIN_REPEATS = 1 / 12  # repeats per step under which a stretch holds no conversion (a picture held now and then)
 MIN_STEPS = 6  # steps judged in the history before their mean step replaces the frame interval
 WAIT_S = 1.0  # how long a pair waits for the mean step while fewer steps are judged, s
 
@@ -39,11 +40,14 @@ class Cadence:
     interval_s : the stream's nominal frame interval, s (0: unknown; the stream's time always).
     ratio : a frame is a repeat when its difference to the frame before is under ``ratio`` times
         the level of the steps around it (0: never; the stream's time always, the thesis).
+    variable : a variable-rate stream: its frames hold no conversion's runs, so a step lasts its own
+        interval (the mean step is one), and a repeat (a picture held) nothing.
     """
 
-    def __init__(self, interval_s: float, ratio: float):
+    def __init__(self, interval_s: float, ratio: float, variable: bool = False):
         self.interval = float(interval_s) if interval_s > 0 and np.isfinite(interval_s) else 0.0
         self.ratio = float(ratio) if self.interval > 0 else 0.0
+        self.variable = bool(variable)
         self.count = 0  # frames seen
         self.found = 0  # repeats found
         self.judged = 0  # frames judged (a repeat or a step)
@@ -132,25 +136,27 @@ class Cadence:
                     if runs == MEAN_STEPS:
                         break
                 started = started or rep is False
-            mean = min(frames / runs, MAX_STEP_FRAMES) if runs >= MIN_STEPS else 1.0
+            mean = min(frames / runs, MAX_STEP_FRAMES) if runs >= MIN_STEPS and not self.variable else 1.0
+            mean = mean if mean >= 1.0 + MIN_REPEATS else 1.0
             self._step = (self.count, mean, runs)
         return self._step[1], self._step[2]
 
     def least_span_s(self, steps: float) -> float:
         """A flow pair's least span for ``steps`` of the picture's steps, s: ``steps`` frame intervals
-        where each frame is a step, else to the frame that ends ``steps`` + 1/2 steps (at 24 -> 59.94
-        fps, 1.5 steps: 5 frames, always two of the picture's steps, as 2 frames are at 24 fps)."""
+        where each frame is a step, else to the frame that ends ``steps`` + 1/2 steps, a quarter interval
+        spared (at 24 -> 59.94 fps, 1.5 steps: 5 frames, always two of the picture's steps, as 2 frames
+        are at 24 fps; at 24 -> 30, 2 frames as without repeats)."""
         step = self.step_s() if self.ratio else self.interval
-        return steps * self.interval if step <= self.interval else (steps + 0.5) * step - 0.5 * self.interval
+        return steps * self.interval if step <= self.interval else (steps + 0.5) * step - 0.75 * self.interval
 
     def pair_time(self, t0: float, t1: float) -> float:
         """A flow pair's time from a frame at ``t0`` to one at ``t1``, s: each frame after the first
-        that is a step lasts :meth:`step_s`, a repeat nothing, a frame not judged its own interval;
-        ``t1 - t0`` when that leaves nothing (every frame a repeat)."""
+        that is a step lasts its interval times the mean step (:meth:`step_s` in intervals), a repeat
+        nothing, a frame not judged its own interval; ``t1 - t0`` when that leaves nothing."""
         span = max(t1 - t0, 1e-3)
         if self.ratio <= 0:
             return span
-        step = None
+        mean = None
         total = 0.0
         for _, t, dt, rep in reversed(self._frames):  # newest first: a pair spans the last few frames
             if t <= t0:
@@ -160,6 +166,6 @@ class Cadence:
             if rep is None:
                 total += dt
             else:
-                step = self.step_s() if step is None else step
-                total += step
+                mean = self._mean()[0] if mean is None else mean
+                total += dt * mean
         return total if total > 1e-3 else span

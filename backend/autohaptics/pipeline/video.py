@@ -200,7 +200,8 @@ class _Pass:
         self.held: deque = deque()  # flow pairs waiting for their successors to be judged (cadence), oldest first
         self.between = None  # (frame, colour signature or None): the last pair's successor, if not analysed
         self.spread = 0  # changes between two ticks' frames read as a cut but spread over both steps
-        self.cadence = Cadence(1.0 / fps if fps > 0 else 0.0, flow_params.cadence_ratio if need_flow else 0.0)
+        self.cadence = Cadence(1.0 / fps if fps > 0 else 0.0, flow_params.cadence_ratio if need_flow else 0.0,
+                               variable=info.video is not None and info.video.variable_rate)
 
     def prepare(self, frame: media.Frame) -> None:
         """Make a frame's gray, RGB and saliency luma planes ahead, in the decoding thread (the same
