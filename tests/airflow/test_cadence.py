@@ -100,9 +100,11 @@ def test_a_pair_is_timed_by_its_successor_as_judged():
     pics = shown(24, 30, 18)  # repeats at frames 6 and 11 (and 1: no step before it to judge it by)
     cad = Cadence(1 / 30, 0.35)
     times = feed(cad, pics[:10], 30)
-    # fewer than MIN_STEPS steps judged: pairs wait up to WAIT_S for the mean step
-    assert cad.settled_s == pytest.approx(times[9 - REACH] - WAIT_S)
-    times += feed(cad, pics[10:], 30, start=10)
+    assert cad.judged == 0 and cad.settled_s == times[9 - REACH]  # nothing judged: nothing to wait for
+    times += feed(cad, pics[10:13], 30, start=10)
+    # frames judged, but fewer than MIN_STEPS whole runs: pairs wait up to WAIT_S for the mean step
+    assert cad.judged and cad.settled_s == pytest.approx(times[12 - REACH] - WAIT_S)
+    times += feed(cad, pics[13:], 30, start=13)
     assert cad.found == 2 and cad.settled_s == times[17 - REACH]
     # each step lasts the mean step (whole runs of the picture: 9 frames in 7), a repeat nothing
     step = cad.step_s()

@@ -55,6 +55,7 @@ class Cadence:
         self._diffs: deque = deque(maxlen=2 * REACH + 1)  # recent frames' differences to their frames before
         self._frames: deque = deque()  # [index, time, interval to the frame before, repeat] of recent frames
         self._step: tuple[int, float, int] = (-1, 1.0, 0)  # (frames seen, _mean() then)
+        self._judged_s = -np.inf  # the time of the newest frame judged
 
     def add(self, time_s: float, sample: np.ndarray | None) -> None:
         """Take the next decoded frame: its time, s, and a coarse luma sample (None: unknown)."""
@@ -102,17 +103,20 @@ class Cadence:
         self._frames[pos - len(diffs)][3] = repeat
         self.found += repeat
         self.judged += 1
+        self._judged_s = self._frames[pos - len(diffs)][1]
 
     @property
     def settled_s(self) -> float:
         """The time up to which pairs may be timed, s: the newest frame whose judgement is final (judged,
-        or never to be), or ``WAIT_S`` before it while the history holds fewer than ``MIN_STEPS`` judged
-        steps (the mean step still unknown: at 120 fps a pair's two steps would read as 2 intervals,
-        5 x); -inf before the first such frame."""
+        or never to be), or ``WAIT_S`` before it while the history holds judged frames but fewer than
+        ``MIN_STEPS`` whole runs (the mean step still unknown: at 120 fps a pair's two steps would read
+        as 2 intervals, 5 x); -inf before the first such frame. A stream whose frames are not judged (a
+        decode that skips frames, a still picture) holds its pairs no longer than ``REACH`` frames."""
         if not self.ratio or len(self._frames) <= REACH:
             return -np.inf
         t = self._frames[-1 - REACH][1]
-        return t if self._mean()[1] >= MIN_STEPS else t - WAIT_S
+        waits = self._mean()[1] < MIN_STEPS and self._judged_s >= t - HISTORY_S  # not where nothing is judged
+        return t - WAIT_S if waits else t
 
     def step_s(self) -> float:
         """The picture's mean step over the history, s: the frame interval x judged frames / steps
