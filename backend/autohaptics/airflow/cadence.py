@@ -106,6 +106,12 @@ class Cadence:
         self._judged_s = self._frames[pos - len(diffs)][1]
 
     @property
+    def judges_newest(self) -> bool:
+        """Whether the newest frame will be judged: its difference to the frame before is known (a decode
+        that skipped the frames between gives none, and a pair ending on it need not wait)."""
+        return bool(self.ratio) and bool(self._diffs) and self._diffs[-1] is not None
+
+    @property
     def settled_s(self) -> float:
         """The time up to which pairs may be timed, s: the newest frame whose judgement is final (judged,
         or never to be), or ``WAIT_S`` before it while the history holds judged frames but fewer than

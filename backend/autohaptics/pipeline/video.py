@@ -146,6 +146,13 @@ def video_pass(info: media.MediaInfo, n: int, *, params: GenerateParams, need_sa
         cv2.setNumThreads(threads)
 
 
+@dataclass(frozen=True)
+class _Successor:
+    """What a held flow pair keeps of its successor frame: its time, s, and ``Frame.ahead``."""
+    time_s: float
+    ahead: bool
+
+
 class _Pass:
     """One video pass's state: the stages' parameters and backends, the previous frame's cut
     signature and saliency luma, and the flow pair waiting for its successor frame."""
@@ -227,8 +234,7 @@ class _Pass:
                 self._motion(*self.held.popleft())
         k = min(int(tick_of_time(frame.time_s)), self.n - 1)
         analyse_this = k >= 0 and (centre_tick is not None or self.every)
-        # a successor closer than the pair's least span (flow.min_span_frames, in the picture's steps
-        # under a repeat cadence) is passed over unread
+        # a successor closer than the pair's least span (flow.min_span_frames; in steps under repeats) is passed over
         span = self.cadence.least_span_s(self.flow_params.min_span_frames) if self.min_span_s and self.cadence.ratio \
             else self.min_span_s
         is_successor = self.pending is not None and (analyse_this or frame.time_s - self.pending[4] >= span)
@@ -269,18 +275,20 @@ class _Pass:
         (``flow.repeat_wait_s``; an analysed frame starts a pair of its own, so it never waits).
         With ``flow.cadence_ratio`` the pair is held until the frames after its successor tell
         whether that is a repeat (:mod:`autohaptics.airflow.cadence`, ``REACH`` frames): its time
-        depends on that."""
+        depends on that. A successor that cannot be judged (the frames before it skipped) is not held."""
         pgray, pt = self.pending[1], self.pending[4]
         if not analysed and frame.time_s - pt < self.flow_params.repeat_wait_s and \
                 self.stages["static"].run(is_static, pgray, gray, params=self.params.airflow):
             self.repeats += 1
             return
-        pair, self.pending = (self.pending, frame, gray, sig), None
+        first, self.pending = self.pending, None
         self.between = None if analysed else (frame, sig)
-        if self.cadence.ratio:
-            self.held.append(pair)
+        if self.held or self.cadence.judges_newest:  # pairs stay in order
+            # held without its decoded frame (a decoder's buffers are few): the successor's signature now
+            sig = sig if sig is not None else self._frame_signature(frame)
+            self.held.append((first, _Successor(frame.time_s, frame.ahead), gray, sig))
         else:
-            self._motion(*pair)
+            self._motion(first, frame, gray, sig)
 
     def _motion(self, first, frame, gray, sig) -> None:
         """A flow pair's motion and depth, added to its tick (:mod:`.pairs`)."""
