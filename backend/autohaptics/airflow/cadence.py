@@ -31,6 +31,7 @@ HISTORY_S = 2.0  # how far back the frames' judgements are kept, s
 MEAN_STEPS = 24  # the picture's latest steps the mean step is taken over (or the history's, where fewer)
 MIN_REPEATS = 1 / 12  # repeats per step under which a stretch holds no conversion (a picture held now and then)
 MIN_STEPS = 6  # steps judged in the history before their mean step replaces the frame interval
+DENSE = 0.8  # the share of recent frames with a known difference from which pairs wait for judgements
 WAIT_S = 1.0  # how long a pair waits for the mean step while fewer steps are judged, s
 
 
@@ -107,21 +108,26 @@ class Cadence:
 
     @property
     def judges_newest(self) -> bool:
-        """Whether the newest frame will be judged: its difference to the frame before is known (a decode
-        that skipped the frames between gives none, and a pair ending on it need not wait)."""
-        return bool(self.ratio) and bool(self._diffs) and self._diffs[-1] is not None
+        """Whether the newest frame is to be judged: its difference to the frame before is known, as most
+        of the recent frames' are (a decode that skips frames gives few: a pair ending there need not wait
+        for the judgement, and a pair held makes the flow of the pairs after it wait too)."""
+        return bool(self.ratio) and bool(self._diffs) and self._diffs[-1] is not None and self._dense()
+
+    def _dense(self) -> bool:
+        """Whether most recent frames' differences are known (``DENSE`` of them: a decode of every frame)."""
+        return sum(d is not None for d in self._diffs) >= DENSE * len(self._diffs)
 
     @property
     def settled_s(self) -> float:
         """The time up to which pairs may be timed, s: the newest frame whose judgement is final (judged,
         or never to be), or ``WAIT_S`` before it while the history holds judged frames but fewer than
         ``MIN_STEPS`` whole runs (the mean step still unknown: at 120 fps a pair's two steps would read
-        as 2 intervals, 5 x); -inf before the first such frame. A stream whose frames are not judged (a
-        decode that skips frames, a still picture) holds its pairs no longer than ``REACH`` frames."""
+        as 2 intervals, 5 x), where most frames are judged (``DENSE``); -inf before the first such frame."""
         if not self.ratio or len(self._frames) <= REACH:
             return -np.inf
         t = self._frames[-1 - REACH][1]
-        waits = self._mean()[1] < MIN_STEPS and self._judged_s >= t - HISTORY_S  # not where nothing is judged
+        # not where nothing is judged, nor where the decode skips frames (its pairs are not held)
+        waits = self._mean()[1] < MIN_STEPS and self._judged_s >= t - HISTORY_S and self._dense()
         return t - WAIT_S if waits else t
 
     def step_s(self) -> float:
