@@ -100,11 +100,11 @@ class Cadence:
         level = min(max(before), max(after)) if after and (max(after) > FLOOR or not ended) else max(before)
         if level <= FLOOR:
             return
-        repeat = diffs[pos] < min(self.ratio * level, REPEAT_MAX)
-        self._frames[pos - len(diffs)][3] = repeat
+        frame = self._frames[pos - len(diffs)]
+        frame[3] = repeat = diffs[pos] < min(self.ratio * level, REPEAT_MAX)
         self.found += repeat
         self.judged += 1
-        self._judged_s = self._frames[pos - len(diffs)][1]
+        self._judged_s = frame[1]
 
     @property
     def judges_newest(self) -> bool:
@@ -131,17 +131,18 @@ class Cadence:
         return t - WAIT_S if waits else t
 
     def step_s(self) -> float:
-        """The picture's mean step over the history, s: the frame interval x judged frames / steps
-        over the latest ``MEAN_STEPS`` steps (the frame interval until ``MIN_STEPS`` are judged), at most
-        ``MAX_STEP_FRAMES`` intervals."""
+        """The picture's mean step, s: the frame interval x frames / steps of the latest ``MEAN_STEPS``
+        whole runs, at most ``MAX_STEP_FRAMES`` intervals; the frame interval until ``MIN_STEPS`` runs are
+        judged, under ``MIN_REPEATS`` and in a variable-rate stream."""
         return self.interval * self._mean()[0]
 
     def _mean(self) -> tuple[float, int]:
         """The mean step over the latest ``MEAN_STEPS`` steps in the history, frame intervals, and the
         steps it is taken over."""
         if self._step[0] != self.count:
-            frames = runs = pending = 0  # whole runs (a step and the repeats after it) before the
-            started = False  # newest step, back to a frame not judged
+            # whole runs (a step and the repeats after it) before the newest step, back to a frame not judged
+            frames = runs = pending = 0
+            started = False
             for _, _, _, rep in reversed(self._frames):
                 if started and rep is None:
                     break

@@ -68,7 +68,8 @@ def refine(path: str | Path, analysis: Analysis, params: GenerateParams, wanted:
     progress("saliency", 0.0)
     info = media.probe(path)
     weights = frame_weights(info, analysis.n_ticks, targets, params=params, cancel=cancel,
-                            need_flow="fans" in params.tracks, need_colour="temperature" in params.tracks)
+                            need_flow="fans" in params.tracks, need_colour="temperature" in params.tracks,
+                            decode=video.stats.get("frames", {}).get("decode"))
     beta, have = video.beta.copy(), video.saliency_mask.copy()
     if weights:  # each analysed tick and the ticks that hold its frame's values take its weights
         keys = np.fromiter(sorted(weights), np.int64, len(weights))

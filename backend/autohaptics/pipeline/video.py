@@ -158,13 +158,13 @@ class _Pass:
     signature and saliency luma, and the flow pair waiting for its successor frame."""
 
     def __init__(self, info: media.MediaInfo, n: int, params: GenerateParams, need_saliency: np.ndarray | LaterMask,
-                 need_flow: bool, need_colour: bool, *, cancel: CancelToken | None = None):
+                 need_flow: bool, need_colour: bool, *, cancel: CancelToken | None = None, decode: str | None = None):
         t0 = time.perf_counter()
         # (x, y, w, h) px read of each frame (None: all of it), and the 3D packing ("": 2D)
         self.area, self.stereo = active_area(info, params)
         self.shown_aspect = shown_aspect(info, self.area, self.stereo)
         self.area_s = time.perf_counter() - t0
-        self.decode = decode_mode(info, params, need_flow)  # the frames decoded: every one for a film's conversion
+        self.decode = decode or decode_mode(info, params, need_flow)  # every frame for a film's conversion
         self.decode_s = time.perf_counter() - t0 - self.area_s
         self.frame_size = tuple(int(v) for v in info.video.display_size) if info.video is not None else (0, 0)
         flow_params = params.flow
@@ -376,7 +376,7 @@ class _Pass:
         """The per-tick results with their stats (ticks held, skipped, computed per stage)."""
         out, n = self.out, self.n
         self.cadence.finish()
-        while self.held:  # no decoded frame outlives the pass
+        while self.held:  # the last pairs, their successors judged by the frames before them
             self._motion(*self.held.popleft())
         self.pairs.finish()
         self.saliency.finish(n)
@@ -415,20 +415,21 @@ class _Pass:
 
 def frame_weights(info: media.MediaInfo, n: int, ticks: np.ndarray, *, params: GenerateParams,
                   need_flow: bool, need_colour: bool, cancel: CancelToken | None = None,
-                  group_s: float = 10.0) -> dict[int, np.ndarray]:
+                  group_s: float = 10.0, decode: str | None = None) -> dict[int, np.ndarray]:
     """The actuator weights of the frames the video pass analyses for ``ticks`` (ticks with a frame
     of their own: the first of a ``video.stride`` group), decoding only around them.
 
     Each run of ticks (runs less than ``group_s`` seconds apart share one) is decoded from the
     keyframe before it; the proxies are made as in :func:`video_pass` with the same ``need_flow``
     and ``need_colour``, so the weights are the ones a full pass computes (with
-    ``saliency.motion_weight`` 0: the motion cue depends on the frame analysed before).
+    ``saliency.motion_weight`` 0: the motion cue depends on the frame analysed before). decode : the
+    pass's ``stats["frames"]["decode"]`` (None: chosen again, :func:`~.picture.decode_mode`).
     Returns {tick: float32 [shape=(9,)]}.
     """
     targets = np.unique(np.asarray(ticks, dtype=np.int64))
     mask = np.zeros(n, bool)
     mask[targets] = True
-    vp = _Pass(info, n, params, mask, need_flow, need_colour)
+    vp = _Pass(info, n, params, mask, need_flow, need_colour, decode=decode)
     out: dict[int, np.ndarray] = {}
     breaks = np.flatnonzero(np.diff(targets) * TICK_S > group_s) + 1
     for run in np.split(targets, breaks) if targets.size else []:
