@@ -145,6 +145,7 @@ THESIS_RULES: dict[str, Any] = {
     "airflow.near_sigma_ticks": 0.0,  # the default smooths nearness over neighbouring ticks of the shot
     "airflow.near_share": 0.0,  # the default counts the nearest 40 % of each tick's cells as near too
     "airflow.threshold_motion": "judged",  # the default takes the threshold from the motion without one-tick spikes
+    "airflow.spike_ratio": 0.0,  # the default judges a tick over 10 x both its neighbours' at theirs
     "fusion.sigma_ticks": 0.0,  # the default spreads each tick's saliency weights over its shot's neighbouring frames
     "thermal.mapping": "thesis",  # the default maps a warm-cool measure around 33 C into the device range
     "cuts.in_one_step": False,  # the default confirms a cut between two ticks' frames over the frame between

@@ -5,6 +5,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
 
 from autohaptics import airflow
 from autohaptics import testing as synth
@@ -435,6 +438,71 @@ def test_despiked_motion_by_hand():
     np.testing.assert_allclose(airflow.despiked_motion([0.5, 0.5, 9.0, 0.4, 0.4], shot), [0.5, 0.5, 0.0, 0.4, 0.4])
     np.testing.assert_allclose(airflow.despiked_motion([0.5, 0.4, 0.0, 0.0, 0.0], np.zeros(5, int))[:2], [0.4, 0.4])
     assert airflow.despiked_motion(np.zeros(0), np.zeros(0, int)).shape == (0,)
+
+
+def test_despiked_motion_with_a_ratio_by_hand():
+    """With a ratio only a tick over ratio x both its shot neighbours changes, to the larger of
+    theirs; a still neighbour (0: a static pair, another shot, a cut, beyond the clip) says nothing
+    of the motion beside it, so a tick between two still ones keeps its own, and so does an
+    alternating run."""
+    still = np.zeros(9, int)
+    m = np.array([0.012, 0.011, 2.4, 0.0, 0.0, 0.05, 0.05, 0.4, 0.05])
+    out = airflow.despiked_motion(m, still, ratio=10.0)
+    np.testing.assert_allclose(out, [0.012, 0.011, 0.011, 0.0, 0.0, 0.05, 0.05, 0.4, 0.05])  # 0.4 is 8 x
+    np.testing.assert_allclose(airflow.despiked_motion(m, still, ratio=4.0)[7], 0.05)
+    alternating = np.tile([0.2, 0.02], 5)
+    np.testing.assert_array_equal(airflow.despiked_motion(alternating, np.zeros(10, int), ratio=10.0), alternating)
+    lone = np.array([0.0, 0.3, 0.0, 0.0])
+    np.testing.assert_array_equal(airflow.despiked_motion(lone, np.zeros(4, int), ratio=10.0), lone)
+    shot = np.array([0, 0, 1, 1, -1, 2])  # a neighbour of another shot or a cut tick counts as still
+    np.testing.assert_allclose(airflow.despiked_motion([0.02, 0.5, 0.02, 0.03, 0.7, 0.01], shot, ratio=10.0),
+                               [0.02, 0.02, 0.02, 0.03, 0.0, 0.01])
+
+
+@given(m=hnp.arrays(np.float64, st.integers(0, 40), elements=st.floats(0.0, 1e3)),
+       ratio=st.floats(1.0, 1000.0), cuts_at=st.lists(st.integers(0, 39), max_size=4))
+def test_despiked_motion_with_a_ratio_only_lowers_the_ticks_over_it(m, ratio, cuts_at):
+    """Property: every tick keeps its motion or falls to the larger of its shot neighbours', which
+    it exceeded ``ratio`` times; nothing rises, and every value stays finite and >= 0."""
+    cut = np.zeros(m.size, bool)
+    cut[[c for c in cuts_at if c < m.size]] = True
+    shot = np.where(~cut, np.cumsum(cut), -1)
+    out = airflow.despiked_motion(m, shot, ratio=ratio)
+    own = np.where(cut, 0.0, m)
+    assert out.shape == m.shape and np.isfinite(out).all() and (out >= 0).all() and (out <= own).all()
+    changed = np.flatnonzero(out < own)
+    for k in changed:
+        beside = [own[j] for j in (k - 1, k + 1) if 0 <= j < m.size and shot[j] == shot[k]]
+        assert max(beside) == out[k] and own[k] > ratio * out[k] > 0
+
+
+def test_a_pair_across_a_missed_cut_does_not_blow():
+    """Known answer: a slow shot (0.012 frame widths/s) ends in one tick of 2.4 (a flow pair across a
+    hard cut just under the cut rule's bar: a 24 fps film at 120 fps read it so), then a still shot;
+    a strong run elsewhere sets the threshold (0.3 x 0.3). Smoothed over the shot, the spike would
+    blow the 4 ticks around it (the thesis's rule, spike_ratio 0); judged at its neighbour's level it
+    blows none, and the strong run blows as before."""
+    n = 100
+    motion = np.zeros(n)
+    motion[10:30] = 0.3
+    motion[50:70] = 0.012
+    motion[70] = 2.4
+    cut = np.zeros(n, bool)
+    cells = np.ones((n, FAN_ROWS, FAN_COLS), np.float32)
+    near = np.ones_like(cells)
+    depth_mask = np.ones(n, bool)
+    got = {}
+    for ratio in (0.0, 10.0):
+        fans, stats = airflow.fan_track(motion, cells, near, cut, depth_mask,
+                                        params=airflow.AirflowParams(spike_ratio=ratio))
+        got[ratio] = (fans.reshape(n, -1).max(axis=1) > 0, stats)
+    blows, stats = got[0.0]
+    assert blows[66:75].sum() >= 4 and stats["spikes_out"] == 0
+    blows, stats = got[10.0]
+    assert not blows[40:n].any() and blows[12:28].all() and stats["spikes_out"] == 1
+    for bad in (0.5, -1.0, float("nan"), 1e4):
+        with pytest.raises(ParameterError, match="spike_ratio"):
+            airflow.AirflowParams(spike_ratio=bad)
 
 
 def test_a_one_tick_spike_does_not_raise_the_threshold():

@@ -3,11 +3,13 @@
 A tick blows when its sustained motion exceeds the threshold: manual, or adaptive from the clip's
 own motion (``strong_rel`` x the 95th percentile of the ticks that move, one-tick spikes left out);
 the motion judged is averaged over the neighbouring ticks of the shot first, so a low-quality
-encode's uneven motion samples neither drop a run nor raise the threshold. In a blowing tick a cell
-blows where its motion, smoothed over the shot's neighbouring ticks and cells, reaches
-``cell_rel`` of the tick's strong motion (its few strongest cells, :func:`strong_motion`) AND it is
-near; a near cell enclosed by blowing cells blows too (an object coming at the camera has a still
-centre). docs/BENCHMARKS.md ("Fans") has the measurements behind each rule.
+encode's uneven motion samples neither drop a run nor raise the threshold, and a tick many times
+both its neighbours' (a flow pair across a cut the cut rule missed) is taken at theirs before that.
+In a blowing tick a cell blows where its motion, smoothed over the shot's neighbouring ticks and
+cells, reaches ``cell_rel`` of the tick's strong motion (its few strongest cells,
+:func:`strong_motion`) AND it is near; a near cell enclosed by blowing cells blows too (an object
+coming at the camera has a still centre). docs/BENCHMARKS.md ("Fans") has the measurements behind
+each rule.
 """
 
 from __future__ import annotations
@@ -40,9 +42,8 @@ class AirflowParams:
     cell_rel, peak_cells, peak_floor : a cell is "strong motion" at ``cell_rel`` (0.55) of the tick's strong
         motion or more: the mean of its ``peak_cells`` (5) strongest cells, at least ``peak_floor`` (0.55) of
         its strongest (:func:`strong_motion`; the thesis: 0.5 of the strongest cell, ``peak_cells`` 1).
-    near_min : a cell is "near" at this nearness or more (0..1, 1 = nearest).
-    near_share : the nearest ``near_share`` of a tick's cells are "near" too (0..1, default 0.4;
-        0 = ``near_min`` alone, the thesis; :func:`near_cells`).
+    near_min, near_share : a cell is "near" at ``near_min`` or more (0..1, 1 = nearest), or among the nearest
+        ``near_share`` of its tick's cells (0..1, default 0.4; 0 = ``near_min`` alone, the thesis; :func:`near_cells`).
     static_level, static_fraction : a pair is static when under ``static_fraction`` of the proxy's pixels
         changed by more than ``static_level`` grey levels (noise tolerant; a small moving object is seen).
     fill_enclosed : a near cell enclosed by "on" cells blows too (an approaching object's still centre).
@@ -56,6 +57,7 @@ class AirflowParams:
         the cells' is, with this std (ticks; default 3; 0 = the tick's own, the thesis; :func:`smoothed_motion`).
     threshold_motion : the adaptive threshold's motion: "despiked" (default: one-tick spikes out first,
         :func:`despiked_motion`) | "judged" (the sustained judged motion: the thesis, the rule before issue 31).
+    spike_ratio : a tick over this many times both moving shot neighbours is judged at theirs (10; 0: never, thesis).
     """
 
     STAGE: ClassVar[str] = DERIVE
@@ -78,11 +80,14 @@ class AirflowParams:
     near_sigma_ticks: float = 2.0
     motion_sigma_ticks: float = 3.0
     threshold_motion: str = "despiked"
+    spike_ratio: float = 10.0
 
     def __post_init__(self):
         if self.threshold_motion not in THRESHOLD_MOTIONS:
             raise ParameterError(f"airflow.threshold_motion must be one of {THRESHOLD_MOTIONS}, "
                                  f"got {self.threshold_motion!r}")
+        if not (self.spike_ratio == 0 or (math.isfinite(self.spike_ratio) and 1.0 <= self.spike_ratio <= 1000.0)):
+            raise ParameterError(f"airflow.spike_ratio must be 0 (never) or lie in 1..1000, got {self.spike_ratio!r}")
         if self.threshold is not None and not (math.isfinite(self.threshold) and self.threshold >= 0):
             raise ParameterError(f"airflow.threshold must be >= 0 (frame widths/s) or None, got {self.threshold!r}")
         if not (0.0 <= float(self.floor) < 100.0):
@@ -191,13 +196,16 @@ def smoothed_motion(motion: np.ndarray, shot: np.ndarray, *, params: AirflowPara
     return smoothed_cell_motion(own, shot, np.arange(m.size), params=one_cell)[:, 0, 0]
 
 
-def despiked_motion(motion: np.ndarray, shot: np.ndarray) -> np.ndarray:
+def despiked_motion(motion: np.ndarray, shot: np.ndarray, *, ratio: float = 0.0) -> np.ndarray:
     """Each tick's motion as the median of itself and its two neighbours, frame widths/s: float64 [shape=(n,)].
 
     motion, shot : [shape=(n,)] as in :func:`smoothed_motion` (a neighbour of another shot, a cut or
     beyond the clip counts as still; a cut tick reads 0). A one-tick spike (an object popping in, a
     flash: flow reads nonsense there, and how much differs between encodes) falls to its
     neighbours' level before it is smoothed over the shot; an alternating run keeps its level.
+    ratio : > 0: only a tick over ``ratio`` x both its neighbours changes, to the larger of theirs (the
+    median there), every other tick keeps its own: a pair across a cut that the cut rule missed reads
+    tens of times its shot's motion, where real motion is rarely ten times both ticks beside it.
     """
     shot = np.asarray(shot)
     m = np.where(shot >= 0, np.nan_to_num(np.asarray(motion, dtype=np.float64)), 0.0)
@@ -207,6 +215,9 @@ def despiked_motion(motion: np.ndarray, shot: np.ndarray) -> np.ndarray:
     same_right = np.concatenate([shot[:-1] == shot[1:], [False]])
     left = np.where(same_left, np.concatenate([[0.0], m[:-1]]), 0.0)
     right = np.where(same_right, np.concatenate([m[1:], [0.0]]), 0.0)
+    if ratio > 0:
+        beside = np.maximum(left, right)
+        return np.where((m > ratio * beside) & (beside > 0), beside, m)
     return median(np.stack([left, m, right]), axis=0)
 
 
@@ -328,8 +339,9 @@ def fan_track(motion: np.ndarray, cell_motion_: np.ndarray, nearness: np.ndarray
     n = motion.size
     valid = ~cut
     shot = np.where(valid, np.cumsum(cut), -1)
-    judged = smoothed_motion(motion, shot, params=params) if params.motion_sigma_ticks > 0 \
-        else np.where(valid, motion, 0.0)
+    own = despiked_motion(motion, shot, ratio=params.spike_ratio) if params.spike_ratio > 0 else motion
+    judged = smoothed_motion(own, shot, params=params) if params.motion_sigma_ticks > 0 \
+        else np.where(valid, own, 0.0)
     sustained = sustained_motion(judged)
     basis = sustained if params.threshold_motion == "judged" else \
         smoothed_motion(despiked_motion(motion, shot), shot, params=params)
@@ -345,5 +357,6 @@ def fan_track(motion: np.ndarray, cell_motion_: np.ndarray, nearness: np.ndarray
         for k, c, nk in zip(part, cells, near):
             fans[k] = fan_levels(c, nk, params=params)
     stats = {"threshold_fw_per_s": float(threshold), "ticks_on": int(on.sum()), "ticks_at_cuts": int(cut.sum()),
-             "spikes_ignored": int(((judged > threshold) & valid & ~(sustained > threshold)).sum())}
+             "spikes_ignored": int(((judged > threshold) & valid & ~(sustained > threshold)).sum()),
+             "spikes_out": int((valid & (own < np.nan_to_num(motion))).sum())}
     return fans, stats
