@@ -1,7 +1,7 @@
 """Broadcast recordings (MPEG-TS, ``testing.broadcast`` writes them from the tests' scene): a clock hours in, a
 clock that wraps inside the file, a recording begun mid-GOP, a sound whose first packet comes after
 FFmpeg's first look at the file, an adaptive stream's renditions of several sizes and a channel's sound
-that changes layout are all read as the film they hold."""
+that changes layout or sample rate are all read as the film they hold."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import pytest
 from autohaptics import pipeline
 from autohaptics import testing as synth
 from autohaptics.bench.matrix import VARIANTS, Variant, cut_analysis, misses, row_figures
-from autohaptics.media import iter_video, probe
+from autohaptics.media import iter_video, probe, read_audio
 from autohaptics.server import posters
 from autohaptics.testing.broadcast import WRAP_S, as_adaptive, as_recording
 from autohaptics.testing.scenes import MATERIAL_IMPACTS_S, material_scene
@@ -185,33 +185,34 @@ def test_a_channel_that_carries_nothing_beside_the_sound_costs_no_further_look(f
     assert any(o for o in opened)
 
 
-def _channel_sound(path, first: str, second: str):
-    """A channel's recording whose sound changes layout at 10 s (AC-3 ``first``, then ``second``; a 5.1
-    part carries the sound in its centre, as a film's dialogue and effects sit there): a 220 Hz bed and a
-    60 Hz boom every 2 s from 1 s, over a still picture. MPEG-TS, 20 s."""
-    rate, half = 48000, 480000
-    t = np.arange(2 * half) / rate
-    x = 0.02 * np.sin(2 * np.pi * 220 * t)
-    for k in range(10):
-        s0, n = int((1.0 + 2 * k) * rate), int(0.3 * rate)
-        x[s0:s0 + n] += 0.6 * np.sin(2 * np.pi * 60 * t[:n]) * np.exp(-t[:n] * 8)
+def _channel_sound(path, first: str, second: str, rates: tuple[int, int] = (48000, 48000)):
+    """A channel's recording whose sound changes layout at 10 s (AC-3 ``first``, then ``second``, at ``rates``;
+    a 5.1 part carries the sound in its centre, as a film's dialogue and effects sit there): a 220 Hz bed and
+    a 60 Hz boom every 2 s from 1 s, over a still picture. MPEG-TS, 20 s."""
     packets = []
-    for layout, start in ((first, 0), (second, half)):
+    for layout, rate, t0 in ((first, rates[0], 0.0), (second, rates[1], 10.0)):
+        start = int(round(t0 * rate))
+        t = np.arange(start, start + 10 * rate) / rate
+        x = 0.02 * np.sin(2 * np.pi * 220 * t)
+        for k in range(10):
+            d = t - (1.0 + 2 * k)
+            boom = (d >= 0) & (d < 0.3)
+            x[boom] += 0.6 * np.sin(2 * np.pi * 60 * d[boom]) * np.exp(-d[boom] * 8)
         enc = av.CodecContext.create("ac3", "w")
         enc.sample_rate, enc.layout, enc.format, enc.bit_rate = rate, layout, "fltp", 384_000
         n = av.AudioLayout(layout).nb_channels
-        for k in range(start, start + half, 1536):
+        for k in range(0, x.size, 1536):
             chunk = np.zeros((n, 1536), np.float32)
-            seg = x[k:min(k + 1536, start + half)]
+            seg = x[k:k + 1536]
             chunk[[0, 1] if n == 2 else [2], :seg.size] = seg
             frame = av.AudioFrame.from_ndarray(chunk, format="fltp", layout=layout)
-            frame.sample_rate, frame.pts, frame.time_base = rate, k, Fraction(1, rate)
+            frame.sample_rate, frame.pts, frame.time_base = rate, start + k, Fraction(1, rate)
             packets += enc.encode(frame)
         packets += enc.encode(None)
     with av.open(str(path), "w", format="mpegts") as out:
         video = out.add_stream("mpeg2video", rate=25)
         video.width, video.height, video.pix_fmt = 64, 36, "yuv420p"
-        sound = out.add_stream("ac3", rate=rate, layout=first)
+        sound = out.add_stream("ac3", rate=rates[0], layout=first)
         items = [(float(p.pts * p.time_base), p, sound) for p in packets]
         still = av.VideoFrame.from_ndarray(np.full((36, 64, 3), 90, np.uint8), format="rgb24").reformat(format="yuv420p")
         for i in range(500):
@@ -230,6 +231,27 @@ def test_a_sound_that_changes_layout_mid_stream_is_read_in_each(tmp_path, first,
     layout. Before, the first part's weights held for the whole stream: stereo then 5.1 lost the 5.1
     part's centre (its booms did not vibrate), and 5.1 then stereo raised an IndexError."""
     got = pipeline.generate(_channel_sound(tmp_path / f"{first}_{second}.ts", first, second))
+    chair = got.vibration.max(axis=1)
+    booms = [chair[int(round(s / TICK_S)):int(round(s / TICK_S)) + 4].max() for s in np.arange(1.0, 20.0, 2.0)]
+    assert min(booms) >= 0.5, booms
+    beds = [chair[int(round(s / TICK_S)) - 4:int(round(s / TICK_S))].max() for s in np.arange(3.0, 20.0, 2.0)]
+    assert max(beds) == 0.0, beds
+
+
+@pytest.mark.parametrize("rates", [(44100, 48000), (48000, 44100)])
+def test_a_sound_that_changes_sample_rate_mid_stream_keeps_its_pitch_and_time(tmp_path, rates):
+    """An advertisement at 44.1 kHz in a 48 kHz channel, or the other way (a stream's inserted sound keeps
+    its own rate): each part is resampled from its own rate. Before, every frame was read at the stream's
+    first rate: the other part's 220 Hz bed read 248 (or 188) Hz, with a gap (or a cut) in every frame."""
+    path = _channel_sound(tmp_path / f"rates_{rates[0]}_{rates[1]}.ts", "stereo", "5.1", rates)
+    x = read_audio(path)
+    assert abs(x.size - 20 * 48000) < 0.01 * 20 * 48000
+    for t0 in (3.3, 13.3):  # the bed between two booms, in each part
+        bed = x[int(t0 * 48000):int((t0 + 0.5) * 48000)]
+        peak = np.fft.rfftfreq(bed.size, 1 / 48000)[np.argmax(np.abs(np.fft.rfft(bed)))]
+        assert abs(peak - 220.0) <= 2.0, (t0, peak)
+        assert np.abs(bed).min() < 0.02 and (np.abs(bed) > 1e-6).mean() > 0.99  # no gaps of silence in it
+    got = pipeline.generate(path)
     chair = got.vibration.max(axis=1)
     booms = [chair[int(round(s / TICK_S)):int(round(s / TICK_S)) + 4].max() for s in np.arange(1.0, 20.0, 2.0)]
     assert min(booms) >= 0.5, booms

@@ -91,7 +91,8 @@ _NO_DRC = {"ac3": {"drc_scale": "0"}, "ac3_fixed": {"drc_scale": "0"}, "eac3": {
 class _Track:
     """One audio stream's frames placed on the container's clock (:class:`AudioClock`) and downmixed
     into ``sink``, with ``weights`` or, when None, the weights of each frame's layout (a channel's sound
-    changes layout where a programme does: stereo advertisements, then a film in 5.1)."""
+    changes layout where a programme does: stereo advertisements, then a film in 5.1), each frame at the
+    stream's first ``rate`` (an inserted sound keeps its own rate: resampled from it)."""
 
     def __init__(self, stream, start_s: float, rate: int, sink: Sink, report: AudioReport,
                  weights: np.ndarray | None = None):
@@ -104,11 +105,16 @@ class _Track:
         self.held = None if weights is None else _Held(self.limit, weights, report)
         self.layout = None if weights is None else ()  # the layout the weights are of; () fixed weights
         self.interleave = _Interleaver()
+        self.to_rate = _Interleaver(rate)
         self.pending = None  # (time, samples) of the frame placed when the next one's time is known
 
     def add(self, frame: av.AudioFrame, lfe_gain: float) -> bool:
         """Take one decoded frame; True when the output may hold chunks ready."""
         frame_time = frame.time  # before _samples: interleaving clears the frame's pts
+        if frame.sample_rate != self.clock.rate:
+            frame = self.to_rate(frame)
+        else:
+            self.to_rate.key = None  # a later change of rate starts without this one's held samples
         x = _samples(frame, self.interleave)
         layout = (frame.layout.name, x.shape[0])
         if self.held is None:
@@ -299,33 +305,36 @@ _PACKABLE_LAYOUTS = {"3.0", "quad", "4.0", "5.0", "5.1", "5.0(side)", "5.1(side)
 
 
 class _Interleaver:
-    """Planar -> packed float at the same rate and layout, through one libswresample context
-    (same-rate format conversion holds no samples back)."""
+    """-> packed float in the same layout, through one libswresample context per layout and rate:
+    at the frame's own rate (``rate`` None; same-rate format conversion holds no samples back), or
+    resampled to ``rate`` (its filter holds back a few samples, which the clock takes for a gap)."""
 
-    def __init__(self):
+    def __init__(self, rate: int | None = None):
+        self.rate = rate
         self.key = None
         self.resampler = None
 
     def __call__(self, frame: av.AudioFrame) -> av.AudioFrame:
         key = (frame.layout.name, frame.sample_rate)
+        rate = self.rate or frame.sample_rate
         if key != self.key:
             self.key = key
-            self.resampler = av.AudioResampler(format="flt", layout=frame.layout.name, rate=frame.sample_rate)
+            self.resampler = av.AudioResampler(format="flt", layout=frame.layout.name, rate=rate)
         frame.pts = None
-        return _join_packed(self.resampler.resample(frame), frame)
+        return _join_packed(self.resampler.resample(frame), frame, rate)
 
 
-def _join_packed(out: list, frame: av.AudioFrame) -> av.AudioFrame:
+def _join_packed(out: list, frame: av.AudioFrame, rate: int) -> av.AudioFrame:
     if len(out) == 1:
         return out[0]
     if not out:
         packed = av.AudioFrame(format="flt", layout=frame.layout.name, samples=0)
-        packed.sample_rate = frame.sample_rate
+        packed.sample_rate = rate
         return packed
     data = np.concatenate([np.frombuffer(f.planes[0], np.float32, count=f.samples * f.layout.nb_channels)
                            for f in out])
     packed = av.AudioFrame.from_ndarray(data.reshape(1, -1), format="flt", layout=frame.layout.name)
-    packed.sample_rate = frame.sample_rate
+    packed.sample_rate = rate
     return packed
 
 

@@ -33,7 +33,8 @@ from autohaptics.shots import Boundaries, detect
 # (``media.frames``); a sound that changes layout mid-stream downmixed by each layout (``media.audio``).
 # 7: repeats told in runs and a pair timed by the picture's mean step, its least span in steps (``airflow.cadence``);
 # every frame decoded from 40 fps up where the pictures repeat (``pipeline.picture.decode_mode``).
-ANALYSIS_REVISION = 7
+# 8: a sound that changes sample rate mid-stream resampled from each rate (``media.audio``).
+ANALYSIS_REVISION = 8
 
 
 @dataclass
