@@ -440,6 +440,16 @@ def test_despiked_motion_by_hand():
     assert airflow.despiked_motion(np.zeros(0), np.zeros(0, int)).shape == (0,)
 
 
+def _blows_everywhere(motion: np.ndarray, params: airflow.AirflowParams):
+    """Which ticks blow (bool per tick) and the stats of ``motion`` where every cell moves alike and is
+    near, depth ran on every tick and there is no cut."""
+    n = motion.size
+    cells = np.ones((n, FAN_ROWS, FAN_COLS), np.float32)
+    fans, stats = airflow.fan_track(motion, cells, np.ones_like(cells), np.zeros(n, bool), np.ones(n, bool),
+                                    params=params)
+    return fans.reshape(n, -1).max(axis=1) > 0, stats
+
+
 def test_despiked_motion_with_a_ratio_by_hand():
     """With a ratio only a tick over ratio x both its shot neighbours changes, to the larger of
     theirs; a still neighbour (0: a static pair, another shot, a cut, beyond the clip) says nothing
@@ -482,24 +492,14 @@ def test_a_pair_across_a_missed_cut_does_not_blow():
     a strong run elsewhere sets the threshold (0.3 x 0.3). Smoothed over the shot, the spike would
     blow the 4 ticks around it (the thesis's rule, spike_ratio 0); judged at its neighbour's level it
     blows none, and the strong run blows as before."""
-    n = 100
-    motion = np.zeros(n)
+    motion = np.zeros(100)
     motion[10:30] = 0.3
     motion[50:70] = 0.012
     motion[70] = 2.4
-    cut = np.zeros(n, bool)
-    cells = np.ones((n, FAN_ROWS, FAN_COLS), np.float32)
-    near = np.ones_like(cells)
-    depth_mask = np.ones(n, bool)
-    got = {}
-    for ratio in (0.0, 10.0):
-        fans, stats = airflow.fan_track(motion, cells, near, cut, depth_mask,
-                                        params=airflow.AirflowParams(spike_ratio=ratio))
-        got[ratio] = (fans.reshape(n, -1).max(axis=1) > 0, stats)
-    blows, stats = got[0.0]
+    blows, stats = _blows_everywhere(motion, airflow.AirflowParams(spike_ratio=0.0))
     assert blows[66:75].sum() >= 4 and stats["spikes_out"] == 0
-    blows, stats = got[10.0]
-    assert not blows[40:n].any() and blows[12:28].all() and stats["spikes_out"] == 1
+    blows, stats = _blows_everywhere(motion, airflow.AirflowParams(spike_ratio=10.0))
+    assert not blows[40:].any() and blows[12:28].all() and stats["spikes_out"] == 1
     for bad in (0.5, -1.0, float("nan"), 1e4):
         with pytest.raises(ParameterError, match="spike_ratio"):
             airflow.AirflowParams(spike_ratio=bad)
@@ -511,21 +511,14 @@ def test_a_one_tick_spike_does_not_raise_the_threshold():
     much differs between encodes). Smoothed over the shot first, the spike spreads over 19 ticks and
     raises the 95th percentile: the weak run is lost. The default takes the threshold from the motion
     with the spike left out: 0.3 x the strong run, and the weak run blows."""
-    n = 120
-    motion = np.zeros(n)
+    motion = np.zeros(120)
     motion[10:30] = 0.2
     motion[50:70] = 0.08
     motion[95] = 3.0
-    cut = np.zeros(n, bool)
-    cells = np.zeros((n, FAN_ROWS, FAN_COLS), np.float32)
-    cells[:] = 1.0
-    near = np.ones_like(cells)
-    depth_mask = np.ones(n, bool)
     got = {}
     for rule in ("despiked", "judged"):
-        fans, stats = airflow.fan_track(motion, cells, near, cut, depth_mask,
-                                        params=airflow.AirflowParams(threshold_motion=rule))
-        got[rule] = (fans.reshape(n, -1).max(axis=1) > 0, stats["threshold_fw_per_s"])
+        blows, stats = _blows_everywhere(motion, airflow.AirflowParams(threshold_motion=rule))
+        got[rule] = (blows, stats["threshold_fw_per_s"])
     blows, threshold = got["despiked"]
     assert threshold == pytest.approx(0.3 * 0.2, rel=0.02)
     assert blows[12:28].all() and blows[52:68].all()

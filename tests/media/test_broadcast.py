@@ -16,7 +16,7 @@ from autohaptics import testing as synth
 from autohaptics.bench.matrix import VARIANTS, Variant, cut_analysis, misses, row_figures
 from autohaptics.media import iter_video, probe, read_audio
 from autohaptics.server import posters
-from autohaptics.testing.broadcast import WRAP_S, as_adaptive, as_recording
+from autohaptics.testing.broadcast import WRAP_S, ac3_packets, as_adaptive, as_rate_break, as_recording
 from autohaptics.testing.scenes import MATERIAL_IMPACTS_S, material_scene
 from autohaptics.timebase import TICK_S
 
@@ -100,6 +100,21 @@ def test_a_picture_whose_size_changes_mid_file_is_read_at_the_size_it_declares(f
         assert {(f.width, f.height) for f in c.decode(video=0)} == {(320, 180), (160, 90), (240, 136)}
     fig = row_figures(timeline, pipeline.generate(rec), Variant("adaptive", "picture"))
     assert misses(fig) == [], fig
+
+
+def test_a_recording_whose_sound_changes_rate_for_a_break_reads_as_the_film(film):
+    """The matrix's row of a channel's recording with an advertisement break at its own rate
+    (``testing.broadcast.as_rate_break``): the file holds the sound at 48, 44.1 and 48 kHz in turn, and it
+    meets the matrix's figures against the film, every onset in place."""
+    d, src, _, timeline = film
+    dur = probe(src).duration_s
+    rec = as_rate_break(src, d / "rate_break.ts", break_s=(0.3 * dur, 0.6 * dur))
+    with av.open(str(rec)) as c:
+        rates = [(float(f.time), f.sample_rate) for f in c.decode(audio=0)]
+    runs = [r for k, (_, r) in enumerate(rates) if k == 0 or r != rates[k - 1][1]]
+    assert runs == [48000, 44100, 48000], runs
+    assert abs(next(t for t, r in rates if r == 44100) - 0.3 * dur) < 0.1  # within a tick
+    _same(timeline, pipeline.generate(rec))
 
 
 def _joined(d, src, name: str, second_clock_s: float):
@@ -189,26 +204,19 @@ def _channel_sound(path, first: str, second: str, rates: tuple[int, int] = (4800
     """A channel's recording whose sound changes layout at 10 s (AC-3 ``first``, then ``second``, at ``rates``;
     a 5.1 part carries the sound in its centre, as a film's dialogue and effects sit there): a 220 Hz bed and
     a 60 Hz boom every 2 s from 1 s, over a still picture. MPEG-TS, 20 s."""
-    packets = []
+    parts = []
     for layout, rate, t0 in ((first, rates[0], 0.0), (second, rates[1], 10.0)):
-        start = int(round(t0 * rate))
-        t = np.arange(start, start + 10 * rate) / rate
+        t = np.arange(int(round(t0 * rate)), int(round(t0 * rate)) + 10 * rate) / rate
         x = 0.02 * np.sin(2 * np.pi * 220 * t)
         for k in range(10):
             d = t - (1.0 + 2 * k)
             boom = (d >= 0) & (d < 0.3)
             x[boom] += 0.6 * np.sin(2 * np.pi * 60 * d[boom]) * np.exp(-d[boom] * 8)
-        enc = av.CodecContext.create("ac3", "w")
-        enc.sample_rate, enc.layout, enc.format, enc.bit_rate = rate, layout, "fltp", 384_000
         n = av.AudioLayout(layout).nb_channels
-        for k in range(0, x.size, 1536):
-            chunk = np.zeros((n, 1536), np.float32)
-            seg = x[k:k + 1536]
-            chunk[[0, 1] if n == 2 else [2], :seg.size] = seg
-            frame = av.AudioFrame.from_ndarray(chunk, format="fltp", layout=layout)
-            frame.sample_rate, frame.pts, frame.time_base = rate, start + k, Fraction(1, rate)
-            packets += enc.encode(frame)
-        packets += enc.encode(None)
+        channels = np.zeros((n, x.size), np.float32)
+        channels[[0, 1] if n == 2 else [2]] = x
+        parts.append((channels, layout, rate, t0))
+    packets = ac3_packets(parts)
     with av.open(str(path), "w", format="mpegts") as out:
         video = out.add_stream("mpeg2video", rate=25)
         video.width, video.height, video.pix_fmt = 64, 36, "yuv420p"

@@ -7,8 +7,9 @@ rate; in 10 bits (H.264, and a ProRes master with its sound in one stream or, as
 channel in a mono track); as an HDR10 grade; as HEVC and AV1; as DVDs (NTSC telecined, coded progressive and
 interlaced; PAL anamorphic); as 3D films, their two views packed side by side or top and bottom; as VP9 and H.264
 screeners; with its sound as mono, stereo (Opus, and AAC from FFmpeg's downmix), 5.1 and 7.1, as AC-3 carrying
-Dolby's dynamic range words, and behind a commentary and a compatibility stereo track; cut to start mid-score, and
-as a broadcast recording begun mid-GOP on a clock that wraps. Every row's timeline is compared with the source's own
+Dolby's dynamic range words, behind a commentary and a compatibility stereo track, and changing its sample rate
+for 10 s (a channel's advertisement); cut to start mid-score, and as a broadcast recording begun mid-GOP on a clock
+that wraps. Every row's timeline is compared with the source's own
 (the clean variant; for a cut, the clean analysis from the cut on derived as a film of its own, so what differs is
 the start of the file, not the context a whole film gives its film-relative levels): onset F1, fan-tick F1, tolerant
 fan IoU and temperature MAE against :data:`TARGETS`, and a cut's largest vibration in its first 0.5 s where the film
@@ -116,8 +117,9 @@ def _tracks_ahead(src: Path, dst: Path, options: dict) -> Path:
 def _broadcast(src: Path, dst: Path, options: dict) -> Path:
     """``src`` re-encoded as a channel sends it (H.264, a keyframe every 12 frames; the sound as ``options``
     say), then kept as ``options["kept"]`` says (``testing.broadcast``): "recording", begun at ``begin_s`` on
-    a clock that wraps ``wrap_after_s`` later; "adaptive", an adaptive stream's renditions in turn."""
-    from autohaptics.testing.broadcast import WRAP_S, as_adaptive, as_recording
+    a clock that wraps ``wrap_after_s`` later; "adaptive", an adaptive stream's renditions in turn; "rate
+    break", its sound at another rate over 10-20 s (``testing.broadcast.as_rate_break``)."""
+    from autohaptics.testing.broadcast import WRAP_S, as_adaptive, as_rate_break, as_recording
     from autohaptics.testing.reencode import reencode
 
     options = dict(options)
@@ -126,7 +128,7 @@ def _broadcast(src: Path, dst: Path, options: dict) -> Path:
     if kept == "recording":
         as_recording(sent, dst, clock_s=WRAP_S - begin_s - wrap_after_s, begin_s=begin_s)
     else:
-        as_adaptive(sent, dst)
+        (as_adaptive if kept == "adaptive" else as_rate_break)(sent, dst)
     sent.unlink()
     return dst
 
@@ -147,6 +149,8 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("double size (a UHD master of an HD film)", "picture", size=lambda w, h: (_even(w * 2), _even(h * 2))),
     Variant("an adaptive stream's recording (HLS): the picture's size changing every 6 s, MPEG-TS, H.264, AAC",
             "picture", ".ts", write=_broadcast, options={"kept": "adaptive"}),
+    Variant("a channel's recording, its sound at another rate over 10-20 s (an advertisement), MPEG-TS, H.264, AC-3",
+            "sound", ".ts", write=_broadcast, options={"kept": "rate break", "audio_codec": "ac3"}),
     Variant("23.976 fps", "rate", options={"fps": Fraction(24000, 1001)}),
     Variant("25 fps", "rate", options={"fps": 25}),
     Variant("29.97 fps", "rate", options={"fps": Fraction(30000, 1001)}),

@@ -8,7 +8,9 @@ holds times that fall back to 0 in its middle. FFmpeg's demuxer reads the times 
 such a file's clock starts below 0.
 
 :func:`as_adaptive` writes a recording of an adaptive stream (HLS): the picture at the renditions a player
-picks in turn, its size changing from segment to segment.
+picks in turn, its size changing from segment to segment. :func:`as_rate_break` writes a channel's recording
+whose sound changes sample rate for a stretch (an advertisement break inserted at its own 44.1 kHz), from the
+sound parts :func:`ac3_packets` encodes each at its own layout and rate.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from fractions import Fraction
 from pathlib import Path
 
 import av
+import numpy as np
 
 from autohaptics.errors import ParameterError
 from autohaptics.media.clock import WRAP_S
@@ -116,3 +119,64 @@ def _flush(out, stream, encoder: av.CodecContext) -> None:
     for p in encoder.encode(None):
         p.stream = stream
         out.mux(p)
+
+
+def ac3_packets(parts, bit_rate: int = 384_000) -> list:
+    """AC-3 packets of sound parts in turn, each ``(samples, layout, rate, start_s)``: float samples
+    [shape=(channels, n)] in ``layout``'s order at ``rate`` Hz, starting ``start_s`` s on the clock, each
+    part with an encoder of its own (a channel's programme and its advertisements: layout and rate their own)."""
+    packets = []
+    for x, layout, rate, start_s in parts:
+        enc = av.CodecContext.create("ac3", "w")
+        enc.sample_rate, enc.layout, enc.format, enc.bit_rate = rate, layout, "fltp", bit_rate
+        start = int(round(start_s * rate))
+        for k in range(0, x.shape[1], 1536):
+            chunk = np.zeros((x.shape[0], 1536), np.float32)
+            chunk[:, :min(1536, x.shape[1] - k)] = x[:, k:k + 1536]
+            frame = av.AudioFrame.from_ndarray(chunk, format="fltp", layout=layout)
+            frame.sample_rate, frame.pts, frame.time_base = rate, start + k, Fraction(1, rate)
+            packets += enc.encode(frame)
+        packets += enc.encode(None)
+    return packets
+
+
+def as_rate_break(src: str | os.PathLike, dst: str | os.PathLike, *, break_s: tuple[float, float] = (10.0, 20.0),
+                  rate: int | None = None) -> Path:
+    """``src``'s picture packets copied and its sound (at most 6 channels) as AC-3, the part over ``break_s``
+    resampled to ``rate`` Hz (default 44100, or 48000 for a sound at 44.1 kHz) and the rest at its own rate,
+    the MPEG-TS ``dst`` (a channel's recording with an advertisement break whose sound keeps its own rate).
+    Returns ``dst``."""
+    dst = Path(dst)
+    with av.open(str(src)) as c:
+        if not c.streams.video or not c.streams.audio:
+            raise ParameterError(f"{src}: a film with picture and sound is needed")
+        v_in, a_in = c.streams.video[0], c.streams.audio[0]
+        pictures, decoded = [], []
+        for p in c.demux(v_in, a_in):
+            if p.stream.type == "audio":
+                decoded += p.decode()
+            elif p.size and p.dts is not None:
+                pictures.append(p)
+        if not decoded or decoded[0].layout.nb_channels > 6:
+            raise ParameterError(f"{src}: AC-3 needs a sound of 1-6 channels")
+        layout, own, t0 = decoded[0].layout.name, decoded[0].sample_rate, float(decoded[0].time or 0.0)
+        rate = rate or (48000 if own == 44100 else 44100)
+        planar = av.AudioResampler(format="fltp", layout=layout, rate=own)
+        x = np.concatenate([g.to_ndarray() for f in decoded for g in planar.resample(f)], axis=1).astype(np.float32)
+        i0, i1 = (min(x.shape[1], max(0, int(round((b - t0) * own)))) for b in break_s)
+        resampler = av.AudioResampler(format="fltp", layout=layout, rate=rate)
+        middle = av.AudioFrame.from_ndarray(np.ascontiguousarray(x[:, i0:i1]), format="fltp", layout=layout)
+        middle.sample_rate = own
+        out_frames = resampler.resample(middle) + resampler.resample(None)
+        mid = np.concatenate([f.to_ndarray() for f in out_frames], axis=1) if out_frames else x[:, :0]
+        parts = [(x[:, :i0], layout, own, t0), (mid, layout, rate, t0 + i0 / own),
+                 (x[:, i1:], layout, own, t0 + i1 / own)]
+        with av.open(str(dst), "w", format="mpegts") as out:
+            video, sound = out.add_stream_from_template(v_in), out.add_stream("ac3", rate=own, layout=layout)
+            items = [(float(p.pts * p.time_base), p, sound) for p in ac3_packets([q for q in parts if q[0].shape[1]])]
+            items += [(float(p.dts * p.time_base), p, video) for p in pictures]
+            for _, p, stream in sorted(items, key=lambda item: item[0]):
+                p.stream = stream
+                out.mux(p)
+    return dst
+
