@@ -128,7 +128,7 @@ def _broadcast(src: Path, dst: Path, options: dict) -> Path:
     if kept == "recording":
         as_recording(sent, dst, clock_s=WRAP_S - begin_s - wrap_after_s, begin_s=begin_s)
     else:
-        (as_adaptive if kept == "adaptive" else as_rate_break)(sent, dst)
+        {"adaptive": as_adaptive, "rate break": as_rate_break}[kept](sent, dst)
     sent.unlink()
     return dst
 
