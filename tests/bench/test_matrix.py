@@ -17,8 +17,8 @@ import pytest
 
 from autohaptics import pipeline
 from autohaptics import testing as synth
-from autohaptics.bench.matrix import (JOLT_MAX, TARGETS, VARIANTS, cut_analysis, misses, not_applicable, row_figures,
-                                      silence_pair, variant_file)
+from autohaptics.bench.matrix import JOLT_MAX, TARGETS, cut_analysis, misses, row_figures, silence_pair
+from autohaptics.bench.variants import VARIANTS, not_applicable, variant_file
 from autohaptics.errors import ParameterError
 from autohaptics.media import probe
 from autohaptics.testing.scenes import material_scene

@@ -13,7 +13,8 @@ import pytest
 
 from autohaptics import pipeline
 from autohaptics import testing as synth
-from autohaptics.bench.matrix import VARIANTS, Variant, cut_analysis, misses, row_figures
+from autohaptics.bench.matrix import cut_analysis, misses, row_figures
+from autohaptics.bench.variants import VARIANTS, Variant
 from autohaptics.media import iter_video, probe, read_audio
 from autohaptics.server import posters
 from autohaptics.testing.broadcast import WRAP_S, ac3_packets, as_adaptive, as_rate_break, as_recording

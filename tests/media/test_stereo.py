@@ -13,7 +13,8 @@ from hypothesis import strategies as st
 
 from autohaptics import pipeline
 from autohaptics import testing as synth
-from autohaptics.bench.matrix import VARIANTS, misses, row_figures
+from autohaptics.bench.matrix import misses, row_figures
+from autohaptics.bench.variants import VARIANTS
 from autohaptics.media import Frame, find_picture, probe
 from autohaptics.media.active import picture_packing, sample_lumas
 from autohaptics.media.stereo import halves, view_aspect, view_rect

@@ -18,6 +18,7 @@ import av
 
 from autohaptics.errors import MediaError
 from autohaptics.media.clock import TRANSPORT_FORMATS, Clock, read_clock
+from autohaptics.media.programs import film_programme
 from autohaptics.media.stereo import declared_packing
 from autohaptics.media.tracks import channel_tracks, sound_stream
 from autohaptics.timebase import ANALYSIS_SAMPLE_RATE
@@ -188,8 +189,10 @@ def probe(path: str | os.PathLike) -> MediaInfo:
     with open_container(p) as c:
         undecodable = [f"{s.type} stream #{s.index} ({_codec_name(s)})" for s in c.streams
                        if s.type in ("video", "audio") and s.codec_context is None]
-        vs = next((s for s in c.streams.video if s.codec_context is not None and _is_real_video(s)), None)
-        as_ = sound_stream(c)
+        pictures = [s for s in c.streams.video if s.codec_context is not None and _is_real_video(s)]
+        among = film_programme(p, c, {s.index for s in pictures})
+        vs = next((s for s in pictures if among is None or s.index in among), None)
+        as_ = sound_stream(c, among)
         video = _video_info(vs) if vs is not None else None
         audio = _audio_info(as_, c) if as_ is not None else None
         if undecodable and ((video is None and any(u.startswith("video") for u in undecodable))
@@ -199,10 +202,11 @@ def probe(path: str | os.PathLike) -> MediaInfo:
             raise MediaError(f"{p}: no audio or video stream (container {c.format.name})")
         if audio is not None and (audio.sample_rate <= 0 or audio.channels <= 0):
             raise MediaError(f"{p}: audio stream #{audio.index} ({audio.codec}) declares no sample rate or channels")
-        start_s = _container_start(c)
-        duration = _duration_s(c, [s for s in (vs, as_) if s is not None])
+        read = [s for s in (vs, as_) if s is not None]
+        start_s = _container_start(c) if among is None else _streams_start(read)
+        duration = _duration_s(c, read) if among is None else None
         if duration is None:
-            duration = _scan_duration(c, [s for s in (vs, as_) if s is not None], start_s)
+            duration = _scan_duration(c, read, start_s)
         if duration is None or not math.isfinite(duration) or duration <= 0:
             raise MediaError(f"{p}: zero-length media (no decodable duration)")
         if video is not None:
@@ -211,8 +215,8 @@ def probe(path: str | os.PathLike) -> MediaInfo:
             video = replace(video, rotation=rotation, stereo=stereo, variable_rate=_variable_rate(c, vs, video.fps))
         clock = None
         if c.format.name in TRANSPORT_FORMATS:
-            clock, end = read_clock(c, [s for s in (vs, as_) if s is not None])
-            if clock.jump_positions and end is not None:
+            clock, end = read_clock(c, read)
+            if (clock.jump_positions or among is not None) and end is not None:
                 duration = end - start_s
         return MediaInfo(path=str(p), size_bytes=p.stat().st_size, container=c.format.name,
                          duration_s=float(duration), start_s=start_s, video=video, audio=audio, clock=clock)
@@ -349,6 +353,12 @@ def _audio_info(s, c) -> AudioInfo:
     n = len(tracks) if len(tracks) > 1 else int(cc.layout.nb_channels)
     return AudioInfo(index=s.index, sample_rate=int(cc.sample_rate or 0), channels=n, layout=layout,
                      codec=cc.name, duration_s=dur, tracks=tuple(tracks) if len(tracks) > 1 else ())
+
+
+def _streams_start(streams) -> float:
+    """The earliest start of ``streams``, s on their clock (0 when none is timed)."""
+    starts = [float(s.start_time * s.time_base) for s in streams if s.start_time is not None and s.time_base]
+    return min(starts) if starts else 0.0
 
 
 def _container_start(c) -> float:

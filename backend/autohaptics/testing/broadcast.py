@@ -7,10 +7,11 @@ The clock counts 33 bits of 90 kHz ticks, so it wraps every :data:`WRAP_S` (26.5
 holds times that fall back to 0 in its middle. FFmpeg's demuxer reads the times before the wrap as negative, so
 such a file's clock starts below 0.
 
-:func:`as_adaptive` writes a recording of an adaptive stream (HLS): the picture at the renditions a player
-picks in turn, its size changing from segment to segment. :func:`as_rate_break` writes a channel's recording
-whose sound changes sample rate for a stretch (an advertisement break inserted at its own 44.1 kHz), from the
-sound parts :func:`ac3_packets` encodes each at its own layout and rate.
+:func:`as_multiplex` writes a recording of a whole multiplex (several channels' programmes, each on its own clock;
+:func:`other_channel` is one). :func:`as_adaptive` writes a recording of an adaptive stream (HLS): the picture at
+the renditions a player picks in turn, its size changing from segment to segment. :func:`as_rate_break` writes a
+channel's recording whose sound changes sample rate for a stretch (an advertisement break inserted at its own 44.1
+kHz), from the sound parts :func:`ac3_packets` encodes each at its own layout and rate.
 """
 
 from __future__ import annotations
@@ -25,10 +26,11 @@ import numpy as np
 
 from autohaptics.errors import ParameterError
 from autohaptics.media.clock import WRAP_S
+from autohaptics.media.programs import crc32_mpeg
 
 
 def as_recording(src: str | os.PathLike, dst: str | os.PathLike, *, clock_s: float = 0.0, begin_s: float = 0.0,
-                 sound_late_s: float = 0.0) -> Path:
+                 sound_late_s: float = 0.0, programme: int = 1) -> Path:
     """``src``'s first picture and sound streams (codecs a transport stream carries), their packets copied, as
     the MPEG-TS recording ``dst`` (module docstring); returns ``dst``.
 
@@ -36,7 +38,8 @@ def as_recording(src: str | os.PathLike, dst: str | os.PathLike, *, clock_s: flo
     of :data:`WRAP_S`, the file's clock wraps inside it). begin_s : where the recording begins on the
     source's time, s: every packet sent from there on, in the order a channel sends them (by decode
     time), whatever frame it holds. sound_late_s : the sound's packets of the first ``sound_late_s`` after
-    ``begin_s`` left out (its first packet that much later than the picture's).
+    ``begin_s`` left out (its first packet that much later than the picture's). programme : its number in
+    the file's tables, which also picks its packet ids (:func:`as_multiplex` joins such files).
     """
     if min(clock_s, begin_s, sound_late_s) < 0:
         raise ParameterError(f"clock_s, begin_s and sound_late_s are >= 0, got {clock_s}, {begin_s}, {sound_late_s}")
@@ -49,7 +52,7 @@ def as_recording(src: str | os.PathLike, dst: str | os.PathLike, *, clock_s: flo
         first = {"video": begin_s if begin_s > 0 else -math.inf, "audio": begin_s if begin_s > 0 else -math.inf}
         if sound_late_s > 0:
             first["audio"] = begin_s + sound_late_s
-        with av.open(str(dst), "w", format="mpegts") as out:
+        with av.open(str(dst), "w", format="mpegts", options=_programme_options(programme)) as out:
             streams = {s.index: out.add_stream_from_template(s) for s in (c.streams.video[0], c.streams.audio[0])}
             for p in packets:
                 if float(p.dts * p.time_base) < first[p.stream.type]:
@@ -60,6 +63,77 @@ def as_recording(src: str | os.PathLike, dst: str | os.PathLike, *, clock_s: flo
                 p.stream = streams[p.stream.index]
                 out.mux(p)
     return dst
+
+
+def as_multiplex(sources, dst: str | os.PathLike, *, clocks_s: tuple[float, ...] | None = None) -> Path:
+    """The films ``sources`` as a recording of a whole multiplex holds them (a DVB mux's channels, an ATSC
+    channel's subchannels): each the programme numbered by its place (1, 2, ...), as :func:`as_recording`
+    writes it on its own clock (``clocks_s``, s; default 0 for each), their transport packets interleaved
+    by their share of each file, under one association table that lists every programme. Returns ``dst``."""
+    clocks_s = tuple(clocks_s) if clocks_s is not None else (0.0,) * len(sources)
+    if len(sources) < 2 or len(clocks_s) != len(sources):
+        raise ParameterError(f"a multiplex needs two or more films, each with a clock, got {len(sources)}, {clocks_s}")
+    dst = Path(dst)
+    parts = []
+    for k, (src, clock_s) in enumerate(zip(sources, clocks_s), start=1):
+        one = as_recording(src, dst.with_name(f"{dst.stem}.{k}.ts"), clock_s=clock_s, programme=k)
+        data = one.read_bytes()
+        one.unlink()
+        keep = [data[i:i + 188] for i in range(0, len(data), 188) if k == 1 or _pid(data[i:i + 188]) not in (0, 0x11)]
+        parts.append(keep)
+    table = [(k, _map_pid(k)) for k in range(1, len(sources) + 1)]
+    out, sent, counter = [], [0] * len(parts), 0
+    while any(n < len(p) for n, p in zip(sent, parts)):
+        k = min((n / len(p), i) for i, (n, p) in enumerate(zip(sent, parts)) if n < len(p))[1]
+        packet = parts[k][sent[k]]
+        sent[k] += 1
+        if _pid(packet) == 0:
+            packet, counter = _association_packet(table, counter), counter + 1
+        out.append(packet)
+    dst.write_bytes(b"".join(out))
+    return dst
+
+
+OTHER_BOOMS_S = (0.8, 3.9, 6.8, 9.9)  # the other channel's events, then every 3 s (none at the matrix scene's)
+
+
+def other_channel(dst: str | os.PathLike, duration_s: float) -> Path:
+    """Another channel's programme for a multiplex (:func:`as_multiplex`), the MP4 ``dst``: ``duration_s`` of
+    one red shot (256 x 144, 30 fps) whose 5.1 sound booms at :data:`OTHER_BOOMS_S` and every 3 s after,
+    more channels than a stereo film has (the stream FFmpeg's own command line would take)."""
+    from autohaptics.testing.encode import write_scene
+    from autohaptics.testing.scenes import Scene, Segment, impact
+
+    booms = [t for t in OTHER_BOOMS_S + tuple(12.8 + 3.0 * k for k in range(int(duration_s / 3)))
+             if t + 1.0 < duration_s]
+    scene = Scene(duration_s, background=[Segment(0.0, duration_s, (200, 60, 40))],
+                  audio=[e for t in booms for e in impact(t, level_dbfs=-6.0)])
+    return write_scene(dst, scene, width=256, height=144, fps=30, channels=6)
+
+
+def _programme_options(number: int) -> dict[str, str]:
+    """FFmpeg's muxer options that number a programme and give it packet ids of its own (its map's:
+    :func:`_map_pid`)."""
+    return {"mpegts_service_id": str(number), "mpegts_pmt_start_pid": str(_map_pid(number)),
+            "mpegts_start_pid": str(0x100 + 0x20 * (number - 1))}
+
+
+def _map_pid(number: int) -> int:
+    return 0x1000 + 0x10 * (number - 1)
+
+
+def _pid(packet: bytes) -> int:
+    return ((packet[1] & 0x1F) << 8) | packet[2]
+
+
+def _association_packet(table, counter: int) -> bytes:
+    """One transport packet holding a programme association section: ``table`` (programme number, its map's
+    packet id), ``counter`` the packet's continuity count."""
+    entries = b"".join(n.to_bytes(2, "big") + (0xE000 | pid).to_bytes(2, "big") for n, pid in table)
+    section = bytes([0x00]) + (0xB000 | (9 + len(entries))).to_bytes(2, "big") + bytes([0, 1, 0xC1, 0, 0]) + entries
+    section += crc32_mpeg(section).to_bytes(4, "big")
+    payload = bytes([0]) + section
+    return bytes([0x47, 0x40, 0x00, 0x10 | (counter & 0xF)]) + payload + b"\xff" * (184 - len(payload))
 
 
 def as_adaptive(src: str | os.PathLike, dst: str | os.PathLike, *, scales: tuple[float, ...] = (1.0, 0.5, 0.75, 1 / 3),

@@ -1,0 +1,78 @@
+"""A recording of a whole multiplex (``testing.broadcast.as_multiplex``): the programmes of a transport stream
+read from its tables (``media.programs``), and the film read from one programme, its picture, its sound and
+its clock, whatever the other programmes carry."""
+
+from __future__ import annotations
+
+import pytest
+
+from autohaptics import pipeline
+from autohaptics import testing as synth
+from autohaptics.bench.matrix import misses, row_figures
+from autohaptics.bench.variants import Variant
+from autohaptics.media import probe
+from autohaptics.media.programs import crc32_mpeg, program_pids
+from autohaptics.testing.broadcast import OTHER_BOOMS_S, as_multiplex, as_recording, other_channel
+from autohaptics.testing.scenes import material_scene
+from autohaptics.timebase import TICK_S
+
+
+@pytest.fixture(scope="module")
+def films(tmp_path_factory):
+    """The film (the matrix's scene, 18 s, stereo) and another channel's programme (14 s, its 5.1 sound
+    booming between the film's impacts)."""
+    d = tmp_path_factory.mktemp("multiplex")
+    film = synth.write_scene(d / "film.mp4", material_scene(18.0), width=320, height=180, fps=25)
+    channel = other_channel(d / "other.mp4", 14.0)
+    return d, film, channel
+
+
+def test_the_tables_crc_is_mpeg2s():
+    assert crc32_mpeg(b"123456789") == 0x0376E6E7  # the check value of CRC-32/MPEG-2
+    section = b"\x00\xb0\x0d\x00\x01\xc1\x00\x00\x00\x01\xf0\x00"
+    assert crc32_mpeg(section + crc32_mpeg(section).to_bytes(4, "big")) == 0
+
+
+def test_the_programmes_are_read_from_the_tables(films):
+    """Three programmes, in the table's order, each with its picture's and sound's packet ids; the same
+    bytes as a Blu-ray's M2TS (a 4-byte time before each packet) read the same; a damaged first copy of
+    the association table is passed over for the next; one programme and a file that is not a transport
+    stream."""
+    d, film, other = films
+    mux = as_multiplex([film, other, film], d / "three.ts")
+    got = program_pids(mux)
+    assert list(got) == [1, 2, 3]
+    assert got == {1: (0x100, 0x101), 2: (0x120, 0x121), 3: (0x140, 0x141)}
+    data = mux.read_bytes()
+    m2ts = d / "three.m2ts"
+    m2ts.write_bytes(b"".join(b"\0\0\0\0" + data[i:i + 188] for i in range(0, len(data), 188)))
+    assert program_pids(m2ts) == got
+    first_pat = next(i for i in range(0, len(data), 188) if data[i + 1] & 0x1F == 0 and data[i + 2] == 0)
+    damaged = bytearray(data)
+    damaged[first_pat + 13] ^= 0xFF  # the first programme number of the first copy
+    (d / "damaged.ts").write_bytes(bytes(damaged))
+    assert program_pids(d / "damaged.ts") == got
+    assert program_pids(as_recording(film, d / "one.ts")) == {1: (0x100, 0x101)}
+    assert program_pids(film) == {}
+
+
+@pytest.mark.parametrize("clocks_s", [(3600.0, 0.0), (0.0, 7200.0)], ids=["other_earlier", "other_later"])
+def test_a_multiplex_is_read_as_its_first_programmes_film(films, clocks_s):
+    """The film is the first programme: its picture, its sound (not the other channel's 5.1, though it
+    has more channels) and its own clock, an hour after or two before the other's. Before, the picture
+    was the film's and the sound the other channel's, the two clocks joined: 3648 s of timeline for the
+    18 s film (the other's clock earlier) or 48 s (later), vibrating at the other's booms."""
+    d, film, other = films
+    mux = as_multiplex([film, other], d / f"mux_{int(clocks_s[0])}.ts", clocks_s=clocks_s)
+    own, info = probe(film), probe(mux)
+    assert (info.video.index, info.audio.index) == (0, 1)
+    assert (info.video.width, info.audio.channels) == (320, 2)
+    assert info.start_s == pytest.approx(clocks_s[0], abs=0.1)
+    assert info.duration_s == pytest.approx(own.duration_s, abs=0.1)
+    want, got = pipeline.generate(film), pipeline.generate(mux)
+    assert abs(want.n_ticks - got.n_ticks) <= 1
+    fig = row_figures(want, got, Variant("multiplex", "codec"))
+    assert misses(fig) == [] and fig["onset_f1"] == 1.0, fig
+    for t in OTHER_BOOMS_S:  # the other channel's booms fall between the film's: nothing there
+        k = int(round(t / TICK_S))
+        assert got.vibration[k:k + 3].max() == pytest.approx(want.vibration[k:k + 3].max(), abs=0.05)
