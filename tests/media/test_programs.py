@@ -76,3 +76,15 @@ def test_a_multiplex_is_read_as_its_first_programmes_film(films, clocks_s):
     for t in OTHER_BOOMS_S:  # the other channel's booms fall between the film's: nothing there
         k = int(round(t / TICK_S))
         assert got.vibration[k:k + 3].max() == pytest.approx(want.vibration[k:k + 3].max(), abs=0.05)
+
+
+def test_a_radio_programme_ahead_of_the_film_is_passed_over(films):
+    """A multiplex whose first programme is a radio station (sound only, 5.1): the film is the first
+    programme with a picture, and its sound is its own, not the radio's."""
+    d, film, other = films
+    radio = synth.write_scene(d / "radio.m4a", material_scene(12.0), channels=6)
+    mux = as_multiplex([radio, film], d / "radio_first.ts", clocks_s=(0.0, 600.0))
+    info = probe(mux)
+    assert (info.video.width, info.audio.channels) == (320, 2)
+    assert info.start_s == pytest.approx(600.0, abs=0.1)
+    assert info.duration_s == pytest.approx(probe(film).duration_s, abs=0.1)

@@ -31,8 +31,8 @@ from autohaptics.media.programs import crc32_mpeg
 
 def as_recording(src: str | os.PathLike, dst: str | os.PathLike, *, clock_s: float = 0.0, begin_s: float = 0.0,
                  sound_late_s: float = 0.0, programme: int = 1) -> Path:
-    """``src``'s first picture and sound streams (codecs a transport stream carries), their packets copied, as
-    the MPEG-TS recording ``dst`` (module docstring); returns ``dst``.
+    """``src``'s first picture and sound streams (codecs a transport stream carries; a radio programme has sound
+    only), their packets copied, as the MPEG-TS recording ``dst`` (module docstring); returns ``dst``.
 
     clock_s : the broadcaster's clock at the source's time 0, s (>= 0; within the file's length of a multiple
     of :data:`WRAP_S`, the file's clock wraps inside it). begin_s : where the recording begins on the
@@ -45,15 +45,16 @@ def as_recording(src: str | os.PathLike, dst: str | os.PathLike, *, clock_s: flo
         raise ParameterError(f"clock_s, begin_s and sound_late_s are >= 0, got {clock_s}, {begin_s}, {sound_late_s}")
     dst = Path(dst)
     with av.open(str(src)) as c:
-        if not c.streams.video or not c.streams.audio:
-            raise ParameterError(f"{src}: a film with picture and sound is needed")
-        packets = [p for p in c.demux(c.streams.video[0], c.streams.audio[0]) if p.size and p.dts is not None]
+        if not c.streams.audio:
+            raise ParameterError(f"{src}: a film or a radio programme, with sound, is needed")
+        kept = [*c.streams.video[:1], c.streams.audio[0]]
+        packets = [p for p in c.demux(*kept) if p.size and p.dts is not None]
         packets.sort(key=lambda p: float(p.dts * p.time_base))
         first = {"video": begin_s if begin_s > 0 else -math.inf, "audio": begin_s if begin_s > 0 else -math.inf}
         if sound_late_s > 0:
             first["audio"] = begin_s + sound_late_s
         with av.open(str(dst), "w", format="mpegts", options=_programme_options(programme)) as out:
-            streams = {s.index: out.add_stream_from_template(s) for s in (c.streams.video[0], c.streams.audio[0])}
+            streams = {s.index: out.add_stream_from_template(s) for s in kept}
             for p in packets:
                 if float(p.dts * p.time_base) < first[p.stream.type]:
                     continue
@@ -66,7 +67,7 @@ def as_recording(src: str | os.PathLike, dst: str | os.PathLike, *, clock_s: flo
 
 
 def as_multiplex(sources, dst: str | os.PathLike, *, clocks_s: tuple[float, ...] | None = None) -> Path:
-    """The films ``sources`` as a recording of a whole multiplex holds them (a DVB mux's channels, an ATSC
+    """The films (or radio programmes) ``sources`` as a recording of a whole multiplex holds them (a DVB mux's channels, an ATSC
     channel's subchannels): each the programme numbered by its place (1, 2, ...), as :func:`as_recording`
     writes it on its own clock (``clocks_s``, s; default 0 for each), their transport packets interleaved
     by their share of each file, under one association table that lists every programme. Returns ``dst``."""
