@@ -5,6 +5,8 @@ its clock, whatever the other programmes carry."""
 from __future__ import annotations
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from autohaptics import pipeline
 from autohaptics import testing as synth
@@ -69,6 +71,33 @@ def test_tables_across_packets_are_gathered(tmp_path):
     path = tmp_path / "tables.ts"
     path.write_bytes(data + filler)
     assert program_pids(path) == {5: (0x100, 0x101), 7: (0x120,)}
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.binary(max_size=4000), st.integers(0, 3), st.sampled_from((188, 192, 204)),
+       st.lists(st.tuples(st.integers(0, 10**6), st.integers(0, 255)), max_size=20))
+def test_any_bytes_give_programmes_or_none_never_an_error(tmp_path_factory, noise, pid_pick, size, flips):
+    """Bytes that look like transport packets (sync bytes in place, anything between), or a real table's
+    packets with any bytes changed: a programme map of packet ids, possibly empty, never an error."""
+    pids = (0, 0x1000, 0x1100, 0x1FFF)[pid_pick]
+    body = bytearray()
+    for k in range(0, len(noise) + 1, 184):
+        head = bytes([0x47, 0x40 | pids >> 8, pids & 0xFF, 0x10 | k % 16])
+        body += (b"\0" * (size - 188) if size == 192 else b"") + head + noise[k:k + 184].ljust(184, b"\xff")
+        body += b"\0" * (size - 188) if size == 204 else b""
+    pat = _section(0x00, 1, b"\x00\x05\xf0\x00")
+    pmt = _section(0x02, 5, b"\xe1\x00\xf0\x00" + b"\x1b\xe1\x00\xf0\x00")
+    tables = bytearray((_packets(0, pat) + _packets(0x1000, pmt)) * 6)
+    for at, value in flips:
+        tables[at % len(tables)] = value
+    path = tmp_path_factory.mktemp("noise") / "noise.ts"
+    for data in (bytes(body) * (12 * size // len(body) + 1), bytes(tables)):  # ten packets or more
+        path.write_bytes(data)
+        got = program_pids(path)
+        assert isinstance(got, dict)
+        assert all(isinstance(n, int) and all(0 <= pid <= 0x1FFF for pid in pids_) for n, pids_ in got.items())
+    if not flips:
+        assert got == {5: (0x100,)}
 
 
 def test_the_programmes_are_read_from_the_tables(films):
