@@ -77,8 +77,8 @@ def film_programme(path: str | os.PathLike, c, pictures: set[int]) -> set[int] |
     programmes = program_pids(path)
     if len(programmes) < 2:
         return None
-    by_pid = {s.id: s.index for s in c.streams}
-    groups = [{by_pid[pid] for pid in pids if pid in by_pid} for pids in programmes.values()]
+    # each programme's streams (one packet id may carry two: a Blu-ray's TrueHD and its AC-3 core)
+    groups = [{s.index for s in c.streams if s.id in pids} for pids in programmes.values()]
     groups = [g for g in groups if g]
     return next((g for g in groups if g & pictures), groups[0]) if groups else None
 
