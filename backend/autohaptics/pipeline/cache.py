@@ -34,7 +34,8 @@ from autohaptics.shots import Boundaries, detect
 # 7: repeats told in runs and a pair timed by the picture's mean step, its least span in steps (``airflow.cadence``);
 # every frame decoded from 40 fps up where the pictures repeat (``pipeline.picture.decode_mode``).
 # 8: a sound that changes sample rate mid-stream resampled from each rate (``media.audio``).
-ANALYSIS_REVISION = 8
+# 9: a transport stream of several programmes read as one programme, its clock its own (``media.programs``).
+ANALYSIS_REVISION = 9
 
 
 @dataclass
