@@ -17,15 +17,14 @@ _ASIDE_TITLES = ("comment", "kommentar", "description", "descriptive")
 def sound_stream(c, among: set[int] | None = None):
     """The audio stream the film's sound is read from, None when no audio stream can be decoded.
 
-    Of the decodable streams (in a transport stream of several programmes, those whose index is in
-    ``among``: the programme read, :mod:`~autohaptics.media.programs`) that declare a sample rate and
-    channels (all decodable ones when none does), those not set aside (flagged, or titled, as a
-    commentary, an audio description, a karaoke or lyrics track, or for the hard of hearing; all of
-    them when every one is); of those, the one with the most channels (a master's mono tracks counted
-    as the mix they make, :func:`channel_tracks`), then the one flagged as the default, then the first.
-    The most channels is what FFmpeg's own command line takes: a compatibility stereo track ahead of
-    the 5.1 mix (HandBrake's and iTunes' files) gives way to the
-    mix, whose LFE channel the booming and low-frequency features read."""
+    Of the decodable streams (in a transport stream of several programmes, those whose index is in ``among``:
+    the programme read, :mod:`~autohaptics.media.programs`) that declare a sample rate and channels (all
+    decodable ones when none does), those not set aside (flagged, or titled, as a commentary, an audio
+    description, a karaoke or lyrics track, or for the hard of hearing; all of them when every one is); of
+    those, the one with the most channels (a master's mono tracks counted as the mix they make,
+    :func:`channel_tracks`), then the one flagged as the default, then the first. The most channels is what
+    FFmpeg's own command line takes: a compatibility stereo track ahead of the 5.1 mix (HandBrake's and iTunes'
+    files) gives way to the mix, whose LFE channel the booming and low-frequency features read."""
     decodable = [s for s in c.streams.audio if s.codec_context is not None and (among is None or s.index in among)]
     usable = [s for s in decodable if s.codec_context.sample_rate and s.codec_context.layout.nb_channels] or decodable
     if not usable:

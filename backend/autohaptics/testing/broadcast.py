@@ -67,10 +67,11 @@ def as_recording(src: str | os.PathLike, dst: str | os.PathLike, *, clock_s: flo
 
 
 def as_multiplex(sources, dst: str | os.PathLike, *, clocks_s: tuple[float, ...] | None = None) -> Path:
-    """The films (or radio programmes) ``sources`` as a recording of a whole multiplex holds them (a DVB mux's channels, an ATSC
-    channel's subchannels): each the programme numbered by its place (1, 2, ...), as :func:`as_recording`
-    writes it on its own clock (``clocks_s``, s; default 0 for each), their transport packets interleaved
-    by their share of each file, under one association table that lists every programme. Returns ``dst``."""
+    """The films (or radio programmes) ``sources`` as a recording of a whole multiplex holds them (a DVB mux's
+    channels, an ATSC channel's subchannels): each the programme numbered by its place (1, 2, ...), as
+    :func:`as_recording` writes it on its own clock (``clocks_s``, s; default 0 for each), their transport packets
+    interleaved by their share of each file, under one association table that lists every programme. Returns
+    ``dst``."""
     clocks_s = tuple(clocks_s) if clocks_s is not None else (0.0,) * len(sources)
     if len(sources) < 2 or len(clocks_s) != len(sources):
         raise ParameterError(f"a multiplex needs two or more films, each with a clock, got {len(sources)}, {clocks_s}")
