@@ -14,7 +14,8 @@ from autohaptics.bench.matrix import misses, row_figures
 from autohaptics.bench.variants import Variant
 from autohaptics.media import probe
 from autohaptics.media.programs import crc32_mpeg, program_pids
-from autohaptics.testing.broadcast import OTHER_BOOMS_S, as_multiplex, as_recording, other_channel
+from autohaptics.testing.broadcast import (OTHER_BOOMS_S, as_multiplex, as_recording, other_channel, section_packets,
+                                           table_section)
 from autohaptics.testing.scenes import material_scene
 from autohaptics.timebase import TICK_S
 
@@ -35,39 +36,20 @@ def test_the_tables_crc_is_mpeg2s():
     assert crc32_mpeg(section + crc32_mpeg(section).to_bytes(4, "big")) == 0
 
 
-def _section(table_id: int, number: int, body: bytes) -> bytes:
-    head = bytes([table_id]) + (0xB000 | (9 + len(body))).to_bytes(2, "big") + number.to_bytes(2, "big") + b"\xc1\0\0"
-    return head + body + crc32_mpeg(head + body).to_bytes(4, "big")
-
-
-def _packets(pid: int, section: bytes, *, adaptation: int = 0) -> bytes:
-    """``section`` in transport packets of ``pid``: the first starts it (pointer 0), after an adaptation
-    field of ``adaptation`` bytes (a clock reference's room); the rest continue it; stuffing ends the last."""
-    out, data, first = [], bytes([0]) + section, True
-    while data:
-        head = bytes([0x47, (0x40 if first else 0) | pid >> 8, pid & 0xFF])
-        room = 184 - (1 + adaptation if first and adaptation else 0)
-        field = bytes([adaptation]) + b"\0" * adaptation if first and adaptation else b""
-        head += bytes([(0x30 if field else 0x10) | len(out)])
-        out.append(head + field + data[:room] + b"\xff" * max(0, room - len(data)))
-        data, first = data[room:], False
-    return b"".join(out)
-
-
 def test_tables_across_packets_are_gathered(tmp_path):
     """A programme map longer than a packet (a broadcaster's, with many descriptors) read from two, the
     association table's network entry left out, a packet's adaptation field skipped; a map for a
     programme the table does not list is not a programme."""
-    pat = _section(0x00, 1, b"\x00\x00\xe0\x10" + b"\x00\x05\xf0\x00" + b"\x00\x07\xf1\x00")  # network, 5, 7
+    pat = table_section(0x00, 1, b"\x00\x00\xe0\x10" + b"\x00\x05\xf0\x00" + b"\x00\x07\xf1\x00")  # network, 5, 7
     info = bytes([0x0A, 200]) + b"x" * 200  # 202 bytes of programme descriptors
     es = b"\x1b\xe1\x00\xf0\x00" + b"\x81\xe1\x01\xf0\x03\x05\x01\x00"  # H.264 0x100, AC-3 0x101
-    pmt5 = _section(0x02, 5, b"\xe1\x00" + (0xF000 | len(info)).to_bytes(2, "big") + info + es)
-    pmt7 = _section(0x02, 7, b"\xe1\x20\xf0\x00" + b"\x1b\xe1\x20\xf0\x00")
-    stray = _section(0x02, 9, b"\xe1\x40\xf0\x00" + b"\x1b\xe1\x40\xf0\x00")
+    pmt5 = table_section(0x02, 5, b"\xe1\x00" + (0xF000 | len(info)).to_bytes(2, "big") + info + es)
+    pmt7 = table_section(0x02, 7, b"\xe1\x20\xf0\x00" + b"\x1b\xe1\x20\xf0\x00")
+    stray = table_section(0x02, 9, b"\xe1\x40\xf0\x00" + b"\x1b\xe1\x40\xf0\x00")
     filler = b"".join(bytes([0x47, 0x1F, 0xFF, 0x10]) + b"\xff" * 184 for _ in range(12))
-    data = filler + _packets(0, pat, adaptation=7) + _packets(0x1000, pmt5) + _packets(0x1200, stray) \
-        + _packets(0x1100, pmt7)
-    assert len(_packets(0x1000, pmt5)) == 2 * 188
+    data = filler + section_packets(0, pat, adaptation=7) + section_packets(0x1000, pmt5) \
+        + section_packets(0x1200, stray) + section_packets(0x1100, pmt7)
+    assert len(section_packets(0x1000, pmt5)) == 2 * 188
     path = tmp_path / "tables.ts"
     path.write_bytes(data + filler)
     assert program_pids(path) == {5: (0x100, 0x101), 7: (0x120,)}
@@ -85,9 +67,9 @@ def test_any_bytes_give_programmes_or_none_never_an_error(tmp_path_factory, nois
         head = bytes([0x47, 0x40 | pids >> 8, pids & 0xFF, 0x10 | k % 16])
         body += (b"\0" * (size - 188) if size == 192 else b"") + head + noise[k:k + 184].ljust(184, b"\xff")
         body += b"\0" * (size - 188) if size == 204 else b""
-    pat = _section(0x00, 1, b"\x00\x05\xf0\x00")
-    pmt = _section(0x02, 5, b"\xe1\x00\xf0\x00" + b"\x1b\xe1\x00\xf0\x00")
-    tables = bytearray((_packets(0, pat) + _packets(0x1000, pmt)) * 6)
+    pat = table_section(0x00, 1, b"\x00\x05\xf0\x00")
+    pmt = table_section(0x02, 5, b"\xe1\x00\xf0\x00" + b"\x1b\xe1\x00\xf0\x00")
+    tables = bytearray((section_packets(0, pat) + section_packets(0x1000, pmt)) * 6)
     for at, value in flips:
         tables[at % len(tables)] = value
     path = tmp_path_factory.mktemp("noise") / "noise.ts"

@@ -83,6 +83,11 @@ def film_programme(path: str | os.PathLike, c, pictures: set[int]) -> set[int] |
     return next((g for g in groups if g & pictures), groups[0]) if groups else None
 
 
+def packet_pid(packet: bytes) -> int:
+    """A transport packet's packet id (13 bits of its second and third bytes)."""
+    return ((packet[1] & 0x1F) << 8) | packet[2]
+
+
 def _layout(data: bytes) -> tuple[int, int] | None:
     """(byte of the first packet's sync byte, packet size) where ``data`` is a run of transport
     packets (ten sync bytes in a row at one of :data:`PACKET_SIZES`), else None."""
@@ -99,7 +104,7 @@ def _payload(packet: bytes) -> tuple[int, bytes | None]:
     its second byte: kept as the payload's first byte for :func:`_sections` as a marker)."""
     if packet[0] != SYNC or packet[1] & 0x80:  # transport error indicator
         return -1, None
-    pid = ((packet[1] & 0x1F) << 8) | packet[2]
+    pid = packet_pid(packet)
     control, at = (packet[3] >> 4) & 0x3, 4
     if not control & 0x1:
         return pid, None

@@ -26,7 +26,7 @@ import numpy as np
 
 from autohaptics.errors import ParameterError
 from autohaptics.media.clock import WRAP_S
-from autohaptics.media.programs import crc32_mpeg
+from autohaptics.media.programs import crc32_mpeg, packet_pid
 
 
 def as_recording(src: str | os.PathLike, dst: str | os.PathLike, *, clock_s: float = 0.0, begin_s: float = 0.0,
@@ -81,7 +81,7 @@ def as_multiplex(sources, dst: str | os.PathLike, *, clocks_s: tuple[float, ...]
         one = as_recording(src, dst.with_name(f"{dst.stem}.{k}.ts"), clock_s=clock_s, programme=k)
         data = one.read_bytes()
         one.unlink()
-        keep = [data[i:i + 188] for i in range(0, len(data), 188) if k == 1 or _pid(data[i:i + 188]) not in (0, 0x11)]
+        keep = [data[i:i + 188] for i in range(0, len(data), 188) if k == 1 or packet_pid(data[i:i + 188]) not in (0, 0x11)]
         parts.append(keep)
     table = [(k, _map_pid(k)) for k in range(1, len(sources) + 1)]
     out, sent, counter = [], [0] * len(parts), 0
@@ -89,7 +89,7 @@ def as_multiplex(sources, dst: str | os.PathLike, *, clocks_s: tuple[float, ...]
         k = min((n / len(p), i) for i, (n, p) in enumerate(zip(sent, parts)) if n < len(p))[1]
         packet = parts[k][sent[k]]
         sent[k] += 1
-        if _pid(packet) == 0:
+        if packet_pid(packet) == 0:
             packet, counter = _association_packet(table, counter), counter + 1
         out.append(packet)
     dst.write_bytes(b"".join(out))
@@ -124,18 +124,34 @@ def _map_pid(number: int) -> int:
     return 0x1000 + 0x10 * (number - 1)
 
 
-def _pid(packet: bytes) -> int:
-    return ((packet[1] & 0x1F) << 8) | packet[2]
+def table_section(table_id: int, number: int, body: bytes) -> bytes:
+    """A table section (ISO/IEC 13818-1): ``table_id`` (0 association, 2 programme map), ``number`` (the
+    stream's id, or the programme's), version 0, one section, ``body``, then its CRC."""
+    head = bytes([table_id]) + (0xB000 | (9 + len(body))).to_bytes(2, "big") + number.to_bytes(2, "big") + b"\xc1\0\0"
+    return head + body + crc32_mpeg(head + body).to_bytes(4, "big")
+
+
+def section_packets(pid: int, section: bytes, *, counter: int = 0, adaptation: int = 0) -> bytes:
+    """``section`` in transport packets of ``pid``: the first starts it (pointer 0), after an adaptation field
+    of ``adaptation`` bytes where > 0; the rest continue it; stuffing ends the last. ``counter``: the first
+    packet's continuity count."""
+    out, data = [], bytes([0]) + section
+    while data:
+        first = not out
+        field = bytes([adaptation]) + b"\0" * adaptation if first and adaptation else b""
+        room = 184 - len(field)
+        head = bytes([0x47, (0x40 if first else 0) | pid >> 8, pid & 0xFF,
+                      (0x30 if field else 0x10) | (counter + len(out)) & 0xF])
+        out.append(head + field + data[:room] + b"\xff" * max(0, room - len(data)))
+        data = data[room:]
+    return b"".join(out)
 
 
 def _association_packet(table, counter: int) -> bytes:
     """One transport packet holding a programme association section: ``table`` (programme number, its map's
     packet id), ``counter`` the packet's continuity count."""
     entries = b"".join(n.to_bytes(2, "big") + (0xE000 | pid).to_bytes(2, "big") for n, pid in table)
-    section = bytes([0x00]) + (0xB000 | (9 + len(entries))).to_bytes(2, "big") + bytes([0, 1, 0xC1, 0, 0]) + entries
-    section += crc32_mpeg(section).to_bytes(4, "big")
-    payload = bytes([0]) + section
-    return bytes([0x47, 0x40, 0x00, 0x10 | (counter & 0xF)]) + payload + b"\xff" * (184 - len(payload))
+    return section_packets(0, table_section(0x00, 1, entries), counter=counter)
 
 
 def as_adaptive(src: str | os.PathLike, dst: str | os.PathLike, *, scales: tuple[float, ...] = (1.0, 0.5, 0.75, 1 / 3),
