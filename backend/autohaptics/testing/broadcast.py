@@ -81,8 +81,8 @@ def as_multiplex(sources, dst: str | os.PathLike, *, clocks_s: tuple[float, ...]
         one = as_recording(src, dst.with_name(f"{dst.stem}.{k}.ts"), clock_s=clock_s, programme=k)
         data = one.read_bytes()
         one.unlink()
-        keep = [data[i:i + 188] for i in range(0, len(data), 188) if k == 1 or packet_pid(data[i:i + 188]) not in (0, 0x11)]
-        parts.append(keep)
+        packets = [data[i:i + 188] for i in range(0, len(data), 188)]
+        parts.append([p for p in packets if k == 1 or packet_pid(p) not in (0, 0x11)])  # one table, one SDT
     table = [(k, _map_pid(k)) for k in range(1, len(sources) + 1)]
     out, sent, counter = [], [0] * len(parts), 0
     while any(n < len(p) for n, p in zip(sent, parts)):
