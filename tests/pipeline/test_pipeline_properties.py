@@ -36,7 +36,7 @@ from autohaptics.layout import ACTUATOR_IDS, FAN_COLS, FAN_ROWS, N_ACTUATORS
 from autohaptics.params import THESIS_RULES, GenerateParams, resolve_params
 from autohaptics.pipeline import Analysis, derive
 from autohaptics.timeline import NORMALISED_FEATURES, Timeline
-from autohaptics.pipeline.video import VideoAnalysis
+from autohaptics.pipeline.ticks import VideoAnalysis
 
 SETTINGS = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 FEW = settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -52,7 +52,7 @@ def cut_analysis(analysis, start_s: float, n_ticks: int):
     ``start_s`` for ``n_ticks`` ticks, as the cache of a film of its own: what a cut made without any
     loss would give, so a cut file's timeline compares with ``derive`` of it."""
     from autohaptics.pipeline.cache import Analysis
-    from autohaptics.pipeline.video import VideoAnalysis
+    from autohaptics.pipeline.ticks import VideoAnalysis
     from autohaptics.timebase import FRAMES_PER_TICK
 
     k0 = int(round(start_s / TICK_S))

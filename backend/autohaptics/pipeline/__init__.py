@@ -12,7 +12,8 @@ from autohaptics.pipeline.cache import Analysis, reusable
 from autohaptics.pipeline.derive import derive
 from autohaptics.pipeline.generate import generate
 from autohaptics.pipeline.refine import frame_sources, lacking_saliency, refinable, refine
-from autohaptics.pipeline.video import VideoAnalysis, video_pass
+from autohaptics.pipeline.ticks import VideoAnalysis
+from autohaptics.pipeline.video import video_pass
 
 __all__ = ["Analysis", "VideoAnalysis", "analyse", "derive", "file_sha256", "frame_sources", "generate", "lacking_saliency", "refinable",
            "refine", "reusable", "video_pass"]

@@ -29,7 +29,8 @@ from autohaptics.params import GenerateParams
 from autohaptics.pipeline.cache import Analysis
 from autohaptics.pipeline.child import Child, ChildFailed, can_fork
 from autohaptics.pipeline.saliency_queue import AbandonedMask, LaterMask
-from autohaptics.pipeline.video import VideoAnalysis, video_pass
+from autohaptics.pipeline.ticks import VideoAnalysis
+from autohaptics.pipeline.video import video_pass
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel, null_progress
 from autohaptics.records import params_to_dict
 from autohaptics.timebase import FRAMES_PER_TICK, n_ticks as ticks_for

@@ -12,7 +12,7 @@ import numpy as np
 
 from autohaptics import __version__
 from autohaptics.params import GenerateParams, analysis_key
-from autohaptics.pipeline.video import VideoAnalysis
+from autohaptics.pipeline.ticks import VideoAnalysis
 from autohaptics.records import params_to_dict
 from autohaptics.shots import Boundaries, detect
 

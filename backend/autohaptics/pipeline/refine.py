@@ -20,7 +20,8 @@ import numpy as np
 from autohaptics import media
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.cache import Analysis
-from autohaptics.pipeline.video import VideoAnalysis, frame_weights
+from autohaptics.pipeline.ticks import VideoAnalysis
+from autohaptics.pipeline.video import frame_weights
 from autohaptics.progress import CancelToken, ProgressFn, null_progress
 
 

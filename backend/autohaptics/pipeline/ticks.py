@@ -1,13 +1,60 @@
 """The video pass's ticks: which decoded frame is analysed for each (:func:`centre_frames`), and its
-per-tick results (:class:`~autohaptics.pipeline.video.VideoAnalysis`): several frames' values summed
+per-tick results (:class:`VideoAnalysis`): several frames' values summed
 into one tick and divided at the end (:class:`TickSums`), and the ticks without a frame of their
 own filled from the analysed tick before them (:func:`hold_missing`)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import numpy as np
 
+from autohaptics.airflow import cuts
+from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS
 from autohaptics.timebase import TICK_S, tick_of_time
+
+
+@dataclass
+class VideoAnalysis:
+    """Per-tick results of the video pass (see the module docstring for units)."""
+
+    mean_rgb: np.ndarray
+    cut: np.ndarray
+    static: np.ndarray
+    motion: np.ndarray
+    cell_motion: np.ndarray
+    nearness: np.ndarray
+    depth_mask: np.ndarray
+    flow_mask: np.ndarray
+    beta: np.ndarray
+    saliency_mask: np.ndarray
+    frame_mask: np.ndarray
+    stats: dict = field(default_factory=dict)
+    signature: np.ndarray | None = None
+
+    ARRAYS = ("mean_rgb", "cut", "static", "motion", "cell_motion", "nearness", "depth_mask", "flow_mask",
+              "beta", "saliency_mask", "frame_mask")
+    OPTIONAL = ("signature",)  # absent from older caches
+
+    @classmethod
+    def empty(cls, n: int) -> "VideoAnalysis":
+        return cls(
+            mean_rgb=np.zeros((n, 3), np.float32), cut=np.zeros(n, bool), static=np.zeros(n, bool),
+            motion=np.zeros(n, np.float32), cell_motion=np.zeros((n, FAN_ROWS, FAN_COLS), np.float16),
+            nearness=np.zeros((n, FAN_ROWS, FAN_COLS), np.float16), depth_mask=np.zeros(n, bool),
+            flow_mask=np.zeros(n, bool), beta=np.zeros((n, N_ACTUATORS), np.float32),
+            saliency_mask=np.zeros(n, bool), frame_mask=np.zeros(n, bool),
+            signature=np.zeros((n, cuts.PACKED_SIZE), np.uint8))
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        out = {name: getattr(self, name) for name in self.ARRAYS}
+        out.update({name: getattr(self, name) for name in self.OPTIONAL if getattr(self, name) is not None})
+        return out
+
+    @classmethod
+    def from_arrays(cls, arrays: dict[str, np.ndarray], stats: dict | None = None) -> "VideoAnalysis":
+        return cls(**{name: arrays[name] for name in cls.ARRAYS}, stats=stats or {},
+                   **{name: arrays[name] for name in cls.OPTIONAL if name in arrays})
 
 
 class TickSums:

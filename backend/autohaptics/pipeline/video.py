@@ -4,7 +4,7 @@ Per 100 ms tick k the pass takes the decoded frame nearest the tick's centre (``
 "tick") and the frame that follows it (a flow pair over one frame interval), or every decoded
 frame ("every", the reference: colour, motion and depth are averaged over the tick's frames;
 saliency stays on the centre frame, because averaging salient positions across a tick would put
-weight where no object ever was). Results per tick (:class:`VideoAnalysis`):
+weight where no object ever was). Results per tick (:class:`~.ticks.VideoAnalysis`):
 
 - ``mean_rgb``   mean colour, float32 [shape=(n, 3)], 0..255 (temperature)
 - ``cut``, ``static``  a hard cut at tick k; the flow pair is identical up to noise (no flow)
@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import time
 from collections import deque
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -38,12 +38,11 @@ from autohaptics.airflow.flow import is_static
 from autohaptics.airflow.pair import PairParams
 from autohaptics.fusion import saliency
 from autohaptics.imaging import resized
-from autohaptics.layout import FAN_COLS, FAN_ROWS, N_ACTUATORS
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.pairs import PairJudge
 from autohaptics.pipeline.picture import active_area, decode_mode, shown_aspect
 from autohaptics.pipeline.saliency_queue import LaterMask, SaliencyQueue
-from autohaptics.pipeline.ticks import TickSums, centre_frames, hold_missing
+from autohaptics.pipeline.ticks import TickSums, VideoAnalysis, centre_frames, hold_missing
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel
 from autohaptics.temperature import mean_colour
 from autohaptics.timebase import TICK_S, tick_of_time
@@ -53,49 +52,6 @@ from autohaptics.timebase import TICK_S, tick_of_time
 SIGNATURE_WIDTH = 48
 SMALL_PICTURE_PX = 1280  # up to this width OpenCV runs single-threaded (docs/BENCHMARKS.md, issue 21)
 STAGES = ("decode_wait", "proxy", "cuts", "static", "colour", "saliency", "flow", "depth")
-
-
-@dataclass
-class VideoAnalysis:
-    """Per-tick results of the video pass (see the module docstring for units)."""
-
-    mean_rgb: np.ndarray
-    cut: np.ndarray
-    static: np.ndarray
-    motion: np.ndarray
-    cell_motion: np.ndarray
-    nearness: np.ndarray
-    depth_mask: np.ndarray
-    flow_mask: np.ndarray
-    beta: np.ndarray
-    saliency_mask: np.ndarray
-    frame_mask: np.ndarray
-    stats: dict = field(default_factory=dict)
-    signature: np.ndarray | None = None
-
-    ARRAYS = ("mean_rgb", "cut", "static", "motion", "cell_motion", "nearness", "depth_mask", "flow_mask",
-              "beta", "saliency_mask", "frame_mask")
-    OPTIONAL = ("signature",)  # absent from older caches
-
-    @classmethod
-    def empty(cls, n: int) -> "VideoAnalysis":
-        return cls(
-            mean_rgb=np.zeros((n, 3), np.float32), cut=np.zeros(n, bool), static=np.zeros(n, bool),
-            motion=np.zeros(n, np.float32), cell_motion=np.zeros((n, FAN_ROWS, FAN_COLS), np.float16),
-            nearness=np.zeros((n, FAN_ROWS, FAN_COLS), np.float16), depth_mask=np.zeros(n, bool),
-            flow_mask=np.zeros(n, bool), beta=np.zeros((n, N_ACTUATORS), np.float32),
-            saliency_mask=np.zeros(n, bool), frame_mask=np.zeros(n, bool),
-            signature=np.zeros((n, cuts.PACKED_SIZE), np.uint8))
-
-    def arrays(self) -> dict[str, np.ndarray]:
-        out = {name: getattr(self, name) for name in self.ARRAYS}
-        out.update({name: getattr(self, name) for name in self.OPTIONAL if getattr(self, name) is not None})
-        return out
-
-    @classmethod
-    def from_arrays(cls, arrays: dict[str, np.ndarray], stats: dict | None = None) -> "VideoAnalysis":
-        return cls(**{name: arrays[name] for name in cls.ARRAYS}, stats=stats or {},
-                   **{name: arrays[name] for name in cls.OPTIONAL if name in arrays})
 
 
 class _Stage:
