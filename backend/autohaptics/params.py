@@ -41,6 +41,7 @@ from autohaptics.temperature import ThermalParams
 TRACKS = ("vibration", "temperature", "fans")
 ANALYSIS_MODES = ("tick", "every")
 ACTIVE_AREAS = ("auto", "full")
+OVERLAY_MODES = ("auto", "keep")
 STEREO_MODES = ("auto", "2d", "side_by_side", "top_bottom")
 
 
@@ -53,23 +54,23 @@ class VideoParams(Record):
     spectral saliency (the full frame's luma at 64 x 64) at most the gray proxy's width.
 
     analysis : "tick" (one frame plus its successor per 100 ms tick) or "every" (every decoded frame; reference).
-    skip : skip what a scene does not need (see the module docstring). False computes everything.
-    prefetch : frames decoded ahead in a background thread, overlapping decoding with analysis
-        (0 = decode in the calling thread).
+    skip : skip what a scene does not need (the module docstring; False computes everything).
+    prefetch : frames decoded ahead in a background thread, beside the analysis (0 = in the calling thread).
     decode : "full" (every frame, exactly), "nonref" (default: FFmpeg skips non-reference frames, about half the
-        decoding work on H.264; the frames it decodes are exact), "fast" (also skips the deblocking filter) or "sparse"
-        (the fast preset: also every B-frame at 40 fps and up, so P-frames that referenced one come out approximate;
-        :func:`media.iter_video`). With skipped frames the analysed frame is the decoded one nearest the tick's centre
-        and a flow pair ends on a decoded frame (``flow.min_span_frames``), timed by its real interval. None is skipped
-        in a variable-rate stream, at 29-40 fps but in "sparse" (a film's repeats), from 40 fps where the pictures
-        repeat (``stats["frames"]["decode"]``), or after skipping left two frames in a row out (MPEG-2, x265).
-    stride : ticks per analysed frame, 1..10 (default 1; the fast preset: 3): in groups of s ticks,
-        the frame nearest the group's centre is analysed (plus its successor for flow) and every tick
-        of the group gets its values (at most s x 50 ms off its own centre). Only with ``analysis="tick"``.
+        decoding work on H.264; the frames it decodes are exact), "fast" (also skips the deblocking filter) or
+        "sparse" (the fast preset: also every B-frame at 40 fps and up, so P-frames that referenced one come out
+        approximate; :func:`media.iter_video`). With skipped frames the analysed frame is the decoded one nearest the
+        tick's centre and a flow pair ends on a decoded frame (``flow.min_span_frames``), timed by its real interval.
+        None is skipped in a variable-rate stream, at 29-40 fps but in "sparse", from 40 fps where the pictures repeat
+        (``stats["frames"]["decode"]``), or after skipping left two frames in a row out (MPEG-2, x265).
+    stride : ticks per analysed frame, 1..10 (default 1; fast: 3; only with ``analysis="tick"``): the frame nearest the
+        centre of each group of s ticks is analysed (and its successor), its values each tick's (at most s x 50 ms off).
     active_area : "auto" (default): every stage reads only the picture inside constant black bars
         (:func:`media.find_active_area`, ``stats["active_area"]``); "full": the whole frame, bars included.
     stereo : a 3D film's packed views: "auto" (default: as the file declares, else as its pictures show,
         :mod:`media.stereo`), "2d", "side_by_side" or "top_bottom"; read from the first view.
+    overlays : "auto" (default): burnt-in overlays (a timecode, a logo) are found and filled in every proxy from the
+        picture around them (:mod:`media.overlays`, ``stats["overlays"]``); "keep": read as the film's (as before).
     """
 
     STAGE: ClassVar[str] = ANALYSIS
@@ -82,6 +83,7 @@ class VideoParams(Record):
     stride: int = param(1, 1, 10, unit="ticks", whole=True)
     active_area: str = param("auto", choices=ACTIVE_AREAS)
     stereo: str = param("auto", choices=STEREO_MODES)
+    overlays: str = param("auto", choices=OVERLAY_MODES)
 
     def check(self) -> None:
         if self.stride > 1 and self.analysis != "tick":
@@ -283,7 +285,7 @@ def params_from_args(args):
 # Analysis-time fields whose default analyses otherwise than the analysis did before the field
 # existed: a document without the field was analysed with this value (dotted name -> value).
 ABSENT_AS = {"flow.min_span_frames": 0.0, "flow.cadence_ratio": 0.0, "depth.expansion_grain": 0.0,
-             "cuts.in_one_step": False, "video.stereo": "2d"}
+             "cuts.in_one_step": False, "video.stereo": "2d", "video.overlays": "keep"}
 
 
 def analysis_key(doc: dict) -> dict:

@@ -107,6 +107,13 @@ def _broadcast(src: Path, dst: Path, options: dict) -> Path:
     return dst
 
 
+def _burnt(src: Path, dst: Path, options: dict) -> Path:
+    """``src`` with an overlay burnt in over its picture (``testing.burnin.with_burn_in``, ``options["kind"]``)."""
+    from autohaptics.testing.burnin import with_burn_in
+
+    return with_burn_in(src, dst, options["kind"])
+
+
 def _packed(src: Path, dst: Path, options: dict) -> Path:
     """``src`` as a 3D film, its two views packed as ``options`` say (``testing.stereo.write_packed``)."""
     from autohaptics.testing.stereo import write_packed
@@ -128,6 +135,12 @@ VARIANTS: tuple[Variant, ...] = (
             options={"kept": "multiplex", "audio_codec": "ac3", "audio_bit_rate": 384_000}),
     Variant("a channel's recording, its sound at another rate over 10-20 s (an advertisement), MPEG-TS, H.264, AC-3",
             "sound", ".ts", write=_broadcast, options={"kept": "rate break", "audio_codec": "ac3"}),
+    Variant("a screener's burnt-in timecode (a black box at the bottom centre, its digits counting the frames)",
+            "overlay", ".mkv", write=_burnt, options={"kind": "timecode"}),
+    Variant("a channel's logo burnt in (a ring and letters at 60 % white, top right)", "overlay", ".mkv",
+            write=_burnt, options={"kind": "logo"}),
+    Variant("a watermark burnt in across the middle (a line of words at 35 % white)", "overlay", ".mkv",
+            write=_burnt, options={"kind": "watermark"}),
     Variant("23.976 fps", "rate", options={"fps": Fraction(24000, 1001)}),
     Variant("25 fps", "rate", options={"fps": 25}),
     Variant("29.97 fps", "rate", options={"fps": Fraction(30000, 1001)}),

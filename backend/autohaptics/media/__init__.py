@@ -2,8 +2,8 @@
 
 :mod:`.probe` (what a file holds, tolerant decoding, truncation), :mod:`.audio` (the mono 48 kHz
 analysis signal), :mod:`.video` (decoded frames, all or the reference ones only), :mod:`.frames`
-(a frame's small proxies, made only when a stage asks) and :mod:`.active` (the active picture
-inside black bars).
+(a frame's small proxies, made only when a stage asks), :mod:`.active` (the active picture
+inside black bars) and :mod:`.overlays` (what a copy burns in over the film).
 """
 
 from autohaptics.lazy import lazy_attributes
@@ -14,11 +14,11 @@ from autohaptics.media.probe import (AudioInfo, AudioReport, MediaInfo, VideoInf
 # `autohaptics features` never need.
 _LAZY = {"iter_audio": "audio", "read_audio": "audio", "Frame": "frames", "DECODE_MODES": "video",
          "SPARSE_MIN_FPS": "video", "iter_video": "video", "find_active_area": "active",
-         "find_picture": "active"}
+         "find_picture": "active", "sample_lumas": "active"}
 
 __getattr__ = lazy_attributes(__name__, _LAZY)
 
 
 __all__ = ["AudioInfo", "AudioReport", "DECODE_MODES", "Frame", "MediaInfo", "SPARSE_MIN_FPS", "VideoInfo",
            "check_complete", "check_truncation", "find_active_area", "find_picture", "iter_audio", "iter_video",
-           "open_container", "probe", "read_audio", "source_block"]
+           "open_container", "probe", "read_audio", "sample_lumas", "source_block"]

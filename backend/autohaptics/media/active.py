@@ -214,16 +214,18 @@ def find_active_area(info: MediaInfo, samples: int = SAMPLES) -> Rect:
     return find_picture(info, "2d", samples)[0]
 
 
-def find_picture(info: MediaInfo, stereo: str = "auto", samples: int = SAMPLES) -> tuple[Rect, str]:
+def find_picture(info: MediaInfo, stereo: str = "auto", samples: int = SAMPLES,
+                 lumas: Sequence[np.ndarray] | None = None) -> tuple[Rect, str]:
     """What the analysis reads of ``info``'s video: (the rectangle, the 3D packing it is read under).
 
     stereo : "2d" (one picture), "side_by_side" or "top_bottom" (two views packed so), or "auto" (the
         packing the file declares, else the one the sampled pictures show inside their bars,
         :func:`~autohaptics.media.stereo.picture_packing`).
     The rectangle is the active picture (:func:`active_area`) of the first view (the whole picture in
-    2D); the view itself when nothing could be sampled. The packing is "" in 2D."""
+    2D); the view itself when nothing could be sampled. The packing is "" in 2D. lumas : the
+    samples when the caller has read them (:func:`sample_lumas`), else they are read here."""
     w, h = info.video.display_size if info.video is not None else (0, 0)
-    lumas = sample_lumas(info, samples)
+    lumas = sample_lumas(info, samples) if lumas is None else lumas
     if lumas:
         h, w = lumas[0].shape[:2]
     packing = "" if stereo == "2d" else stereo

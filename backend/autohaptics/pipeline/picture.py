@@ -1,31 +1,58 @@
 """What the video pass reads of each frame: the rectangle (the active picture inside black bars, a 3D
-film's first view) and the aspect on screen its proxies keep; and which frames it decodes."""
+film's first view), the overlays burnt in over it and the aspect on screen its proxies keep; and which
+frames it decodes."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from itertools import islice
 
 from autohaptics import media
 from autohaptics.airflow.cadence import Cadence
+from autohaptics.media.overlays import MIN_SAMPLES, EdgeTally, Overlays
 from autohaptics.media.stereo import view_aspect, view_rect
 from autohaptics.params import GenerateParams
 
 
-def active_area(info: media.MediaInfo, params: GenerateParams) -> tuple[tuple[int, int, int, int] | None, str]:
-    """The rectangle (x, y, w, h) px, display orientation, that the pass reads of each frame, and the
-    3D packing it is read under ("" for 2D; ``video.stereo``, :func:`media.find_picture`): the
-    active picture inside black bars of the first view (``video.active_area="auto"``), or the whole
-    view ("full"); None for the whole frame as decoded (a 2D film read in full, or no video)."""
+@dataclass(frozen=True)
+class Picture:
+    """What the pass reads of each frame. area : (x, y, w, h) px, display orientation (None: the whole
+    frame as decoded); packing : the 3D packing ("" for 2D); overlays : found before the pass (None:
+    none); tally : whether the pass must look for overlays itself (too few pictures were sampled)."""
+
+    area: tuple[int, int, int, int] | None
+    packing: str
+    overlays: Overlays | None = None
+    tally: bool = False
+
+
+def read_picture(info: media.MediaInfo, params: GenerateParams) -> Picture:
+    """The rectangle the pass reads of each frame and the 3D packing it is read under ("" for 2D;
+    ``video.stereo``, :func:`media.find_picture`): the active picture inside black bars of the first
+    view (``video.active_area="auto"``), or the whole view ("full"); None for the whole frame as
+    decoded (a 2D film read in full, or no video). With ``video.overlays="auto"`` also the overlays
+    over that rectangle in the same sampled pictures (:func:`media.overlay_mask`)."""
     if info.video is None:
-        return None, ""
-    stereo = params.video.stereo
+        return Picture(None, "")
+    stereo, lumas = params.video.stereo, None
     if params.video.active_area != "full":
-        return media.find_picture(info, stereo)
-    if stereo == "auto":
-        packing = info.video.stereo or media.find_picture(info)[1]
+        lumas = media.sample_lumas(info)
+        area, packing = media.find_picture(info, stereo, lumas=lumas)
     else:
-        packing = "" if stereo == "2d" else stereo
-    return (view_rect(*info.video.display_size, packing), packing) if packing else (None, "")
+        if stereo == "auto":
+            packing = info.video.stereo or media.find_picture(info, lumas=(lumas := media.sample_lumas(info)))[1]
+        else:
+            packing = "" if stereo == "2d" else stereo
+        area = view_rect(*info.video.display_size, packing) if packing else None
+    if params.video.overlays != "auto":
+        return Picture(area, packing)
+    lumas = media.sample_lumas(info) if lumas is None else lumas
+    x, y, w, h = area if area is not None else (0, 0, *info.video.display_size)
+    tally = EdgeTally()
+    for luma in lumas:
+        tally.add(luma[y:y + h, x:x + w])
+    mask = tally.mask()
+    return Picture(area, packing, None if mask is None else Overlays(mask), tally.n < MIN_SAMPLES)
 
 
 def shown_aspect(info: media.MediaInfo, area: tuple[int, int, int, int] | None, packing: str) -> float | None:

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from autohaptics import media
+from autohaptics.media.overlays import Overlays
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.cache import Analysis
 from autohaptics.pipeline.ticks import VideoAnalysis
@@ -70,7 +71,8 @@ def refine(path: str | Path, analysis: Analysis, params: GenerateParams, wanted:
     info = media.probe(path)
     weights = frame_weights(info, analysis.n_ticks, targets, params=params, cancel=cancel,
                             need_flow="fans" in params.tracks, need_colour="temperature" in params.tracks,
-                            decode=video.stats.get("frames", {}).get("decode"))
+                            decode=video.stats.get("frames", {}).get("decode"),
+                            overlays=Overlays.from_stats(video.stats.get("overlays")))
     beta, have = video.beta.copy(), video.saliency_mask.copy()
     if weights:  # each analysed tick and the ticks that hold its frame's values take its weights
         keys = np.fromiter(sorted(weights), np.int64, len(weights))

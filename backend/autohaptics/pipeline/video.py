@@ -18,7 +18,9 @@ Skipping (``video.skip``): saliency where the audio intensity is zero (unless th
 tick), flow on static pairs and across cuts, depth where the motion is below the airflow floor.
 Proxies are made only when a stage runs, from the active picture (``video.active_area``: the
 rectangle inside black bars, found before the pass; ``stats["active_area"]``), so no stage reads
-the bars. A tick without a frame of its own (below 10 fps, or a later
+the bars; overlays burnt in over it (``video.overlays``, ``stats["overlays"]``) are filled in each
+proxy. A clip too short to sample before the pass (:attr:`~.picture.Picture.tally`) is sampled by
+the pass, once a second; where that finds overlays the pass runs again with them filled. A tick without a frame of its own (below 10 fps, or a later
 tick of a ``video.stride`` group) holds the values of the analysed tick before it.
 """
 
@@ -40,7 +42,8 @@ from autohaptics.fusion import saliency
 from autohaptics.imaging import resized
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.pairs import PairJudge
-from autohaptics.pipeline.picture import active_area, decode_mode, shown_aspect
+from autohaptics.media.overlays import EdgeTally, Overlays
+from autohaptics.pipeline.picture import decode_mode, read_picture, shown_aspect
 from autohaptics.pipeline.saliency_queue import LaterMask, SaliencyQueue
 from autohaptics.pipeline.ticks import TickSums, VideoAnalysis, centre_frames, hold_missing
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel
@@ -51,7 +54,8 @@ from autohaptics.timebase import TICK_S, tick_of_time
 # (a histogram of a 128 px proxy is wider than one of a 48 px proxy of the same picture).
 SIGNATURE_WIDTH = 48
 SMALL_PICTURE_PX = 1280  # up to this width OpenCV runs single-threaded (docs/BENCHMARKS.md, issue 21)
-STAGES = ("decode_wait", "proxy", "cuts", "static", "colour", "saliency", "flow", "depth")
+STAGES = ("decode_wait", "proxy", "overlays", "cuts", "static", "colour", "saliency", "flow", "depth")
+TALLY_S = 1.0  # s: a pass that looks for overlays itself samples a picture this often
 
 
 class _Stage:
@@ -86,20 +90,34 @@ def video_pass(info: media.MediaInfo, n: int, *, params: GenerateParams, need_sa
     vp = None
     try:
         vp = _Pass(info, n, params, need_saliency, need_flow, need_colour, cancel=cancel)
-        stream = media.iter_video(info.path, info=info, prefetch=params.video.prefetch, decode=vp.decode,
-                                  prepare=vp.prepare, crop=vp.area, shown_aspect=vp.shown_aspect)
-        duration = max(info.duration_s, 1e-9)
-        for frame, centre_tick in centre_frames(vp.timed(stream), n, int(params.video.stride)):
-            vp.frame(frame, centre_tick)
-            if frame.index % 16 == 0:
-                check_cancel(cancel)
-                if progress is not None:
-                    progress("video", min(1.0, frame.time_s / duration))
-        return vp.finish()
+        share = 0.5 if vp.tally is not None else 1.0  # the second half of the bar for a pass run again
+        out = _run(vp, info, params, progress, cancel, 0.0, share)
+        found = vp.overlays_found()
+        if found is None:
+            return out
+        vp.pairs.close()
+        vp = _Pass(info, n, params, need_saliency, need_flow, need_colour, cancel=cancel, decode=vp.decode, overlays=found)
+        vp.found_by = "pass"
+        return _run(vp, info, params, progress, cancel, share, 1.0 - share)
     finally:
         if vp is not None:
             vp.pairs.close()
         cv2.setNumThreads(threads)
+
+
+def _run(vp: _Pass, info: media.MediaInfo, params: GenerateParams, progress: ProgressFn | None,
+         cancel: CancelToken | None, start: float, share: float) -> VideoAnalysis:
+    """One pass over the decoded frames (progress from ``start``, ``share`` of the bar)."""
+    stream = media.iter_video(info.path, info=info, prefetch=params.video.prefetch, decode=vp.decode,
+                              prepare=vp.prepare, crop=vp.area, shown_aspect=vp.shown_aspect)
+    duration = max(info.duration_s, 1e-9)
+    for frame, centre_tick in centre_frames(vp.timed(stream), vp.n, int(params.video.stride)):
+        vp.frame(frame, centre_tick)
+        if frame.index % 16 == 0:
+            check_cancel(cancel)
+            if progress is not None:
+                progress("video", start + share * min(1.0, frame.time_s / duration))
+    return vp.finish()
 
 
 @dataclass(frozen=True)
@@ -114,10 +132,18 @@ class _Pass:
     signature and saliency luma, and the flow pair waiting for its successor frame."""
 
     def __init__(self, info: media.MediaInfo, n: int, params: GenerateParams, need_saliency: np.ndarray | LaterMask,
-                 need_flow: bool, need_colour: bool, *, cancel: CancelToken | None = None, decode: str | None = None):
+                 need_flow: bool, need_colour: bool, *, cancel: CancelToken | None = None, decode: str | None = None,
+                 overlays: Overlays | None | str = "find"):
+        """overlays : "find" (as ``video.overlays`` says, :func:`~.picture.read_picture`), or the ones to fill."""
         t0 = time.perf_counter()
+        picture = read_picture(info, params if overlays == "find" else replace(
+            params, video=replace(params.video, overlays="keep")))
         # (x, y, w, h) px read of each frame (None: all of it), and the 3D packing ("": 2D)
-        self.area, self.stereo = active_area(info, params)
+        self.area, self.stereo = picture.area, picture.packing
+        self.overlays = picture.overlays if overlays == "find" else overlays
+        self.found_by = "samples" if self.overlays is not None and overlays == "find" else ""
+        self.tally = EdgeTally() if picture.tally else None  # the pass's own samples, once a second
+        self.tally_at = 0.0
         self.shown_aspect = shown_aspect(info, self.area, self.stereo)
         self.area_s = time.perf_counter() - t0
         self.decode = decode or decode_mode(info, params, need_flow)  # every frame for a film's conversion
@@ -215,11 +241,14 @@ class _Pass:
                 rgb, gray = st["proxy"].run(frame.rgb_and_gray, self.rgb_width, fw)
         else:
             gray = st["proxy"].run(frame.gray, fw)
+        if self.overlays is not None:
+            rgb, gray, luma = (None if a is None else st["overlays"].run(self.overlays.fill, a) for a in (rgb, gray, luma))
         return rgb, gray, luma, None if rgb is None else self._signature(rgb)
 
     def _frame_signature(self, frame):
         """A frame's colour cut signature read from its gray plane (a frame not analysed has no RGB proxy)."""
-        return self._signature(self.stages["proxy"].run(frame.rgb, self.rgb_width, self.flow_params.proxy_width))
+        rgb = self.stages["proxy"].run(frame.rgb, self.rgb_width, self.flow_params.proxy_width)
+        return self._signature(rgb if self.overlays is None else self.stages["overlays"].run(self.overlays.fill, rgb))
 
     def _signature(self, rgb):
         """A frame's colour cut signature from its RGB proxy (all at ``SIGNATURE_WIDTH``)."""
@@ -266,6 +295,9 @@ class _Pass:
         """Colour, the cut against the previous analysed frame, saliency, and the flow pair to come."""
         out, st, params = self.out, self.stages, self.params
         out.frame_mask[k] = True
+        if self.tally is not None and frame.time_s >= self.tally_at:
+            st["overlays"].run(self.tally.add, gray)
+            self.tally_at = frame.time_s + TALLY_S
         if sig is None:
             sig = st["cuts"].run(cuts.frame_signature, gray)
         if self.prev_sig is not None and self.prev_sig.shape == sig.shape and \
@@ -366,12 +398,23 @@ class _Pass:
         out.stats["active_area"] = {"rect": [int(v) for v in rect], "frame": list(self.frame_size),
                                     "mode": self.params.video.active_area, "stereo": self.stereo or "2d",
                                     "seconds": round(self.area_s, 4)}
+        ov = self.overlays
+        out.stats["overlays"] = {"mode": self.params.video.overlays, "found_by": self.found_by,
+                                 "share": round(ov.share, 4) if ov is not None else 0.0,
+                                 "boxes": ov.boxes(*rect[2:]) if ov is not None else [],
+                                 **(ov.to_stats() if ov is not None else {})}
         return out
+
+    def overlays_found(self) -> Overlays | None:
+        """The overlays the pass's own samples show (None: none, or the pass did not look)."""
+        mask = self.tally.mask() if self.tally is not None else None
+        return None if mask is None else Overlays(mask)
 
 
 def frame_weights(info: media.MediaInfo, n: int, ticks: np.ndarray, *, params: GenerateParams,
                   need_flow: bool, need_colour: bool, cancel: CancelToken | None = None,
-                  group_s: float = 10.0, decode: str | None = None) -> dict[int, np.ndarray]:
+                  group_s: float = 10.0, decode: str | None = None,
+                  overlays: Overlays | None | str = "find") -> dict[int, np.ndarray]:
     """The actuator weights of the frames the video pass analyses for ``ticks`` (ticks with a frame
     of their own: the first of a ``video.stride`` group), decoding only around them.
 
@@ -379,13 +422,13 @@ def frame_weights(info: media.MediaInfo, n: int, ticks: np.ndarray, *, params: G
     keyframe before it; the proxies are made as in :func:`video_pass` with the same ``need_flow``
     and ``need_colour``, so the weights are the ones a full pass computes (with
     ``saliency.motion_weight`` 0: the motion cue depends on the frame analysed before). decode : the
-    pass's ``stats["frames"]["decode"]`` (None: chosen again, :func:`~.picture.decode_mode`).
-    Returns {tick: float32 [shape=(9,)]}.
+    pass's ``stats["frames"]["decode"]`` (None: chosen again, :func:`~.picture.decode_mode`); overlays :
+    the pass's (``Overlays.from_stats(stats["overlays"])``), or "find" them again. Returns {tick: float32 [shape=(9,)]}.
     """
     targets = np.unique(np.asarray(ticks, dtype=np.int64))
     mask = np.zeros(n, bool)
     mask[targets] = True
-    vp = _Pass(info, n, params, mask, need_flow, need_colour, decode=decode)
+    vp = _Pass(info, n, params, mask, need_flow, need_colour, decode=decode, overlays=overlays)
     out: dict[int, np.ndarray] = {}
     breaks = np.flatnonzero(np.diff(targets) * TICK_S > group_s) + 1
     for run in np.split(targets, breaks) if targets.size else []:

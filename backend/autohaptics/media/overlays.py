@@ -1,0 +1,173 @@
+"""Burnt-in overlays: what a copy lays over the film in one place for its whole length (a screener's
+or a daily's timecode box, a watermark, a channel's logo), found so that no stage reads it as the
+film's picture.
+
+A timecode's digits change every frame, so no pair of frames is ever static and optical flow reads
+motion where the film has none; its box holds the flow's coarse levels still, joins the two sides of
+a cut in the cut signatures and draws the saliency (docs/BENCHMARKS.md, "Burnt-in overlays").
+
+:func:`overlay_mask` decides from the sampled frames' luma (pure, numpy in): edges that stand in the
+same place in nearly every sample, across a film whose pictures otherwise change, joined into the
+shapes they outline and widened by a margin (an encode's ringing around them). :class:`Overlays`
+fills that mask in each proxy from the picture around it (OpenCV's Telea inpainting), so the
+proxies move, change and keep their colours as the film around the overlay does.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Sequence
+
+import cv2
+import numpy as np
+
+DETECT_WIDTH = 320  # px: the samples are looked at this wide
+EDGE_LOW, EDGE_HIGH = 60, 120  # Canny thresholds, grey levels
+MIN_SAMPLES = 7  # fewer samples (a short clip's few keyframes) find nothing
+PERSIST = 7 / 9  # an edge in at least this share of the samples stands still
+CLOSE = 0.02  # frame widths: strokes and borders this close are one shape (a box's digits, a word's letters)
+MARGIN = 0.025  # frame widths: the mask reaches this far beyond the shapes (ringing, a box's shadow)
+MIN_PART = 0.0005  # a shape covering less of the picture is a speck, not an overlay
+MAX_COVER = 0.12  # a mask covering more: the samples show one scene, not overlays on a film
+CHANGE_LEVEL = 24  # grey levels: a pixel whose samples span more than this changes across the film
+MIN_CHANGING = 0.5  # the pixels outside the mask that change: at least this share, or nothing is found
+FILL_RADIUS = 3  # px: the neighbourhood each filled pixel is taken from (cv2.inpaint)
+LIT_LEVEL, LIT_SHARE = 12, 0.25  # a sample lit (luma above LIT_LEVEL) on less of its pixels tells nothing
+
+
+def overlay_mask(lumas: Sequence[np.ndarray]) -> np.ndarray | None:
+    """Where overlays lie in sampled frames (:class:`EdgeTally` of ``lumas``, then its
+    :meth:`~EdgeTally.mask`): bool [shape=(h, w)] at most ``DETECT_WIDTH`` wide, or None."""
+    tally = EdgeTally()
+    for luma in lumas:
+        tally.add(luma)
+    return tally.mask()
+
+
+class EdgeTally:
+    """The edges and the luma range of pictures sampled over a film, added one at a time (a
+    pass keeps a tally rather than the pictures: a 2-hour film gives thousands)."""
+
+    def __init__(self):
+        self.n = 0
+        self.edges: np.ndarray | None = None  # int32 [shape=(h, w)]: samples with an edge at each pixel
+        self.lo: np.ndarray | None = None  # uint8: each pixel's least and greatest luma over the samples
+        self.hi: np.ndarray | None = None
+
+    def add(self, luma: np.ndarray) -> None:
+        """One picture: uint8 [shape=(height, width)], full-range luma of the active picture (bars
+        left out). A dark picture (lit on under ``LIT_SHARE``: a fade, a night, a title card) is
+        passed over, since an overlay's dark parts show no edge on it, as is one of another aspect."""
+        small = _shrunk(np.ascontiguousarray(luma, np.uint8))
+        if (self.edges is not None and small.shape != self.edges.shape) or \
+                np.count_nonzero(small > LIT_LEVEL) < LIT_SHARE * small.size:
+            return
+        edge = (cv2.Canny(small, EDGE_LOW, EDGE_HIGH) > 0).astype(np.int32)
+        if self.edges is None:
+            self.edges, self.lo, self.hi = edge, small.copy(), small.copy()
+        else:
+            self.edges += edge
+            np.minimum(self.lo, small, out=self.lo)
+            np.maximum(self.hi, small, out=self.hi)
+        self.n += 1
+
+    def mask(self) -> np.ndarray | None:
+        """Where overlays lie: bool [shape=(h, w)] at the samples' size (at most ``DETECT_WIDTH``
+        wide), or None when there are none, or too few samples (``MIN_SAMPLES``) to tell.
+
+        An overlay is made of edges found in at least ``PERSIST`` of the samples; those closer than
+        ``CLOSE`` are joined, each shape's convex hull filled (a box with its digits, those that
+        change every frame too; a word; a logo), shapes under
+        ``MIN_PART`` of the picture dropped, the rest widened by ``MARGIN``. Nothing is found when
+        the mask would cover more than ``MAX_COVER``, or when under ``MIN_CHANGING`` of the pixels
+        outside it change across the samples: a clip of one scene keeps its own edges in every sample.
+        """
+        if self.n < MIN_SAMPLES or self.edges is None or min(self.edges.shape) < 16:
+            return None
+        h, w = self.edges.shape
+        persistent = (self.edges >= PERSIST * self.n - 1e-9).astype(np.uint8)
+        if not persistent.any():
+            return None
+        joined = cv2.dilate(persistent, _disc(CLOSE * w))
+        contours, _ = cv2.findContours(joined, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        shapes = np.zeros((h, w), np.uint8)
+        for c in contours:
+            part = np.zeros((h, w), np.uint8)
+            cv2.fillConvexPoly(part, cv2.convexHull(c), 1)
+            if part.sum() >= MIN_PART * h * w:
+                shapes |= part
+        if not shapes.any():
+            return None
+        mask = cv2.dilate(shapes, _disc(MARGIN * w)) > 0
+        changing = (self.hi.astype(np.int16) - self.lo) > CHANGE_LEVEL
+        if mask.mean() > MAX_COVER or changing[~mask].mean() < MIN_CHANGING:
+            return None
+        return mask
+
+
+def _disc(diameter: float) -> np.ndarray:
+    """An elliptic structuring element about ``diameter`` px across (odd, at least 3)."""
+    d = max(3, int(round(diameter)) | 1)
+    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (d, d))
+
+
+def _shrunk(luma: np.ndarray) -> np.ndarray:
+    """``luma`` area-averaged to ``DETECT_WIDTH`` wide (its aspect kept; a narrower one as it is)."""
+    h, w = luma.shape[:2]
+    if w <= DETECT_WIDTH:
+        return luma
+    return cv2.resize(luma, (DETECT_WIDTH, max(2, int(round(h * DETECT_WIDTH / w)))), interpolation=cv2.INTER_AREA)
+
+
+class Overlays:
+    """A film's overlays (:func:`overlay_mask`), filled in any proxy of its frames, at any size, gray
+    or RGB. The mask at each size is made once (thread-safe)."""
+
+    def __init__(self, mask: np.ndarray):
+        self.mask = np.asarray(mask, bool)
+        self._sized: dict[tuple[int, int], np.ndarray] = {}
+        self._lock = threading.Lock()
+
+    @property
+    def share(self) -> float:
+        """The share of the picture the overlays cover, 0..1."""
+        return float(self.mask.mean())
+
+    def boxes(self, width: int, height: int) -> list[list[int]]:
+        """Each overlay's bounding box [x, y, w, h] px in a picture ``width`` x ``height``."""
+        n, _, stats, _ = cv2.connectedComponentsWithStats(self.mask_at(height, width))
+        return [[int(v) for v in stats[i, :4]] for i in range(1, n)]
+
+    def to_stats(self) -> dict:
+        """The mask as JSON-able stats: {"size": [w, h], "runs": run lengths of the rows joined,
+        starting with a clear run}; :meth:`from_stats` reads them back exactly."""
+        flat = self.mask.ravel().astype(np.int8)
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], flat, [1 - flat[-1]] if flat.size else [1]])))
+        runs = np.diff(np.concatenate([[0], edges])).tolist()
+        return {"size": [int(self.mask.shape[1]), int(self.mask.shape[0])], "runs": [int(r) for r in runs]}
+
+    @classmethod
+    def from_stats(cls, stats: dict | None) -> "Overlays | None":
+        """The overlays :meth:`to_stats` wrote (None: none, or stats without a mask)."""
+        if not stats or "runs" not in stats:
+            return None
+        w, h = (int(v) for v in stats["size"])
+        values = np.arange(len(stats["runs"])) % 2 == 1
+        return cls(np.repeat(values, np.asarray(stats["runs"], np.int64))[:w * h].reshape(h, w))
+
+    def mask_at(self, height: int, width: int) -> np.ndarray:
+        """The mask at ``height`` x ``width`` px: uint8 0/1, every pixel an overlay touches set."""
+        key = (int(height), int(width))
+        with self._lock:
+            got = self._sized.get(key)
+            if got is None:
+                got = (cv2.resize(self.mask.astype(np.float32), (key[1], key[0]), interpolation=cv2.INTER_AREA)
+                       > 0).astype(np.uint8)
+                self._sized[key] = got
+        return got
+
+    def fill(self, picture: np.ndarray) -> np.ndarray:
+        """``picture`` (uint8 [shape=(h, w)] or [shape=(h, w, 3)]: a proxy) with the overlays filled
+        from the picture around them: a new array."""
+        a = np.ascontiguousarray(picture, np.uint8)
+        return cv2.inpaint(a, self.mask_at(*a.shape[:2]), FILL_RADIUS, cv2.INPAINT_TELEA)

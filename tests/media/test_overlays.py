@@ -1,0 +1,139 @@
+"""Burnt-in overlays (``media.overlays``): found in sampled pictures of a film, nothing found in a clean
+film or a clip of one scene, and filled from the picture around them."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from autohaptics.media.overlays import MIN_SAMPLES, EdgeTally, Overlays, overlay_mask
+from autohaptics.testing.burnin import KINDS, burn, timecode, timecode_box
+
+W, H = 640, 272
+
+
+def _scene(k: int) -> np.ndarray:
+    """Picture ``k`` of a film: a lit, textured scene, different for every ``k`` (RGB uint8)."""
+    rng = np.random.default_rng(k)
+    small = rng.integers(40, 230, size=(9, 16, 3)).astype(np.uint8)
+    img = cv2.resize(small, (W, H), interpolation=cv2.INTER_CUBIC)
+    for _ in range(6):
+        x, y = int(rng.integers(0, W)), int(rng.integers(0, H))
+        cv2.circle(img, (x, y), int(rng.integers(10, 60)), [int(v) for v in rng.integers(0, 255, 3)], -1)
+    return img
+
+
+def _luma(rgb: np.ndarray) -> np.ndarray:
+    return cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)
+
+
+def _samples(kind: str | None, n: int = 9) -> list[np.ndarray]:
+    """``n`` pictures spread over a film at 24 fps (frames 37 s apart), ``kind`` burnt in (None: clean)."""
+    out = []
+    for k in range(n):
+        rgb = _scene(k)
+        out.append(_luma(rgb if kind is None else burn(rgb, kind, 37 * 24 * k + 5 * k, 24.0)))
+    return out
+
+
+def test_timecode_is_found_whole_with_its_changing_digits():
+    mask = overlay_mask(_samples("timecode"))
+    assert mask is not None
+    scale = mask.shape[1] / W
+    x, y, w, h = timecode_box(W, H)
+    box = np.zeros(mask.shape, bool)
+    box[int(y * scale):int(np.ceil((y + h) * scale)), int(x * scale):int(np.ceil((x + w) * scale))] = True
+    assert mask[box].mean() >= 0.97  # the box, the frame digits that change in every sample included
+    assert mask.sum() <= 2.5 * box.sum()  # and not much more than it (the margin)
+
+
+def test_a_logo_is_found_where_it_is():
+    mask = overlay_mask(_samples("logo"))
+    assert mask is not None
+    ys, xs = np.nonzero(mask)
+    assert xs.min() > 0.8 * mask.shape[1] and ys.max() < 0.3 * mask.shape[0]  # top right
+
+
+def test_a_watermark_is_left_or_found_on_its_line():
+    """A 35 % white line's edges are faint on bright scenes: it may go unfound, never found elsewhere."""
+    mask = overlay_mask(_samples("watermark"))
+    if mask is not None:
+        ys, _ = np.nonzero(mask)
+        assert ys.min() > 0.3 * mask.shape[0] and ys.max() < 0.65 * mask.shape[0]
+
+
+def test_nothing_is_found_in_a_clean_film():
+    assert overlay_mask(_samples(None)) is None
+
+
+def test_a_clip_of_one_scene_has_no_overlays():
+    """Every sample of one shot keeps the scene's own edges: nothing changes around them."""
+    rng = np.random.default_rng(3)
+    base = _scene(1).astype(np.int16)
+    lumas = [_luma(np.clip(base + rng.integers(-3, 4, base.shape), 0, 255).astype(np.uint8)) for _ in range(9)]
+    assert overlay_mask(lumas) is None
+    tc = [_luma(burn(np.clip(base + rng.integers(-3, 4, base.shape), 0, 255).astype(np.uint8), "timecode", k * 24, 24.0))
+          for k in range(9)]
+    assert overlay_mask(tc) is None  # a timecode over one still scene: the scene cannot be told from it
+
+
+def test_too_few_or_dark_samples_tell_nothing():
+    assert overlay_mask(_samples("timecode", MIN_SAMPLES - 1)) is None
+    tally = EdgeTally()
+    for k in range(12):  # dark pictures (a fade, a title card) are passed over
+        tally.add(_luma(burn(np.full((H, W, 3), 4, np.uint8), "timecode", k * 50, 24.0)))
+    assert tally.n == 0 and tally.mask() is None
+    for luma in _samples("timecode"):
+        tally.add(luma)
+    assert tally.n == 9 and tally.mask() is not None
+
+
+def test_fill_takes_the_picture_around_and_leaves_the_rest():
+    mask = overlay_mask(_samples("timecode"))
+    ov = Overlays(mask)
+    rgb = burn(_scene(4), "timecode", 100, 24.0)
+    for picture in (rgb, _luma(rgb), cv2.resize(rgb, (160, 68), interpolation=cv2.INTER_AREA)):
+        filled = ov.fill(picture)
+        inside = ov.mask_at(*picture.shape[:2]).astype(bool)
+        assert filled.shape == picture.shape and filled.dtype == np.uint8
+        assert np.array_equal(filled[~inside], picture[~inside])
+        ring = (cv2.dilate(inside.astype(np.uint8), np.ones((9, 9), np.uint8)) > 0) & ~inside
+        assert abs(float(filled[inside].mean()) - float(picture[ring].mean())) < 25  # the scene around it,
+        sy, sx = picture.shape[0] / H, picture.shape[1] / W
+        x, y, w, h = timecode_box(W, H)
+        box = (slice(int(y * sy) + 1, int((y + h) * sy) - 1), slice(int(x * sx) + 1, int((x + w) * sx) - 1))
+        assert float(filled[box].mean()) > float(picture[box].mean()) + 40  # not the black box
+
+
+def test_boxes_and_share():
+    ov = Overlays(overlay_mask(_samples("timecode")))
+    (x, y, w, h), = ov.boxes(W, H)
+    bx, by, bw, bh = timecode_box(W, H)
+    assert x <= bx and y <= by and x + w >= bx + bw and y + h >= by + bh
+    assert 0.0 < ov.share < 0.06
+
+
+def test_timecode_text():
+    assert timecode(0, 24.0) == "01:00:00:00"
+    assert timecode(24 * 61 + 7, 24.0) == "01:01:01:07"
+    assert timecode(25 * 3600, 25.0) == "02:00:00:00"
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 40), st.integers(1, 40), st.floats(0.0, 1.0), st.integers(0, 2**31))
+def test_stats_round_trip(h, w, p, seed):
+    mask = np.random.default_rng(seed).random((h, w)) < p
+    back = Overlays.from_stats(Overlays(mask).to_stats())
+    assert back is not None and np.array_equal(back.mask, mask)
+    assert Overlays.from_stats({}) is None and Overlays.from_stats(None) is None
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_burn_changes_only_its_place(kind):
+    rgb = _scene(2)
+    out = burn(rgb, kind, 10, 24.0)
+    changed = np.any(out != rgb, axis=2)
+    assert 0.002 < changed.mean() < 0.2

@@ -1,0 +1,79 @@
+"""Overlays burnt in over a film (``video.overlays``, ``media.overlays``) in the video pass: a timecode
+found before the pass (a film with keyframes enough to sample) or by the pass itself (a short clip),
+filled in every proxy, so the film reads as it does without one; a clean film reads exactly as
+before, and the saliency a refinement computes is the pass's own."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from autohaptics import media, pipeline
+from autohaptics import testing as synth
+from autohaptics.media.overlays import Overlays
+from autohaptics.metrics import compare_tracks, headline
+from autohaptics.params import GenerateParams, resolve_params
+from autohaptics.pipeline.video import frame_weights
+from autohaptics.testing.burnin import timecode_box, with_burn_in
+from autohaptics.testing.scenes import material_scene
+
+W, H = 320, 180
+KEEP = resolve_params("balanced", {"video.overlays": "keep"})[0]
+
+
+@pytest.fixture(scope="module")
+def films(tmp_path_factory):
+    d = tmp_path_factory.mktemp("overlays")
+    clean = synth.write_scene(d / "clean.mp4", material_scene(24.0), width=W, height=H, fps=24)
+    return {"clean": clean, "short": with_burn_in(clean, d / "short.mkv", "timecode"),
+            "sampled": with_burn_in(clean, d / "sampled.mkv", "timecode", gop=24)}
+
+
+def _figures(ref, test) -> dict:
+    n = min(ref.n_ticks, test.n_ticks)
+    report = compare_tracks(ref.vibration[:n], test.vibration[:n], ref.temperature_c[:n], test.temperature_c[:n],
+                            ref.fans[:n], test.fans[:n])
+    report["n_ticks"] = {"difference": test.n_ticks - ref.n_ticks}
+    return headline(report)
+
+
+@pytest.mark.parametrize("name, found_by", [("short", "pass"), ("sampled", "samples")])
+def test_a_timecode_is_found_and_the_film_reads_as_without_it(films, name, found_by):
+    clean = pipeline.analyse(films["clean"])
+    burnt = pipeline.analyse(films[name])
+    kept = pipeline.analyse(films[name], KEEP)
+    found = burnt.video.stats["overlays"]
+    assert found["found_by"] == found_by and len(found["boxes"]) == 1
+    (x, y, w, h), (bx, by, bw, bh) = found["boxes"][0], timecode_box(W, H)
+    assert x <= bx and y <= by and x + w >= bx + bw and y + h >= by + bh and w * h <= 3 * bw * bh
+    static = (int(clean.video.static.sum()), int(burnt.video.static.sum()), int(kept.video.static.sum()))
+    assert abs(static[1] - static[0]) <= 6, static
+    assert kept.video.stats["overlays"] == {"mode": "keep", "found_by": "", "share": 0.0, "boxes": []}
+    ref = pipeline.derive(clean)
+    got, before = _figures(ref, pipeline.derive(burnt)), _figures(ref, pipeline.derive(kept))
+    assert got["onset_f1"] >= 0.9 and got["fan_ticks_f1"] >= 0.9 and got["fan_iou_tolerant"] >= 0.8
+    assert got["temperature_mae_c"] <= 0.5
+    # read as the film's picture, the digits draw the saliency and move the fans' cells (0.73-0.74, 0.69 here)
+    assert before["onset_f1"] < 0.8 and before["fan_iou"] < 0.75 and got["fan_iou"] > 0.83
+
+
+def test_a_clean_film_reads_exactly_as_before(films):
+    auto = pipeline.analyse(films["clean"])
+    keep = pipeline.analyse(films["clean"], KEEP)
+    assert auto.video.stats["overlays"]["found_by"] == "" and auto.video.stats["overlays"]["share"] == 0.0
+    a, k = pipeline.derive(auto), pipeline.derive(keep)
+    for track in ("vibration", "temperature_c", "fans"):
+        assert np.array_equal(getattr(a, track), getattr(k, track)), track
+
+
+def test_the_saliency_of_a_refinement_fills_the_same_overlays(films):
+    params = GenerateParams()
+    analysis = pipeline.analyse(films["short"], params)
+    video = analysis.video
+    ticks = np.flatnonzero(video.saliency_mask & video.frame_mask)[::7][:6]
+    assert ticks.size >= 3
+    info = media.probe(films["short"])
+    got = frame_weights(info, analysis.n_ticks, ticks, params=params, need_flow=True, need_colour=True,
+                        decode=video.stats["frames"]["decode"], overlays=Overlays.from_stats(video.stats["overlays"]))
+    for k in ticks:
+        assert np.allclose(got[int(k)], video.beta[k], atol=1e-6), k
