@@ -107,7 +107,11 @@ def test_the_scene_has_what_each_row_is_judged_on(clean):
 
 # rows not met yet, with what they measure (docs/BENCHMARKS.md, "The material matrix"); strict: one
 # that starts to pass fails here until it is taken off this list
-NOT_MET: dict[str, str] = {}
+NOT_MET: dict[str, str] = {
+    "a watermark burnt in across the middle (a line of words at 35 % white)":
+        "onset F1 0.83 (read as the film's picture: 0.89): the band filled takes the disc under it from the "
+        "saliency; a translucent overlay across the picture wants a rule of its own (docs/BENCHMARKS.md, Stop 63)",
+}
 
 
 @pytest.mark.slow

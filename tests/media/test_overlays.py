@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from autohaptics.media.overlays import MIN_SAMPLES, EdgeTally, Overlays, overlay_mask
+from autohaptics.media.overlays import MIN_SHOTS, EdgeTally, Overlays, overlay_mask
 from autohaptics.testing.burnin import KINDS, burn, timecode, timecode_box
 
 W, H = 640, 272
@@ -80,15 +80,34 @@ def test_a_clip_of_one_scene_has_no_overlays():
     assert overlay_mask(tc) is None  # a timecode over one still scene: the scene cannot be told from it
 
 
+def test_a_long_shot_counts_once():
+    """A shot's scene stands still in all its samples: however many, they count as one shot."""
+    rng = np.random.default_rng(5)
+    still = _scene(11).astype(np.int16)
+    tally = EdgeTally()
+    for k in range(40):  # one long shot, its edges in every sample
+        tally.add(_luma(np.clip(still + rng.integers(-3, 4, still.shape), 0, 255).astype(np.uint8)), shot=0)
+    for k in range(1, 4):  # then three short ones
+        tally.add(_luma(_scene(20 + k)), shot=k)
+    assert tally.mask() is None and tally.n == 4 and tally.edges.max() <= 4
+    each = EdgeTally()
+    for k in range(40):  # the same samples, each taken as a shot of its own: the scene's edges stand in 40 of 43
+        each.add(_luma(np.clip(still + rng.integers(-3, 4, still.shape), 0, 255).astype(np.uint8)))
+    for k in range(1, 4):
+        each.add(_luma(_scene(20 + k)))
+    each.mask()
+    assert each.n == 43 and each.edges.max() >= 40
+
+
 def test_too_few_or_dark_samples_tell_nothing():
-    assert overlay_mask(_samples("timecode", MIN_SAMPLES - 1)) is None
+    assert overlay_mask(_samples("timecode", MIN_SHOTS - 1)) is None
     tally = EdgeTally()
     for k in range(12):  # dark pictures (a fade, a title card) are passed over
         tally.add(_luma(burn(np.full((H, W, 3), 4, np.uint8), "timecode", k * 50, 24.0)))
     assert tally.n == 0 and tally.mask() is None
     for luma in _samples("timecode"):
         tally.add(luma)
-    assert tally.n == 9 and tally.mask() is not None
+    assert tally.mask() is not None and tally.n == 9
 
 
 def test_fill_takes_the_picture_around_and_leaves_the_rest():

@@ -1,7 +1,7 @@
 """Overlays burnt in over a film (``video.overlays``, ``media.overlays``) in the video pass: a timecode
-found before the pass (a film with keyframes enough to sample) or by the pass itself (a short clip),
-filled in every proxy, so the film reads as it does without one; a clean film reads exactly as
-before, and the saliency a refinement computes is the pass's own."""
+found in the pictures sampled before the pass (a long film) or by the pass itself, shot by shot (a
+short one), filled in every proxy, so the film reads as it does without one; a clean film reads
+exactly as before, and the saliency a refinement computes is the pass's own."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ from autohaptics import testing as synth
 from autohaptics.media.overlays import Overlays
 from autohaptics.metrics import compare_tracks, headline
 from autohaptics.params import GenerateParams, resolve_params
+from autohaptics.pipeline.picture import SAMPLED_MIN_S, read_picture
 from autohaptics.pipeline.video import frame_weights
 from autohaptics.testing.burnin import timecode_box, with_burn_in
 from autohaptics.testing.scenes import material_scene
@@ -26,7 +27,7 @@ def films(tmp_path_factory):
     d = tmp_path_factory.mktemp("overlays")
     clean = synth.write_scene(d / "clean.mp4", material_scene(24.0), width=W, height=H, fps=24)
     return {"clean": clean, "short": with_burn_in(clean, d / "short.mkv", "timecode"),
-            "sampled": with_burn_in(clean, d / "sampled.mkv", "timecode", gop=24)}
+            "keyframes": with_burn_in(clean, d / "keyframes.mkv", "timecode", gop=24)}
 
 
 def _figures(ref, test) -> dict:
@@ -37,13 +38,15 @@ def _figures(ref, test) -> dict:
     return headline(report)
 
 
-@pytest.mark.parametrize("name, found_by", [("short", "pass"), ("sampled", "samples")])
-def test_a_timecode_is_found_and_the_film_reads_as_without_it(films, name, found_by):
+@pytest.mark.parametrize("name", ["short", "keyframes"])
+def test_a_timecode_is_found_and_the_film_reads_as_without_it(films, name):
+    """24 s: too short to search in samples taken before the pass (they could share a shot), with
+    three keyframes or 24: the pass searches its four shots and runs again with the timecode filled."""
     clean = pipeline.analyse(films["clean"])
     burnt = pipeline.analyse(films[name])
     kept = pipeline.analyse(films[name], KEEP)
     found = burnt.video.stats["overlays"]
-    assert found["found_by"] == found_by and len(found["boxes"]) == 1
+    assert found["found_by"] == "pass" and len(found["boxes"]) == 1
     (x, y, w, h), (bx, by, bw, bh) = found["boxes"][0], timecode_box(W, H)
     assert x <= bx and y <= by and x + w >= bx + bw and y + h >= by + bh and w * h <= 3 * bw * bh
     static = (int(clean.video.static.sum()), int(burnt.video.static.sum()), int(kept.video.static.sum()))
@@ -64,6 +67,18 @@ def test_a_clean_film_reads_exactly_as_before(films):
     a, k = pipeline.derive(auto), pipeline.derive(keep)
     for track in ("vibration", "temperature_c", "fans"):
         assert np.array_equal(getattr(a, track), getattr(k, track)), track
+
+
+def test_a_long_film_is_searched_before_the_pass(tmp_path):
+    """Three minutes: the nine pictures sampled for the active area, each its own shot, find it."""
+    clean = synth.write_scene(tmp_path / "long.mp4", material_scene(SAMPLED_MIN_S), width=160, height=90, fps=5,
+                              quality="low")
+    burnt = with_burn_in(clean, tmp_path / "long_tc.mkv", "timecode", gop=10)
+    for path, found in ((clean, False), (burnt, True)):
+        picture = read_picture(media.probe(path), GenerateParams())
+        assert (picture.overlays is not None) == found and not picture.tally
+    (x, y, w, h), (bx, by, bw, bh) = picture.overlays.boxes(160, 90)[0], timecode_box(160, 90)
+    assert x <= bx and y <= by and x + w >= bx + bw and y + h >= by + bh
 
 
 def test_the_saliency_of_a_refinement_fills_the_same_overlays(films):

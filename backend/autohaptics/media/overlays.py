@@ -4,11 +4,12 @@ film's picture.
 
 A timecode's digits change every frame, so no pair of frames is ever static and optical flow reads
 motion where the film has none; its box holds the flow's coarse levels still, joins the two sides of
-a cut in the cut signatures and draws the saliency (docs/BENCHMARKS.md, "Burnt-in overlays").
+a cut in the cut signatures and draws the saliency (docs/BENCHMARKS.md, "Stop 63").
 
-:func:`overlay_mask` decides from the sampled frames' luma (pure, numpy in): edges that stand in the
-same place in nearly every sample, across a film whose pictures otherwise change, joined into the
-shapes they outline and widened by a margin (an encode's ringing around them). :class:`Overlays`
+:class:`EdgeTally` decides from frames sampled shot by shot (pure, numpy in; :func:`overlay_mask`: one
+sample a shot): edges that stand in the same place in nearly every shot, across a film whose pictures
+otherwise change, joined into the shapes they outline and widened by a margin (an encode's ringing
+around them). :class:`Overlays`
 fills that mask in each proxy from the picture around it (OpenCV's Telea inpainting), so the
 proxies move, change and keep their colours as the film around the overlay does.
 """
@@ -23,11 +24,12 @@ import numpy as np
 
 DETECT_WIDTH = 320  # px: the samples are looked at this wide
 EDGE_LOW, EDGE_HIGH = 60, 120  # Canny thresholds, grey levels
-MIN_SAMPLES = 7  # fewer samples (a short clip's few keyframes) find nothing
-PERSIST = 7 / 9  # an edge in at least this share of the samples stands still
+MIN_SHOTS = 4  # fewer shots sampled tell nothing
+PERSIST = 7 / 9  # an edge in at least this share of the shots stands still
 CLOSE = 0.02  # frame widths: strokes and borders this close are one shape (a box's digits, a word's letters)
 MARGIN = 0.025  # frame widths: the mask reaches this far beyond the shapes (ringing, a box's shadow)
-MIN_PART = 0.0005  # a shape covering less of the picture is a speck, not an overlay
+MIN_EDGES = 0.05  # frame widths: a shape with fewer standing edge pixels is a coincidence (a few), not an overlay
+BORDER = 0.02  # of the height: edges this near the picture's border are not an overlay's (a bar's, a pixel off)
 MAX_COVER = 0.12  # a mask covering more: the samples show one scene, not overlays on a film
 CHANGE_LEVEL = 24  # grey levels: a pixel whose samples span more than this changes across the film
 MIN_CHANGING = 0.5  # the pixels outside the mask that change: at least this share, or nothing is found
@@ -36,8 +38,8 @@ LIT_LEVEL, LIT_SHARE = 12, 0.25  # a sample lit (luma above LIT_LEVEL) on less o
 
 
 def overlay_mask(lumas: Sequence[np.ndarray]) -> np.ndarray | None:
-    """Where overlays lie in sampled frames (:class:`EdgeTally` of ``lumas``, then its
-    :meth:`~EdgeTally.mask`): bool [shape=(h, w)] at most ``DETECT_WIDTH`` wide, or None."""
+    """Where overlays lie in frames sampled far apart, each taken as a shot of its own (:class:`EdgeTally`
+    of ``lumas``, then its :meth:`~EdgeTally.mask`): bool [shape=(h, w)] at most ``DETECT_WIDTH`` wide, or None."""
     tally = EdgeTally()
     for luma in lumas:
         tally.add(luma)
@@ -45,57 +47,76 @@ def overlay_mask(lumas: Sequence[np.ndarray]) -> np.ndarray | None:
 
 
 class EdgeTally:
-    """The edges and the luma range of pictures sampled over a film, added one at a time (a
-    pass keeps a tally rather than the pictures: a 2-hour film gives thousands)."""
+    """The edges and the luma range of pictures sampled over a film, shot by shot, added one at a
+    time (a pass keeps a tally rather than the pictures: a 2-hour film gives thousands). A pixel is
+    an edge of a shot where it is one in at least half of the shot's samples; ``n`` counts the
+    shots, ``edges`` how many had an edge at each pixel. Shots, not samples: a long shot's scene
+    stands still in all its samples, as an overlay does."""
 
     def __init__(self):
         self.n = 0
-        self.edges: np.ndarray | None = None  # int32 [shape=(h, w)]: samples with an edge at each pixel
+        self.edges: np.ndarray | None = None  # int32 [shape=(h, w)]: shots with an edge at each pixel
         self.lo: np.ndarray | None = None  # uint8: each pixel's least and greatest luma over the samples
         self.hi: np.ndarray | None = None
+        self._shot: tuple = ()  # the current shot: (its id, int32 edge counts, samples)
 
-    def add(self, luma: np.ndarray) -> None:
+    def add(self, luma: np.ndarray, shot: int | None = None) -> None:
         """One picture: uint8 [shape=(height, width)], full-range luma of the active picture (bars
-        left out). A dark picture (lit on under ``LIT_SHARE``: a fade, a night, a title card) is
-        passed over, since an overlay's dark parts show no edge on it, as is one of another aspect."""
+        left out), of shot ``shot`` (None: a shot of its own; pictures of one shot come together).
+        Passed over: a dark picture (lit on under ``LIT_SHARE``: a fade, a night, a title card; an
+        overlay's dark parts show no edge on it) and one of another aspect."""
         small = _shrunk(np.ascontiguousarray(luma, np.uint8))
-        if (self.edges is not None and small.shape != self.edges.shape) or \
+        if (self.lo is not None and small.shape != self.lo.shape) or \
                 np.count_nonzero(small > LIT_LEVEL) < LIT_SHARE * small.size:
             return
         edge = (cv2.Canny(small, EDGE_LOW, EDGE_HIGH) > 0).astype(np.int32)
-        if self.edges is None:
-            self.edges, self.lo, self.hi = edge, small.copy(), small.copy()
+        if self.lo is None:
+            self.lo, self.hi, self.edges = small.copy(), small.copy(), np.zeros(small.shape, np.int32)
         else:
-            self.edges += edge
             np.minimum(self.lo, small, out=self.lo)
             np.maximum(self.hi, small, out=self.hi)
-        self.n += 1
+        if shot is None or not self._shot or self._shot[0] != shot:
+            self._close()
+            self._shot = (shot, edge, 1)
+        else:
+            self._shot = (shot, self._shot[1] + edge, self._shot[2] + 1)
+
+    def _close(self) -> None:
+        """Count the current shot's edges."""
+        if self._shot:
+            _, counts, taken = self._shot
+            self.edges += (2 * counts >= taken).astype(np.int32)
+            self.n += 1
+            self._shot = ()
 
     def mask(self) -> np.ndarray | None:
         """Where overlays lie: bool [shape=(h, w)] at the samples' size (at most ``DETECT_WIDTH``
-        wide), or None when there are none, or too few samples (``MIN_SAMPLES``) to tell.
+        wide), or None when there are none, or too few shots (``MIN_SHOTS``) to tell.
 
-        An overlay is made of edges found in at least ``PERSIST`` of the samples; those closer than
-        ``CLOSE`` are joined, each shape's convex hull filled (a box with its digits, those that
-        change every frame too; a word; a logo), shapes under
-        ``MIN_PART`` of the picture dropped, the rest widened by ``MARGIN``. Nothing is found when
-        the mask would cover more than ``MAX_COVER``, or when under ``MIN_CHANGING`` of the pixels
-        outside it change across the samples: a clip of one scene keeps its own edges in every sample.
+        An overlay is made of edges found in at least ``PERSIST`` of the shots; those closer than
+        ``CLOSE`` are joined, each shape's convex hull filled (a box with its digits, those that change
+        every frame too; a word; a logo), shapes of fewer standing edge pixels than ``MIN_EDGES`` frame
+        widths dropped (scenes that share a sample or two of their edges), the rest widened by ``MARGIN``.
+        Nothing is found when the mask would cover more than ``MAX_COVER``, or when under ``MIN_CHANGING``
+        of the pixels outside it change across the samples: a clip of one scene keeps its own edges in every
+        shot.
         """
-        if self.n < MIN_SAMPLES or self.edges is None or min(self.edges.shape) < 16:
+        self._close()
+        if self.n < MIN_SHOTS or self.edges is None or min(self.edges.shape) < 16:
             return None
         h, w = self.edges.shape
         persistent = (self.edges >= PERSIST * self.n - 1e-9).astype(np.uint8)
+        b = max(2, int(round(BORDER * h)))  # a bar's edge the active picture's rectangle left in
+        persistent[:b], persistent[-b:], persistent[:, :b], persistent[:, -b:] = 0, 0, 0, 0
         if not persistent.any():
             return None
-        joined = cv2.dilate(persistent, _disc(CLOSE * w))
-        contours, _ = cv2.findContours(joined, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        n, labels = cv2.connectedComponents(cv2.dilate(persistent, _disc(CLOSE * w)))
+        held = np.bincount(labels[persistent > 0], minlength=n)  # each shape's standing edge pixels
         shapes = np.zeros((h, w), np.uint8)
-        for c in contours:
-            part = np.zeros((h, w), np.uint8)
-            cv2.fillConvexPoly(part, cv2.convexHull(c), 1)
-            if part.sum() >= MIN_PART * h * w:
-                shapes |= part
+        for k in np.flatnonzero(held >= MIN_EDGES * w):
+            if k:
+                ys, xs = np.nonzero(labels == k)
+                cv2.fillConvexPoly(shapes, cv2.convexHull(np.stack([xs, ys], axis=1).astype(np.int32)), 1)
         if not shapes.any():
             return None
         mask = cv2.dilate(shapes, _disc(MARGIN * w)) > 0

@@ -9,16 +9,20 @@ from itertools import islice
 
 from autohaptics import media
 from autohaptics.airflow.cadence import Cadence
-from autohaptics.media.overlays import MIN_SAMPLES, EdgeTally, Overlays
+from autohaptics.media.overlays import MIN_SHOTS, EdgeTally, Overlays
 from autohaptics.media.stereo import view_aspect, view_rect
 from autohaptics.params import GenerateParams
+
+
+SAMPLED_MIN_S = 180.0  # s: a film at least this long is searched for overlays in its samples, each a shot
+SAMPLE_EVERY_S = 1.0  # s: a pass that searches for overlays itself samples a shot this often after its first frame
 
 
 @dataclass(frozen=True)
 class Picture:
     """What the pass reads of each frame. area : (x, y, w, h) px, display orientation (None: the whole
     frame as decoded); packing : the 3D packing ("" for 2D); overlays : found before the pass (None:
-    none); tally : whether the pass must look for overlays itself (too few pictures were sampled)."""
+    none); tally : whether the pass must look for overlays itself, shot by shot."""
 
     area: tuple[int, int, int, int] | None
     packing: str
@@ -31,7 +35,8 @@ def read_picture(info: media.MediaInfo, params: GenerateParams) -> Picture:
     ``video.stereo``, :func:`media.find_picture`): the active picture inside black bars of the first
     view (``video.active_area="auto"``), or the whole view ("full"); None for the whole frame as
     decoded (a 2D film read in full, or no video). With ``video.overlays="auto"`` also the overlays
-    over that rectangle in the same sampled pictures (:func:`media.overlay_mask`)."""
+    over that rectangle in the same sampled pictures, each taken as a shot (``SAMPLED_MIN_S`` of film
+    and up; a shorter one, or one too few pictures were sampled of, the pass samples shot by shot)."""
     if info.video is None:
         return Picture(None, "")
     stereo, lumas = params.video.stereo, None
@@ -46,13 +51,37 @@ def read_picture(info: media.MediaInfo, params: GenerateParams) -> Picture:
         area = view_rect(*info.video.display_size, packing) if packing else None
     if params.video.overlays != "auto":
         return Picture(area, packing)
+    if info.duration_s < SAMPLED_MIN_S:  # samples close together may share a shot: the pass tells its shots
+        return Picture(area, packing, tally=True)
     lumas = media.sample_lumas(info) if lumas is None else lumas
     x, y, w, h = area if area is not None else (0, 0, *info.video.display_size)
     tally = EdgeTally()
     for luma in lumas:
         tally.add(luma[y:y + h, x:x + w])
     mask = tally.mask()
-    return Picture(area, packing, None if mask is None else Overlays(mask), tally.n < MIN_SAMPLES)
+    return Picture(area, packing, None if mask is None else Overlays(mask), tally.n < MIN_SHOTS)
+
+
+class ShotSampler:
+    """A pass's own search for overlays: the gray proxy of each shot's first analysed frame, then one
+    a second (``SAMPLE_EVERY_S``), into an :class:`~autohaptics.media.overlays.EdgeTally` by shot."""
+
+    def __init__(self):
+        self.tally = EdgeTally()
+        self.at, self.shot, self.cut_tick = 0.0, 0, -1
+
+    def add(self, k: int, time_s: float, cut: bool, gray) -> None:
+        """The analysed frame of tick ``k`` (a cut there: a new shot; time_s: s) and its gray proxy."""
+        new_shot = cut and k != self.cut_tick  # the 'every' analysis reads several frames a tick
+        if new_shot or time_s >= self.at:
+            self.shot, self.cut_tick = self.shot + int(new_shot), k if new_shot else self.cut_tick
+            self.tally.add(gray, self.shot)
+            self.at = time_s + SAMPLE_EVERY_S
+
+    def found(self) -> Overlays | None:
+        """The overlays the samples show (None: none)."""
+        mask = self.tally.mask()
+        return None if mask is None else Overlays(mask)
 
 
 def shown_aspect(info: media.MediaInfo, area: tuple[int, int, int, int] | None, packing: str) -> float | None:

@@ -19,8 +19,9 @@ tick), flow on static pairs and across cuts, depth where the motion is below the
 Proxies are made only when a stage runs, from the active picture (``video.active_area``: the
 rectangle inside black bars, found before the pass; ``stats["active_area"]``), so no stage reads
 the bars; overlays burnt in over it (``video.overlays``, ``stats["overlays"]``) are filled in each
-proxy. A clip too short to sample before the pass (:attr:`~.picture.Picture.tally`) is sampled by
-the pass, once a second; where that finds overlays the pass runs again with them filled. A tick without a frame of its own (below 10 fps, or a later
+proxy. A film too short to sample before the pass (:attr:`~.picture.Picture.tally`) is sampled by
+the pass, shot by shot (at each cut, then once a second); where that finds overlays the pass runs
+again with them filled. A tick without a frame of its own (below 10 fps, or a later
 tick of a ``video.stride`` group) holds the values of the analysed tick before it.
 """
 
@@ -42,8 +43,8 @@ from autohaptics.fusion import saliency
 from autohaptics.imaging import resized
 from autohaptics.params import GenerateParams
 from autohaptics.pipeline.pairs import PairJudge
-from autohaptics.media.overlays import EdgeTally, Overlays
-from autohaptics.pipeline.picture import decode_mode, read_picture, shown_aspect
+from autohaptics.media.overlays import Overlays
+from autohaptics.pipeline.picture import ShotSampler, decode_mode, read_picture, shown_aspect
 from autohaptics.pipeline.saliency_queue import LaterMask, SaliencyQueue
 from autohaptics.pipeline.ticks import TickSums, VideoAnalysis, centre_frames, hold_missing
 from autohaptics.progress import CancelToken, ProgressFn, check_cancel
@@ -55,7 +56,6 @@ from autohaptics.timebase import TICK_S, tick_of_time
 SIGNATURE_WIDTH = 48
 SMALL_PICTURE_PX = 1280  # up to this width OpenCV runs single-threaded (docs/BENCHMARKS.md, issue 21)
 STAGES = ("decode_wait", "proxy", "overlays", "cuts", "static", "colour", "saliency", "flow", "depth")
-TALLY_S = 1.0  # s: a pass that looks for overlays itself samples a picture this often
 
 
 class _Stage:
@@ -90,9 +90,9 @@ def video_pass(info: media.MediaInfo, n: int, *, params: GenerateParams, need_sa
     vp = None
     try:
         vp = _Pass(info, n, params, need_saliency, need_flow, need_colour, cancel=cancel)
-        share = 0.5 if vp.tally is not None else 1.0  # the second half of the bar for a pass run again
+        share = 0.5 if vp.sampler is not None else 1.0  # the second half of the bar for a pass run again
         out = _run(vp, info, params, progress, cancel, 0.0, share)
-        found = vp.overlays_found()
+        found = vp.sampler.found() if vp.sampler is not None else None
         if found is None:
             return out
         vp.pairs.close()
@@ -142,8 +142,7 @@ class _Pass:
         self.area, self.stereo = picture.area, picture.packing
         self.overlays = picture.overlays if overlays == "find" else overlays
         self.found_by = "samples" if self.overlays is not None and overlays == "find" else ""
-        self.tally = EdgeTally() if picture.tally else None  # the pass's own samples, once a second
-        self.tally_at = 0.0
+        self.sampler = ShotSampler() if picture.tally else None  # the pass's own search, shot by shot
         self.shown_aspect = shown_aspect(info, self.area, self.stereo)
         self.area_s = time.perf_counter() - t0
         self.decode = decode or decode_mode(info, params, need_flow)  # every frame for a film's conversion
@@ -295,15 +294,14 @@ class _Pass:
         """Colour, the cut against the previous analysed frame, saliency, and the flow pair to come."""
         out, st, params = self.out, self.stages, self.params
         out.frame_mask[k] = True
-        if self.tally is not None and frame.time_s >= self.tally_at:
-            st["overlays"].run(self.tally.add, gray)
-            self.tally_at = frame.time_s + TALLY_S
         if sig is None:
             sig = st["cuts"].run(cuts.frame_signature, gray)
         if self.prev_sig is not None and self.prev_sig.shape == sig.shape and \
                 cuts.is_cut(self.prev_sig, sig, params=params.cuts) and self._cut_in_a_step(sig):
             out.cut[k] = True
         self.prev_sig, self.between = sig, None
+        if self.sampler is not None:
+            st["overlays"].run(self.sampler.add, k, frame.time_s, bool(out.cut[k]), gray)
         if centre or not out.signature[k].any():
             packed = cuts.pack_signature(sig)
             if packed is not None:
@@ -405,10 +403,6 @@ class _Pass:
                                  **(ov.to_stats() if ov is not None else {})}
         return out
 
-    def overlays_found(self) -> Overlays | None:
-        """The overlays the pass's own samples show (None: none, or the pass did not look)."""
-        mask = self.tally.mask() if self.tally is not None else None
-        return None if mask is None else Overlays(mask)
 
 
 def frame_weights(info: media.MediaInfo, n: int, ticks: np.ndarray, *, params: GenerateParams,
