@@ -30,7 +30,7 @@ CLOSE = 0.02  # frame widths: strokes and borders this close are one shape (a bo
 MARGIN = 0.025  # frame widths: the mask reaches this far beyond the shapes (ringing, a box's shadow)
 MIN_EDGES = 0.05  # frame widths: a shape with fewer standing edge pixels is a coincidence (a few), not an overlay
 BORDER = 0.02  # of the height: edges this near the picture's border are not an overlay's (a bar's, a pixel off)
-MAX_COVER = 0.12  # a mask covering more: the samples show one scene, not overlays on a film
+MAX_COVER = 0.08  # a mask covering more is left as picture: one scene, or a watermark the film shows through
 CHANGE_LEVEL = 24  # grey levels: a pixel whose samples span more than this changes across the film
 MIN_CHANGING = 0.5  # the pixels outside the mask that change: at least this share, or nothing is found
 FILL_RADIUS = 3  # px: the neighbourhood each filled pixel is taken from (cv2.inpaint)
@@ -93,13 +93,14 @@ class EdgeTally:
         """Where overlays lie: bool [shape=(h, w)] at the samples' size (at most ``DETECT_WIDTH``
         wide), or None when there are none, or too few shots (``MIN_SHOTS``) to tell.
 
-        An overlay is made of edges found in at least ``PERSIST`` of the shots; those closer than
-        ``CLOSE`` are joined, each shape's convex hull filled (a box with its digits, those that change
-        every frame too; a word; a logo), shapes of fewer standing edge pixels than ``MIN_EDGES`` frame
-        widths dropped (scenes that share a sample or two of their edges), the rest widened by ``MARGIN``.
-        Nothing is found when the mask would cover more than ``MAX_COVER``, or when under ``MIN_CHANGING``
-        of the pixels outside it change across the samples: a clip of one scene keeps its own edges in every
-        shot.
+        An overlay is made of edges found in at least ``PERSIST`` of the shots; those closer than ``CLOSE`` are
+        joined, each shape's convex hull filled (a box with its digits, those that change every frame too; a
+        word; a logo), shapes of fewer standing edge pixels than ``MIN_EDGES`` frame widths dropped (scenes that
+        share a sample or two of their edges), the rest widened by ``MARGIN``. Nothing is found when under
+        ``MIN_CHANGING`` of the pixels outside the mask change across the samples (a clip of one scene keeps its
+        own edges in every shot), or when the mask would cover more than ``MAX_COVER``: a wide translucent
+        watermark, through which the film shows, would take more film from the stages filled than it hides
+        (docs/BENCHMARKS.md, "Stop 63").
         """
         self._close()
         if self.n < MIN_SHOTS or self.edges is None or min(self.edges.shape) < 16:
