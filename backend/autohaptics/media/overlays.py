@@ -9,9 +9,8 @@ a cut in the cut signatures and draws the saliency (docs/BENCHMARKS.md, "Stop 63
 :class:`EdgeTally` decides from frames sampled shot by shot (pure, numpy in; :func:`overlay_mask`: one
 sample a shot): edges that stand in the same place in nearly every shot, across a film whose pictures
 otherwise change, joined into the shapes they outline and widened by a margin (an encode's ringing
-around them). :class:`Overlays`
-fills that mask in each proxy from the picture around it (OpenCV's Telea inpainting), so the
-proxies move, change and keep their colours as the film around the overlay does.
+around them). :class:`Overlays` fills that mask in each proxy from the picture around it (OpenCV's Telea
+inpainting), so the proxies move, change and keep their colours as the film around the overlay does.
 """
 
 from __future__ import annotations
@@ -163,9 +162,10 @@ class Overlays:
     def to_stats(self) -> dict:
         """The mask as JSON-able stats: {"size": [w, h], "runs": run lengths of the rows joined,
         starting with a clear run}; :meth:`from_stats` reads them back exactly."""
-        flat = self.mask.ravel().astype(np.int8)
-        edges = np.flatnonzero(np.diff(np.concatenate([[0], flat, [1 - flat[-1]] if flat.size else [1]])))
-        runs = np.diff(np.concatenate([[0], edges])).tolist()
+        flat = self.mask.ravel()
+        runs = np.diff(np.concatenate([[0], np.flatnonzero(flat[1:] != flat[:-1]) + 1, [flat.size]]))
+        if flat.size and flat[0]:
+            runs = np.concatenate([[0], runs])  # the first run is a clear one, here empty
         return {"size": [int(self.mask.shape[1]), int(self.mask.shape[0])], "runs": [int(r) for r in runs]}
 
     @classmethod
