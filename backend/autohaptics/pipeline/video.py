@@ -15,14 +15,13 @@ weight where no object ever was). Results per tick (:class:`~.ticks.VideoAnalysi
   [shape=(n, 192)], zeros where none (shot detection); None in caches written before it existed
 
 Skipping (``video.skip``): saliency where the audio intensity is zero (unless the mode needs every
-tick), flow on static pairs and across cuts, depth where the motion is below the airflow floor.
-Proxies are made only when a stage runs, from the active picture (``video.active_area``: the
-rectangle inside black bars, found before the pass; ``stats["active_area"]``), so no stage reads
-the bars; overlays burnt in over it (``video.overlays``, ``stats["overlays"]``) are filled in each
-proxy. A film too short to sample before the pass (:attr:`~.picture.Picture.tally`) is sampled by
-the pass, shot by shot (at each cut, then once a second); where that finds overlays the pass runs
-again with them filled. A tick without a frame of its own (below 10 fps, or a later
-tick of a ``video.stride`` group) holds the values of the analysed tick before it.
+tick), flow on static pairs and across cuts, depth where the motion is below the airflow floor. Proxies
+are made only when a stage runs, from the active picture (``video.active_area``: the rectangle inside
+black bars, found before the pass; ``stats["active_area"]``), so no stage reads the bars; overlays burnt
+in over it (``video.overlays``, ``stats["overlays"]``) are filled in each proxy. A film too short to
+search before the pass is searched by it, shot by shot (:class:`~.picture.ShotSampler`), and run again
+with what it finds filled. A tick without a frame of its own (below 10 fps, or a later tick of a
+``video.stride`` group) holds the values of the analysed tick before it.
 """
 
 from __future__ import annotations
