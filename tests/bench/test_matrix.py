@@ -107,12 +107,7 @@ def test_the_scene_has_what_each_row_is_judged_on(clean):
 
 # rows not met yet, with what they measure (docs/BENCHMARKS.md, "The material matrix"); strict: one
 # that starts to pass fails here until it is taken off this list
-NOT_MET: dict[str, str] = {
-    "a watermark burnt in across the middle (a line of words at 35 % white)":
-        "onset F1 0.89: the watermark, 11 % of the picture, is left as picture (media.overlays.MAX_COVER; filled, "
-        "0.83) and draws the saliency; a translucent overlay across the picture wants a rule of its own "
-        "(docs/BENCHMARKS.md, Stop 63)",
-}
+NOT_MET: dict[str, str] = {}
 
 
 @pytest.mark.slow

@@ -10,11 +10,15 @@ a cut in the cut signatures and draws the saliency (docs/BENCHMARKS.md, "Stop 63
 sample a shot): edges that stand in the same place in nearly every shot, across a film whose pictures
 otherwise change, joined into the shapes they outline and widened by a margin (an encode's ringing
 around them). :class:`Overlays` fills that mask in each proxy from the picture around it (OpenCV's Telea
-inpainting), so the proxies move, change and keep their colours as the film around the overlay does.
+inpainting), so the proxies move, change and keep their colours as the film around the overlay does;
+a translucent one (a watermark the film shows through) is taken off instead: its opacity and level,
+read from how each pixel follows the picture around it from shot to shot, are unblended, so the film
+under it stays.
 """
 
 from __future__ import annotations
 
+import base64
 import threading
 from collections.abc import Sequence
 
@@ -34,15 +38,22 @@ CHANGE_LEVEL = 24  # grey levels: a pixel whose samples span more than this chan
 MIN_CHANGING = 0.5  # the pixels outside the mask that change: at least this share, or nothing is found
 FILL_RADIUS = 3  # px: the neighbourhood each filled pixel is taken from (cv2.inpaint)
 LIT_LEVEL, LIT_SHARE = 12, 0.25  # a sample lit (luma above LIT_LEVEL) on less of its pixels tells nothing
+AROUND = 0.06  # frame widths: the median over this square is the picture around a pixel (wider than a word's line)
+MIN_SPREAD = 10.0  # grey levels: a pixel's surroundings must vary this much (sd over shots) to read its opacity
+ALPHA_MIN = 0.05  # opacities under this read as none (the fit's noise)
+SEE_THROUGH = 0.15, 0.5  # a shape whose strong opacity (its 95th percentile) lies here is translucent
+MAX_TRANSLUCENT = 0.25  # translucent shapes covering more are left as picture
+LEVEL_FROM = 0.25  # an overlay's grey level is read where it is this opaque (a fainter fit leans to the film's mean)
+MAX_ALPHA = 0.75  # opacities are unblended up to this (the film under them amplified at most 4 x)
 
 
-def overlay_mask(lumas: Sequence[np.ndarray]) -> np.ndarray | None:
-    """Where overlays lie in frames sampled far apart, each taken as a shot of its own (:class:`EdgeTally`
-    of ``lumas``, then its :meth:`~EdgeTally.mask`): bool [shape=(h, w)] at most ``DETECT_WIDTH`` wide, or None."""
+def find_overlays(lumas: Sequence[np.ndarray]) -> "Overlays | None":
+    """The overlays in frames sampled far apart, each taken as a shot of its own (:class:`EdgeTally` of
+    ``lumas``, then its :meth:`~EdgeTally.find`), at most ``DETECT_WIDTH`` wide; None: none."""
     tally = EdgeTally()
     for luma in lumas:
         tally.add(luma)
-    return tally.mask()
+    return tally.find()
 
 
 class EdgeTally:
@@ -57,7 +68,10 @@ class EdgeTally:
         self.edges: np.ndarray | None = None  # int32 [shape=(h, w)]: shots with an edge at each pixel
         self.lo: np.ndarray | None = None  # uint8: each pixel's least and greatest luma over the samples
         self.hi: np.ndarray | None = None
-        self._shot: tuple = ()  # the current shot: (its id, int32 edge counts, samples)
+        # float64 [shape=(4, h, w)]: sums over shots of the shot's mean picture (y) and of the picture around
+        # each pixel in it (x, ``AROUND``): x, y, x * x, x * y (a line y = (1 - opacity) x + opacity x level)
+        self.fit: np.ndarray | None = None
+        self._shot: tuple = ()  # the current shot: (its id, int32 edge counts, samples, float32 sum of them)
 
     def add(self, luma: np.ndarray, shot: int | None = None) -> None:
         """One picture: uint8 [shape=(height, width)], full-range luma of the active picture (bars
@@ -71,39 +85,91 @@ class EdgeTally:
         edge = (cv2.Canny(small, EDGE_LOW, EDGE_HIGH) > 0).astype(np.int32)
         if self.lo is None:
             self.lo, self.hi, self.edges = small.copy(), small.copy(), np.zeros(small.shape, np.int32)
+            self.fit = np.zeros((4, *small.shape), np.float64)
         else:
             np.minimum(self.lo, small, out=self.lo)
             np.maximum(self.hi, small, out=self.hi)
         if shot is None or not self._shot or self._shot[0] != shot:
             self._close()
-            self._shot = (shot, edge, 1)
+            self._shot = (shot, edge, 1, small.astype(np.float32))
         else:
-            self._shot = (shot, self._shot[1] + edge, self._shot[2] + 1)
+            _, counts, taken, ys = self._shot
+            self._shot = (shot, counts + edge, taken + 1, ys + small)
 
     def _close(self) -> None:
-        """Count the current shot's edges."""
+        """Count the current shot's edges and add its mean pictures to the fit."""
         if self._shot:
-            _, counts, taken = self._shot
+            _, counts, taken, ys = self._shot
             self.edges += (2 * counts >= taken).astype(np.int32)
+            y = ys / taken
+            mean = np.clip(y + 0.5, 0, 255).astype(np.uint8)
+            x = cv2.medianBlur(mean, max(3, int(round(AROUND * y.shape[1])) | 1)).astype(np.float64)
+            self.fit += np.stack([x, y, x * x, x * y])
             self.n += 1
             self._shot = ()
 
-    def mask(self) -> np.ndarray | None:
-        """Where overlays lie: bool [shape=(h, w)] at the samples' size (at most ``DETECT_WIDTH``
-        wide), or None when there are none, or too few shots (``MIN_SHOTS``) to tell.
+    def opacity(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each pixel's opacity over the film around it, float [shape=(h, w)] 0..1 (under ``ALPHA_MIN``,
+        or where the surroundings vary less than ``MIN_SPREAD`` over the shots: 0), and its level
+        (opacity x the overlay's grey level, 0..255), from the line through the shots' (around, own)
+        luma pairs: an overlay of opacity a and level c shows y = (1 - a) x + a c."""
+        self._close()
+        n = max(self.n, 1)
+        mx, my, mxx, mxy = self.fit / n
+        spread = mxx - mx * mx
+        slope = np.where(spread > MIN_SPREAD ** 2, (mxy - mx * my) / np.maximum(spread, 1e-9), 1.0)
+        alpha = np.clip(1.0 - slope, 0.0, 1.0)
+        alpha[alpha < ALPHA_MIN] = 0.0
+        return alpha, np.where(alpha > 0, my - slope * mx, 0.0)
+
+    def find(self) -> "Overlays | None":
+        """The overlays the shots show, at the samples' size (at most ``DETECT_WIDTH`` wide); None when
+        there are none, or too few shots (``MIN_SHOTS``) to tell.
 
         An overlay is made of edges found in at least ``PERSIST`` of the shots; those closer than ``CLOSE`` are
         joined, each shape's convex hull filled (a box with its digits, those that change every frame too; a
         word; a logo), shapes of fewer standing edge pixels than ``MIN_EDGES`` frame widths dropped (scenes that
         share a sample or two of their edges), the rest widened by ``MARGIN``. Nothing is found when under
-        ``MIN_CHANGING`` of the pixels outside the mask change across the samples (a clip of one scene keeps its
-        own edges in every shot), or when the mask would cover more than ``MAX_COVER``: a wide translucent
-        watermark, through which the film shows, would take more film from the stages filled than it hides
-        (docs/BENCHMARKS.md, "Stop 63").
+        ``MIN_CHANGING`` of the pixels outside the shapes change across the samples (a clip of one scene keeps
+        its own edges in every shot). Shapes covering up to ``MAX_COVER`` are filled: that takes little film,
+        and leaves no trace of them. Over it, filling would take more film than the overlay hides: a shape
+        whose strong opacity (:meth:`opacity`, its 95th percentile) lies in ``SEE_THROUGH`` is unblended (a
+        watermark across the picture; up to ``MAX_TRANSLUCENT``), the others are filled if they fit in
+        ``MAX_COVER``, or left as picture (docs/BENCHMARKS.md, "Stop 63", "Stop 64").
         """
         self._close()
         if self.n < MIN_SHOTS or self.edges is None or min(self.edges.shape) < 16:
             return None
+        region = self._shapes()
+        if region is None:
+            return None
+        changing = (self.hi.astype(np.int16) - self.lo) > CHANGE_LEVEL
+        if changing[~region].mean() < MIN_CHANGING:
+            return None
+        if region.mean() <= MAX_COVER:
+            return Overlays(region)
+        alpha, level = self.opacity()
+        n, labels = cv2.connectedComponents(region.astype(np.uint8))
+        see_through = np.zeros(n, bool)
+        for k in range(1, n):
+            strong = float(np.quantile(alpha[labels == k], 0.95))
+            see_through[k] = SEE_THROUGH[0] <= strong <= SEE_THROUGH[1]
+        translucent = see_through[labels]
+        mask = region & ~translucent
+        if mask.mean() > MAX_COVER:
+            mask[:] = False
+        if translucent.mean() > MAX_TRANSLUCENT:
+            translucent[:] = False
+        strong = translucent & (alpha >= SEE_THROUGH[0])
+        if not strong.any():
+            return Overlays(mask) if mask.any() else None
+        if (strong & (alpha >= LEVEL_FROM)).any():
+            strong &= alpha >= LEVEL_FROM
+        colour = float(level[strong].sum() / alpha[strong].sum())
+        return Overlays(mask, np.where(translucent, alpha, 0.0), colour)
+
+    def _shapes(self) -> np.ndarray | None:
+        """The standing edges' shapes, hulled and widened (:meth:`find`): bool [shape=(h, w)], or None."""
         h, w = self.edges.shape
         persistent = (self.edges >= PERSIST * self.n - 1e-9).astype(np.uint8)
         b = max(2, int(round(BORDER * h)))  # a bar's edge the active picture's rectangle left in
@@ -117,13 +183,7 @@ class EdgeTally:
             if k:
                 ys, xs = np.nonzero(labels == k)
                 cv2.fillConvexPoly(shapes, cv2.convexHull(np.stack([xs, ys], axis=1).astype(np.int32)), 1)
-        if not shapes.any():
-            return None
-        mask = cv2.dilate(shapes, _disc(MARGIN * w)) > 0
-        changing = (self.hi.astype(np.int16) - self.lo) > CHANGE_LEVEL
-        if mask.mean() > MAX_COVER or changing[~mask].mean() < MIN_CHANGING:
-            return None
-        return mask
+        return cv2.dilate(shapes, _disc(MARGIN * w)) > 0 if shapes.any() else None
 
 
 def _disc(diameter: float) -> np.ndarray:
@@ -141,32 +201,52 @@ def _shrunk(luma: np.ndarray) -> np.ndarray:
 
 
 class Overlays:
-    """A film's overlays (:func:`overlay_mask`), filled in any proxy of its frames, at any size, gray
-    or RGB. The mask at each size is made once (thread-safe)."""
+    """A film's overlays (:meth:`EdgeTally.find`) taken off any proxy of its frames, at any size, gray
+    or RGB: ``mask`` (bool [shape=(h, w)]) filled from the picture around it, ``alpha`` (uint8, opacity
+    x 255; None: no translucent overlay) unblended with the overlay's grey level ``colour`` (0..255).
+    The maps at each size are made once (thread-safe)."""
 
-    def __init__(self, mask: np.ndarray):
+    def __init__(self, mask: np.ndarray, alpha: np.ndarray | None = None, colour: float = 0.0):
         self.mask = np.asarray(mask, bool)
-        self._sized: dict[tuple[int, int], np.ndarray] = {}
+        self.alpha = None if alpha is None else _alpha_u8(alpha)
+        if self.alpha is not None and not self.alpha.any():
+            self.alpha = None
+        self.colour = float(np.clip(colour, 0.0, 255.0))
+        self._sized: dict[tuple, np.ndarray] = {}
         self._lock = threading.Lock()
 
     @property
     def share(self) -> float:
-        """The share of the picture the overlays cover, 0..1."""
+        """The share of the picture filled, 0..1."""
         return float(self.mask.mean())
+
+    @property
+    def translucent(self) -> float:
+        """The share of the picture unblended, 0..1."""
+        return 0.0 if self.alpha is None else float(np.count_nonzero(self.alpha) / self.alpha.size)
 
     def boxes(self, width: int, height: int) -> list[list[int]]:
         """Each overlay's bounding box [x, y, w, h] px in a picture ``width`` x ``height``."""
-        n, _, stats, _ = cv2.connectedComponentsWithStats(self.mask_at(height, width))
+        covered = self.mask_at(height, width)
+        if self.alpha is not None:  # a translucent overlay's strokes, joined as its shapes were (``CLOSE``)
+            strokes = (self.alpha_at(height, width) > 0).astype(np.uint8)
+            covered = covered | (cv2.morphologyEx(strokes, cv2.MORPH_CLOSE, _disc(CLOSE * width)) > 0)
+        n, _, stats, _ = cv2.connectedComponentsWithStats(covered)
         return [[int(v) for v in stats[i, :4]] for i in range(1, n)]
 
     def to_stats(self) -> dict:
-        """The mask as JSON-able stats: {"size": [w, h], "runs": run lengths of the rows joined,
-        starting with a clear run}; :meth:`from_stats` reads them back exactly."""
+        """The overlays as JSON-able stats: {"size": [w, h], "runs": the mask's run lengths, rows joined,
+        starting with a clear run; with a translucent one also "alpha" (a PNG of the opacities, base64)
+        and "colour"}; :meth:`from_stats` reads them back exactly."""
         flat = self.mask.ravel()
         runs = np.diff(np.concatenate([[0], np.flatnonzero(flat[1:] != flat[:-1]) + 1, [flat.size]]))
         if flat.size and flat[0]:
             runs = np.concatenate([[0], runs])  # the first run is a clear one, here empty
-        return {"size": [int(self.mask.shape[1]), int(self.mask.shape[0])], "runs": [int(r) for r in runs]}
+        out = {"size": [int(self.mask.shape[1]), int(self.mask.shape[0])], "runs": [int(r) for r in runs]}
+        if self.alpha is not None:
+            out["alpha"] = base64.b64encode(cv2.imencode(".png", self.alpha)[1].tobytes()).decode("ascii")
+            out["colour"] = round(self.colour, 3)
+        return out
 
     @classmethod
     def from_stats(cls, stats: dict | None) -> "Overlays | None":
@@ -175,21 +255,62 @@ class Overlays:
             return None
         w, h = (int(v) for v in stats["size"])
         values = np.arange(len(stats["runs"])) % 2 == 1
-        return cls(np.repeat(values, np.asarray(stats["runs"], np.int64))[:w * h].reshape(h, w))
+        mask = np.repeat(values, np.asarray(stats["runs"], np.int64))[:w * h].reshape(h, w)
+        alpha = None
+        if stats.get("alpha"):
+            png = np.frombuffer(base64.b64decode(stats["alpha"]), np.uint8)
+            alpha = cv2.imdecode(png, cv2.IMREAD_UNCHANGED)
+        return cls(mask, alpha, float(stats.get("colour", 0.0)))
 
     def mask_at(self, height: int, width: int) -> np.ndarray:
         """The mask at ``height`` x ``width`` px: uint8 0/1, every pixel an overlay touches set."""
-        key = (int(height), int(width))
+        key = ("mask", int(height), int(width))
         with self._lock:
             got = self._sized.get(key)
             if got is None:
-                got = (cv2.resize(self.mask.astype(np.float32), (key[1], key[0]), interpolation=cv2.INTER_AREA)
+                got = (cv2.resize(self.mask.astype(np.float32), (key[2], key[1]), interpolation=cv2.INTER_AREA)
                        > 0).astype(np.uint8)
                 self._sized[key] = got
         return got
 
+    def alpha_at(self, height: int, width: int) -> np.ndarray:
+        """The opacities at ``height`` x ``width`` px: float32 0..1 (area-averaged to a smaller size, as a
+        proxy averages the picture; at most ``MAX_ALPHA``), 0 without a translucent overlay."""
+        key = ("alpha", int(height), int(width))
+        with self._lock:
+            got = self._sized.get(key)
+            if got is None:
+                if self.alpha is None:
+                    got = np.zeros((key[1], key[2]), np.float32)
+                else:
+                    small = key[2] < self.alpha.shape[1]
+                    got = cv2.resize(self.alpha.astype(np.float32) / 255.0, (key[2], key[1]),
+                                     interpolation=cv2.INTER_AREA if small else cv2.INTER_LINEAR)
+                    np.minimum(got, MAX_ALPHA, out=got)
+                self._sized[key] = got
+        return got
+
     def fill(self, picture: np.ndarray) -> np.ndarray:
-        """``picture`` (uint8 [shape=(h, w)] or [shape=(h, w, 3)]: a proxy) with the overlays filled
-        from the picture around them: a new array."""
+        """``picture`` (uint8 [shape=(h, w)] or [shape=(h, w, 3)]: a proxy) with the overlays taken off: a
+        translucent one unblended (the film under it: (picture - opacity x colour) / (1 - opacity), for
+        each channel), the mask filled from the picture around it: a new array."""
         a = np.ascontiguousarray(picture, np.uint8)
+        if self.alpha is not None:
+            alpha = self.alpha_at(*a.shape[:2])
+            rows = np.flatnonzero(alpha.any(axis=1))
+            a = a.copy()
+            if rows.size:
+                band = slice(int(rows[0]), int(rows[-1]) + 1)
+                al = alpha[band] if a.ndim == 2 else alpha[band, :, None]
+                a[band] = np.clip((a[band] - al * self.colour) / (1.0 - al) + 0.5, 0, 255).astype(np.uint8)
+        if not self.mask.any():
+            return a
         return cv2.inpaint(a, self.mask_at(*a.shape[:2]), FILL_RADIUS, cv2.INPAINT_TELEA)
+
+
+def _alpha_u8(alpha: np.ndarray) -> np.ndarray:
+    """Opacities as stored: uint8 0..255 (a float map 0..1 is scaled; uint8 kept as it is)."""
+    a = np.asarray(alpha)
+    if a.dtype == np.uint8:
+        return np.ascontiguousarray(a)
+    return np.clip(np.rint(a * 255.0), 0, 255).astype(np.uint8)

@@ -35,7 +35,8 @@ from autohaptics.shots import Boundaries, detect
 # every frame decoded from 40 fps up where the pictures repeat (``pipeline.picture.decode_mode``).
 # 8: a sound that changes sample rate mid-stream resampled from each rate (``media.audio``).
 # 9: a transport stream of several programmes read as one programme, its clock its own (``media.programs``).
-ANALYSIS_REVISION = 9
+# 10: a translucent overlay wider than a filled one may be (a watermark) unblended (``media.overlays``).
+ANALYSIS_REVISION = 10
 
 
 @dataclass

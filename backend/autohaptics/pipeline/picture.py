@@ -58,8 +58,7 @@ def read_picture(info: media.MediaInfo, params: GenerateParams) -> Picture:
     tally = EdgeTally()
     for luma in lumas:
         tally.add(luma[y:y + h, x:x + w])
-    mask = tally.mask()
-    return Picture(area, packing, None if mask is None else Overlays(mask), tally.n < MIN_SHOTS)
+    return Picture(area, packing, tally.find(), tally.n < MIN_SHOTS)
 
 
 class ShotSampler:
@@ -80,8 +79,7 @@ class ShotSampler:
 
     def found(self) -> Overlays | None:
         """The overlays the samples show (None: none)."""
-        mask = self.tally.mask()
-        return None if mask is None else Overlays(mask)
+        return self.tally.find()
 
 
 def shown_aspect(info: media.MediaInfo, area: tuple[int, int, int, int] | None, packing: str) -> float | None:

@@ -398,6 +398,7 @@ class _Pass:
         ov = self.overlays
         out.stats["overlays"] = {"mode": self.params.video.overlays, "found_by": self.found_by,
                                  "share": round(ov.share, 4) if ov is not None else 0.0,
+                                 "translucent": round(ov.translucent, 4) if ov is not None else 0.0,
                                  "boxes": ov.boxes(*rect[2:]) if ov is not None else [],
                                  **(ov.to_stats() if ov is not None else {})}
         return out
