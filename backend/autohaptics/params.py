@@ -70,7 +70,8 @@ class VideoParams(Record):
     stereo : a 3D film's packed views: "auto" (default: as the file declares, else as its pictures show,
         :mod:`media.stereo`), "2d", "side_by_side" or "top_bottom"; read from the first view.
     overlays : "auto" (default): burnt-in overlays (a timecode, a logo) are found and filled in every proxy from the
-        picture around them (:mod:`media.overlays`, ``stats["overlays"]``); "keep": read as the film's (as before).
+        picture around them, a translucent watermark across the picture unblended (:mod:`media.overlays`,
+        ``stats["overlays"]``); "keep": read as the film's (as before).
     """
 
     STAGE: ClassVar[str] = ANALYSIS

@@ -68,7 +68,7 @@ def _shrunk_to(rgb: np.ndarray, width: int) -> np.ndarray:
 def test_a_watermark_across_the_picture_is_unblended():
     """A line of words at 35 % white across the picture: filled, it would take the film under it; unblended,
     the film stays and the words fade (at the proxies' sizes, in pictures the search never saw)."""
-    ov = find_overlays(_samples("watermark", 12))
+    ov = find_overlays(_samples("watermark", 20))
     assert ov is not None and ov.share == 0.0 and ov.alpha is not None
     ys, _ = np.nonzero(ov.alpha)
     assert ys.min() > 0.3 * ov.alpha.shape[0] and ys.max() < 0.65 * ov.alpha.shape[0]  # on its line
@@ -80,7 +80,7 @@ def test_a_watermark_across_the_picture_is_unblended():
             out = ov.fill(picture)
             words = np.abs(picture.astype(int) - film).max(axis=2) > 3
             before, after = (float(np.abs(p.astype(int) - film)[words].mean()) for p in (picture, out))
-            assert after < 0.8 * before, (k, width, before, after)
+            assert after < 0.7 * before, (k, width, before, after)  # 0.57-0.61 x
             untouched = ov.alpha_at(*picture.shape[:2]) == 0
             assert np.array_equal(out[untouched], picture[untouched])
 
