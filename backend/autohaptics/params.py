@@ -69,9 +69,8 @@ class VideoParams(Record):
         (:func:`media.find_active_area`, ``stats["active_area"]``); "full": the whole frame, bars included.
     stereo : a 3D film's packed views: "auto" (default: as the file declares, else as its pictures show,
         :mod:`media.stereo`), "2d", "side_by_side" or "top_bottom"; read from the first view.
-    overlays : "auto" (default): burnt-in overlays (a timecode, a logo) are found and filled in every proxy from the
-        picture around them, a translucent watermark across the picture unblended (:mod:`media.overlays`,
-        ``stats["overlays"]``); "keep": read as the film's (as before).
+    overlays : "auto" (default): burnt-in overlays are found (:mod:`media.overlays`, ``stats["overlays"]``), a timecode
+        or a logo filled from the picture around it, a watermark across the picture unblended; "keep": read as picture.
     """
 
     STAGE: ClassVar[str] = ANALYSIS

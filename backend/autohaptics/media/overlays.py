@@ -39,11 +39,11 @@ MIN_CHANGING = 0.5  # the pixels outside the mask that change: at least this sha
 FILL_RADIUS = 3  # px: the neighbourhood each filled pixel is taken from (cv2.inpaint)
 LIT_LEVEL, LIT_SHARE = 12, 0.25  # a sample lit (luma above LIT_LEVEL) on less of its pixels tells nothing
 AROUND = 0.06  # frame widths: the median over this square is the picture around a pixel (wider than a word's line)
-MIN_SPREAD = 10.0  # grey levels: a pixel's surroundings must vary this much (sd over shots) to read its opacity
+MIN_SPREAD = 10.0  # grey levels: a pixel's surroundings must vary this much (sd over samples) to read its opacity
 ALPHA_MIN = 0.05  # opacities under this read as none (the fit's noise)
 SEE_THROUGH = 0.15, 0.5  # a shape whose strong opacity (its 95th percentile) lies here is translucent
-MAX_TRANSLUCENT = 0.25  # translucent shapes covering more are left as picture
-LEVEL_FROM = 0.25  # an overlay's grey level is read where it is this opaque (a fainter fit leans to the film's mean)
+MAX_TRANSLUCENT = 0.5  # translucent shapes covering more are left as picture
+LEVEL_FROM = 0.5  # quantile of the strokes' opacities their grey level is read from (a fainter fit leans to the mean)
 MAX_ALPHA = 0.75  # opacities are unblended up to this (the film under them amplified at most 4 x)
 
 
@@ -68,10 +68,12 @@ class EdgeTally:
         self.edges: np.ndarray | None = None  # int32 [shape=(h, w)]: shots with an edge at each pixel
         self.lo: np.ndarray | None = None  # uint8: each pixel's least and greatest luma over the samples
         self.hi: np.ndarray | None = None
-        # float64 [shape=(4, h, w)]: sums over shots of the shot's mean picture (y) and of the picture around
-        # each pixel in it (x, ``AROUND``): x, y, x * x, x * y (a line y = (1 - opacity) x + opacity x level)
+        # float64 [shape=(4, h, w)]: sums over the samples of each pixel's luma (y) and the picture's around
+        # it (x, ``AROUND``): x, y, x * x, x * y (a line y = (1 - opacity) x + opacity x level); ``fitted``
+        # counts them. By sample, not by shot: a shot's samples are more points on the same line
         self.fit: np.ndarray | None = None
-        self._shot: tuple = ()  # the current shot: (its id, int32 edge counts, samples, float32 sum of them)
+        self.fitted = 0
+        self._shot: tuple = ()  # the current shot: (its id, int32 edge counts, samples)
 
     def add(self, luma: np.ndarray, shot: int | None = None) -> None:
         """One picture: uint8 [shape=(height, width)], full-range luma of the active picture (bars
@@ -83,39 +85,36 @@ class EdgeTally:
                 np.count_nonzero(small > LIT_LEVEL) < LIT_SHARE * small.size:
             return
         edge = (cv2.Canny(small, EDGE_LOW, EDGE_HIGH) > 0).astype(np.int32)
+        x = cv2.medianBlur(small, max(3, int(round(AROUND * small.shape[1])) | 1)).astype(np.float64)
+        y = small.astype(np.float64)
         if self.lo is None:
             self.lo, self.hi, self.edges = small.copy(), small.copy(), np.zeros(small.shape, np.int32)
             self.fit = np.zeros((4, *small.shape), np.float64)
         else:
             np.minimum(self.lo, small, out=self.lo)
             np.maximum(self.hi, small, out=self.hi)
+        self.fit += np.stack([x, y, x * x, x * y])
+        self.fitted += 1
         if shot is None or not self._shot or self._shot[0] != shot:
             self._close()
-            self._shot = (shot, edge, 1, small.astype(np.float32))
+            self._shot = (shot, edge, 1)
         else:
-            _, counts, taken, ys = self._shot
-            self._shot = (shot, counts + edge, taken + 1, ys + small)
+            self._shot = (shot, self._shot[1] + edge, self._shot[2] + 1)
 
     def _close(self) -> None:
-        """Count the current shot's edges and add its mean pictures to the fit."""
+        """Count the current shot's edges."""
         if self._shot:
-            _, counts, taken, ys = self._shot
+            _, counts, taken = self._shot
             self.edges += (2 * counts >= taken).astype(np.int32)
-            y = ys / taken
-            mean = np.clip(y + 0.5, 0, 255).astype(np.uint8)
-            x = cv2.medianBlur(mean, max(3, int(round(AROUND * y.shape[1])) | 1)).astype(np.float64)
-            self.fit += np.stack([x, y, x * x, x * y])
             self.n += 1
             self._shot = ()
 
     def opacity(self) -> tuple[np.ndarray, np.ndarray]:
         """Each pixel's opacity over the film around it, float [shape=(h, w)] 0..1 (under ``ALPHA_MIN``,
-        or where the surroundings vary less than ``MIN_SPREAD`` over the shots: 0), and its level
-        (opacity x the overlay's grey level, 0..255), from the line through the shots' (around, own)
+        or where the surroundings vary less than ``MIN_SPREAD`` over the samples: 0), and its level
+        (opacity x the overlay's grey level, 0..255), from the line through the samples' (around, own)
         luma pairs: an overlay of opacity a and level c shows y = (1 - a) x + a c."""
-        self._close()
-        n = max(self.n, 1)
-        mx, my, mxx, mxy = self.fit / n
+        mx, my, mxx, mxy = self.fit / max(self.fitted, 1)
         spread = mxx - mx * mx
         slope = np.where(spread > MIN_SPREAD ** 2, (mxy - mx * my) / np.maximum(spread, 1e-9), 1.0)
         alpha = np.clip(1.0 - slope, 0.0, 1.0)
@@ -163,9 +162,8 @@ class EdgeTally:
         strong = translucent & (alpha >= SEE_THROUGH[0])
         if not strong.any():
             return Overlays(mask) if mask.any() else None
-        if (strong & (alpha >= LEVEL_FROM)).any():
-            strong &= alpha >= LEVEL_FROM
-        colour = float(level[strong].sum() / alpha[strong].sum())
+        strong &= alpha >= np.quantile(alpha[strong], LEVEL_FROM)
+        colour = float(np.median(level[strong] / alpha[strong]))
         return Overlays(mask, np.where(translucent, alpha, 0.0), colour)
 
     def _shapes(self) -> np.ndarray | None:
