@@ -12,8 +12,8 @@ otherwise change, joined into the shapes they outline and widened by a margin (a
 around them). :class:`Overlays` fills that mask in each proxy from the picture around it (OpenCV's Telea
 inpainting), so the proxies move, change and keep their colours as the film around the overlay does;
 a translucent one (a watermark the film shows through) is taken off instead: its opacity and level,
-read from how each pixel follows the picture around it from shot to shot, are unblended, so the film
-under it stays.
+read from how each pixel follows the picture around it across the film's samples, are unblended, so
+the film under it stays.
 """
 
 from __future__ import annotations
@@ -151,8 +151,8 @@ class EdgeTally:
         n, labels = cv2.connectedComponents(region.astype(np.uint8))
         see_through = np.zeros(n, bool)
         for k in range(1, n):
-            strong = float(np.quantile(alpha[labels == k], 0.95))
-            see_through[k] = SEE_THROUGH[0] <= strong <= SEE_THROUGH[1]
+            q95 = float(np.quantile(alpha[labels == k], 0.95))
+            see_through[k] = SEE_THROUGH[0] <= q95 <= SEE_THROUGH[1]
         translucent = see_through[labels]
         mask = region & ~translucent
         if mask.mean() > MAX_COVER:
