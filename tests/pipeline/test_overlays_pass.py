@@ -91,16 +91,30 @@ def test_a_clean_film_reads_exactly_as_before(films):
         assert np.array_equal(getattr(a, track), getattr(k, track)), track
 
 
-def test_a_long_film_is_searched_before_the_pass(tmp_path):
+@pytest.fixture(scope="module")
+def long_clean(tmp_path_factory):
+    return synth.write_scene(tmp_path_factory.mktemp("long") / "long.mp4", material_scene(SAMPLED_MIN_S), width=160,
+                             height=90, fps=5, quality="low")
+
+
+def test_a_long_film_is_searched_before_the_pass(long_clean, tmp_path):
     """Three minutes: the nine pictures sampled for the active area, each its own shot, find it."""
-    clean = synth.write_scene(tmp_path / "long.mp4", material_scene(SAMPLED_MIN_S), width=160, height=90, fps=5,
-                              quality="low")
-    burnt = with_burn_in(clean, tmp_path / "long_tc.mkv", "timecode", gop=10)
-    for path, found in ((clean, False), (burnt, True)):
+    burnt = with_burn_in(long_clean, tmp_path / "long_tc.mkv", "timecode", gop=10)
+    for path, found in ((long_clean, False), (burnt, True)):
         picture = read_picture(media.probe(path), GenerateParams())
         assert (picture.overlays is not None) == found and not picture.tally
     (x, y, w, h), (bx, by, bw, bh) = picture.overlays.boxes(160, 90)[0], timecode_box(160, 90)
     assert x <= bx and y <= by and x + w >= bx + bw and y + h >= by + bh
+
+
+def test_a_long_films_watermark_is_unblended_from_its_nine_samples(long_clean, tmp_path):
+    """Nine samples are enough points for the opacity fit: the line of words is unblended, nothing filled."""
+    burnt = with_burn_in(long_clean, tmp_path / "long_wm.mkv", "watermark", gop=10)
+    overlays = read_picture(media.probe(burnt), GenerateParams()).overlays
+    assert overlays is not None and overlays.share == 0.0 and 0.01 < overlays.translucent < 0.08
+    assert overlays.colour > 180
+    x, y, w, h = max(overlays.boxes(160, 90), key=lambda b: b[2] * b[3])
+    assert w > 0.6 * 160 and 0.3 * 90 < y and y + h < 0.7 * 90  # across the middle
 
 
 @pytest.mark.parametrize("name", ["short", "watermark"])
