@@ -210,7 +210,8 @@ class Overlays:
         if self.alpha is not None and not self.alpha.any():
             self.alpha = None
         self.colour = float(np.clip(colour, 0.0, 255.0))
-        self._sized: dict[tuple, np.ndarray] = {}
+        self._filled = bool(self.mask.any())
+        self._sized: dict[tuple, object] = {}
         self._lock = threading.Lock()
 
     @property
@@ -294,16 +295,30 @@ class Overlays:
         each channel), the mask filled from the picture around it: a new array."""
         a = np.ascontiguousarray(picture, np.uint8)
         if self.alpha is not None:
-            alpha = self.alpha_at(*a.shape[:2])
-            rows = np.flatnonzero(alpha.any(axis=1))
+            band, gain, offset = self._unblend_at(*a.shape[:2])
             a = a.copy()
-            if rows.size:
-                band = slice(int(rows[0]), int(rows[-1]) + 1)
-                al = alpha[band] if a.ndim == 2 else alpha[band, :, None]
-                a[band] = np.clip((a[band] - al * self.colour) / (1.0 - al) + 0.5, 0, 255).astype(np.uint8)
-        if not self.mask.any():
+            if a.ndim == 3:
+                gain, offset = gain[:, :, None], offset[:, :, None]
+            a[band] = np.clip(a[band] * gain - offset + 0.5, 0, 255).astype(np.uint8)
+        if not self._filled:
             return a
         return cv2.inpaint(a, self.mask_at(*a.shape[:2]), FILL_RADIUS, cv2.INPAINT_TELEA)
+
+    def _unblend_at(self, height: int, width: int) -> tuple[slice, np.ndarray, np.ndarray]:
+        """The rows a translucent overlay touches at ``height`` x ``width`` px, and over them the gain
+        1 / (1 - opacity) and offset opacity x colour x gain of :meth:`fill` (float32), made once a size."""
+        key = ("unblend", int(height), int(width))
+        with self._lock:
+            got = self._sized.get(key)
+        if got is None:
+            alpha = self.alpha_at(height, width)
+            rows = np.flatnonzero(alpha.any(axis=1))
+            band = slice(int(rows[0]), int(rows[-1]) + 1) if rows.size else slice(0, 0)
+            gain = (1.0 / (1.0 - alpha[band])).astype(np.float32)
+            got = (band, gain, (alpha[band] * self.colour * gain).astype(np.float32))
+            with self._lock:
+                self._sized[key] = got
+        return got
 
 
 def _alpha_u8(alpha: np.ndarray) -> np.ndarray:
