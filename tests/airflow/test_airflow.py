@@ -119,6 +119,21 @@ def test_flows_computed_in_two_threads_at_once_are_those_of_one_thread():
             np.testing.assert_array_equal(flow, alone[k % len(pairs)])
 
 
+def test_dis_iterations_default_to_the_presets_and_each_setting_has_its_own_object():
+    """None reads the preset's own iterations (medium: 25 descents, 5 refinements), bit for bit; fewer
+    refinements give another flow, and asking for one setting leaves the other's results as they were."""
+    scene = pan_scene(0.6)
+    a, b = gray(scene, 0.5, 160, 68), gray(scene, 0.5 + 1 / 24, 160, 68)
+    default = airflow.optical_flow(a, b)
+    spelled = airflow.optical_flow(a, b, params=airflow.FlowParams(dis_descent=25, dis_refine=5))
+    np.testing.assert_array_equal(spelled, default)
+    rough = airflow.optical_flow(a, b, params=airflow.FlowParams(dis_refine=0))
+    assert np.abs(rough - default).max() > 0.01
+    inner = rough[10:-10, 10:-10]  # still the pan: 4 px a frame to the right
+    np.testing.assert_allclose(np.median(inner[..., 0]), 4.0, atol=0.25)
+    np.testing.assert_array_equal(airflow.optical_flow(a, b), default)
+
+
 def test_too_small_proxy_gives_zero_flow():
     a = np.random.default_rng(0).integers(0, 256, (15, 40), dtype=np.uint8)
     np.testing.assert_array_equal(airflow.optical_flow(a, np.roll(a, 2, axis=1)), np.zeros((15, 40, 2), np.float32))
@@ -633,6 +648,9 @@ def test_the_flow_proxy_width_follows_the_picture(params, picture_width, expecte
     (airflow.FlowParams, {"method": "lucas"}), (airflow.FlowParams, {"dis_preset": "slow"}),
     (airflow.FlowParams, {"proxy_width": 4}), (airflow.FlowParams, {"proxy_fraction": -0.1}),
     (airflow.FlowParams, {"proxy_fraction": 1.5}), (airflow.FlowParams, {"proxy_fraction": float("nan")}),
+    (airflow.FlowParams, {"dis_refine": -1}), (airflow.FlowParams, {"dis_refine": 101}),
+    (airflow.FlowParams, {"dis_refine": 2.5}), (airflow.FlowParams, {"dis_refine": True}),
+    (airflow.FlowParams, {"dis_descent": 0}),
     (airflow.AirflowParams, {"threshold": -1.0}),
     (airflow.AirflowParams, {"cell_rel": 1.5}), (airflow.AirflowParams, {"floor": -0.1}),
     (airflow.AirflowParams, {"peak_cells": 0}), (airflow.AirflowParams, {"peak_cells": 2.5}),

@@ -37,24 +37,24 @@ class FlowParams:
     proxy_width : width of the gray proxy the flow runs on, px (default 160); the least width
         when ``proxy_fraction`` asks for more (:meth:`width_for`).
     dis_preset : "ultrafast" | "fast" | "medium" (default; see the module docstring).
-    proxy_fraction : the proxy is at least this fraction of the picture's width as shown, in
-        multiples of 16 px, 0..1 (default 1/8: 240 px at 1920, 480 at 3840, ``proxy_width`` up to
-        1280; 0 = always ``proxy_width``). Module docstring, "Decisions".
+    dis_descent, dis_refine : DIS's gradient-descent (1..100) and variational refinement (0..100) iterations;
+        None (default) = the preset's (medium: 25, 5); fewer cost less (docs/BENCHMARKS.md, "Stop 65").
+    proxy_fraction : the proxy is at least this fraction of the picture's width as shown, in multiples of
+        16 px, 0..1 (default 1/8: 240 px at 1920, 480 at 3840, ``proxy_width`` up to 1280; 0 = always
+        ``proxy_width``). Module docstring, "Decisions".
     repeat_wait_s : a flow pair's successor frame that repeats its first frame (static, see
-        ``airflow.static_level``) is passed over for the next decoded frame while it lies less than
-        this after the first frame, s, 0..1 (default 0.1, one tick: frame-rate conversion by repeated
-        frames, 3:2 pulldown to 60 fps, animation on twos, also where the decoder skips the
-        non-reference frames between; 0 = always the next frame, the thesis).
+        ``airflow.static_level``) is passed over for the next decoded frame while it lies less than this after
+        the first frame, s, 0..1 (default 0.1, one tick: frame-rate conversion by repeated frames, 3:2
+        pulldown to 60 fps, animation on twos, also where the decoder skips the non-reference frames
+        between; 0 = always the next frame, the thesis).
     min_span_frames : a flow pair's successor is the first decoded frame at least this many frame
         intervals (the stream's average rate; a variable-rate stream: its next frame; under a repeat
         cadence this many of the picture's steps, :meth:`Cadence.least_span_s`) after its first, 0..10
         (an analysed frame always ends the pair before it). 0 = the next decoded frame (the thesis); 1.5
         (default) pairs frames two apart whether or not the decoder skips the non-reference frames
         (quick flutter reads otherwise over one): docs/BENCHMARKS.md, "Screener encodes".
-    cadence_ratio : a frame that differs from the frame before by under this share of the steps
-        around it is a repeat (a frame-rate conversion): a flow pair's time counts the picture's
-        steps, not the repeats (:mod:`autohaptics.airflow.cadence`); 0..1 (default 0.35; 0 = the
-        stream's time, the thesis).
+    cadence_ratio : a frame that differs from the one before by under this share of the steps around it is a
+        repeat: a pair's time counts the picture's steps (:mod:`.cadence`); 0..1 (default 0.35; 0 = the thesis).
     """
 
     STAGE: ClassVar[str] = ANALYSIS
@@ -66,6 +66,8 @@ class FlowParams:
     repeat_wait_s: float = 0.1
     min_span_frames: float = 1.5
     cadence_ratio: float = 0.35
+    dis_descent: int | None = None
+    dis_refine: int | None = None
 
     def __post_init__(self):
         if self.method not in FLOW_METHODS:
@@ -77,6 +79,10 @@ class FlowParams:
         for name in ("proxy_fraction", "repeat_wait_s", "cadence_ratio"):
             if not (0.0 <= float(getattr(self, name)) <= 1.0):  # NaN fails too
                 raise ParameterError(f"flow.{name} must lie in 0..1, got {getattr(self, name)!r}")
+        for name, least in (("dis_descent", 1), ("dis_refine", 0)):
+            v = getattr(self, name)
+            if v is not None and not (isinstance(v, int) and not isinstance(v, bool) and least <= v <= 100):
+                raise ParameterError(f"flow.{name} must be a whole number in {least}..100 or None, got {v!r}")
         if not (0.0 <= float(self.min_span_frames) <= 10.0):
             raise ParameterError(f"flow.min_span_frames must lie in 0..10, got {self.min_span_frames!r}")
 
@@ -90,8 +96,8 @@ class FlowParams:
 _THREAD = threading.local()  # each thread's DIS objects
 
 
-def _dis(preset: str, h: int, w: int):
-    """One DIS object per preset AND frame size, per thread: OpenCV's DIS keeps buffers across
+def _dis(params: FlowParams, h: int, w: int):
+    """One DIS object per setting AND frame size, per thread: OpenCV's DIS keeps buffers across
     calls, and a call at another size changes later results (up to 0.06 px on a 160x68 pair; on
     the Sintel trailer analysed after other sizes, per-tick motion moved by up to 0.19 frame
     widths/s); two threads calling one object at once corrupt each other's. Per size, results
@@ -99,11 +105,16 @@ def _dis(preset: str, h: int, w: int):
     held = getattr(_THREAD, "dis", None)
     if held is None:
         held = _THREAD.dis = {}
-    key = (preset, h, w)
+    key = (params.dis_preset, params.dis_descent, params.dis_refine, h, w)
     if key not in held:
         if len(held) >= 16:  # sizes of films analysed before
             held.clear()
-        held[key] = cv2.DISOpticalFlow_create(DIS_PRESETS[preset])
+        dis = cv2.DISOpticalFlow_create(DIS_PRESETS[params.dis_preset])
+        if params.dis_descent is not None:
+            dis.setGradientDescentIterations(params.dis_descent)
+        if params.dis_refine is not None:
+            dis.setVariationalRefinementIterations(params.dis_refine)
+        held[key] = dis
     return held[key]
 
 
@@ -119,7 +130,7 @@ def optical_flow(prev_gray: np.ndarray, gray: np.ndarray, *, params: FlowParams 
     if min(h, w) < _MIN_FLOW_SIDE:
         return np.zeros((h, w, 2), np.float32)
     if params.method == "dis":
-        flow = _dis(params.dis_preset, h, w).calc(a, b, None)
+        flow = _dis(params, h, w).calc(a, b, None)
     else:
         win = max(5, int(round(w / 40)) | 1)
         levels = max(1, min(5, int(math.log2(min(h, w) / 8))))
