@@ -46,7 +46,7 @@ MAX_TRANSLUCENT = 0.5  # translucent shapes covering more are left as picture
 LEVEL_FROM = 0.5  # quantile of the strokes' opacities their grey level is read from (a fainter fit leans to the mean)
 MAX_ALPHA = 0.75  # opacities are unblended up to this (the film under them amplified at most 4 x)
 REPEAT_THUMB = (32, 18)  # px: the thumbnail two samples are compared on
-REPEAT_LEVEL = 2.0  # grey levels: a sample this close (mean absolute difference) to one of another shot repeats it
+REPEAT_LEVEL = 1.0  # grey levels: a sample this close (mean absolute difference) to one of another shot repeats it
 
 
 def find_overlays(lumas: Sequence[np.ndarray]) -> "Overlays | None":
@@ -108,8 +108,9 @@ class EdgeTally:
 
     def _repeats(self, small: np.ndarray, shot: int | None) -> bool:
         """Whether ``small`` repeats a sample of another shot (a sample of shot None is a shot of its
-        own); otherwise its thumbnail is kept. Measured: a looped clip's repeats differ by 0.0 grey
-        levels, the nearest two shots of the shared films by 8 or more (docs/BENCHMARKS.md, "Stop 65")."""
+        own); otherwise its thumbnail is kept. Measured: a looped clip's repeats differ by up to 0.13 grey
+        levels, its pictures a second apart by 4.2, two shots of the shared films by 8 or more
+        (docs/BENCHMARKS.md, "Stop 65")."""
         thumb = cv2.resize(small, REPEAT_THUMB, interpolation=cv2.INTER_AREA).astype(np.float32)
         others = [t for t, s in zip(self._thumbs, self._thumb_shots) if s is None or s != shot]
         if others and float(np.abs(np.stack(others) - thumb).mean(axis=(1, 2)).min()) < REPEAT_LEVEL:
