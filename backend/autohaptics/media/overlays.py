@@ -45,8 +45,8 @@ SEE_THROUGH = 0.15, 0.5  # a shape whose strong opacity (its 95th percentile) li
 MAX_TRANSLUCENT = 0.5  # translucent shapes covering more are left as picture
 LEVEL_FROM = 0.5  # quantile of the strokes' opacities their grey level is read from (a fainter fit leans to the mean)
 MAX_ALPHA = 0.75  # opacities are unblended up to this (the film under them amplified at most 4 x)
-REPEAT_THUMB = (32, 18)  # px: the thumbnail two samples are compared on
-REPEAT_LEVEL = 1.0  # grey levels: a sample this close (mean absolute difference) to one of another shot repeats it
+REPEAT_THUMB = (16, 9)  # px: the thumbnail two shots' first samples are compared on
+REPEAT_LEVEL = 1.0  # grey levels: a shot whose first sample is this close (mean absolute difference) to one's repeats it
 
 
 def find_overlays(lumas: Sequence[np.ndarray]) -> "Overlays | None":
@@ -63,8 +63,8 @@ class EdgeTally:
     time (a pass keeps a tally rather than the pictures: a 2-hour film gives thousands). A pixel is
     an edge of a shot where it is one in at least half of the shot's samples; ``n`` counts the
     shots, ``edges`` how many had an edge at each pixel. Shots, not samples: a long shot's scene
-    stands still in all its samples, as an overlay does. For the same reason a sample that repeats one
-    of another shot (``REPEAT_LEVEL``: a loop, a shot used twice) is passed over: it adds no evidence."""
+    stands still in all its samples, as an overlay does. For the same reason a shot that repeats an
+    earlier one (``REPEAT_LEVEL``: a loop, a shot used twice) is passed over: it adds no evidence."""
 
     def __init__(self):
         self.n = 0
@@ -77,17 +77,18 @@ class EdgeTally:
         self.fit: np.ndarray | None = None
         self.fitted = 0
         self._shot: tuple = ()  # the current shot: (its id, int32 edge counts, samples)
-        self._thumbs: list[np.ndarray] = []  # float32 thumbnails of the samples taken, and their shots
-        self._thumb_shots: list = []
+        self._starts = np.zeros((0, REPEAT_THUMB[0] * REPEAT_THUMB[1]), np.float32)  # shots' first thumbnails
+        self._kept = 0  # rows of ``_starts`` in use
+        self._seen: tuple = ()  # the shot of the last sample looked at, and whether it repeats an earlier one
 
     def add(self, luma: np.ndarray, shot: int | None = None) -> None:
         """One picture: uint8 [shape=(height, width)], full-range luma of the active picture (bars
         left out), of shot ``shot`` (None: a shot of its own; pictures of one shot come together).
         Passed over: a dark picture (lit on under ``LIT_SHARE``: a fade, a night, a title card; an
-        overlay's dark parts show no edge on it), one of another aspect, and a repeat of another shot's."""
+        overlay's dark parts show no edge on it), one of another aspect, and those of a shot that repeats one."""
         small = _shrunk(np.ascontiguousarray(luma, np.uint8))
         if (self.lo is not None and small.shape != self.lo.shape) or \
-                np.count_nonzero(small > LIT_LEVEL) < LIT_SHARE * small.size or self._repeats(small, shot):
+                np.count_nonzero(small > LIT_LEVEL) < LIT_SHARE * small.size or self._repeated(small, shot):
             return
         edge = (cv2.Canny(small, EDGE_LOW, EDGE_HIGH) > 0).astype(np.int32)
         x = cv2.medianBlur(small, max(3, int(round(AROUND * small.shape[1])) | 1)).astype(np.float64)
@@ -106,18 +107,25 @@ class EdgeTally:
         else:
             self._shot = (shot, self._shot[1] + edge, self._shot[2] + 1)
 
-    def _repeats(self, small: np.ndarray, shot: int | None) -> bool:
-        """Whether ``small`` repeats a sample of another shot (a sample of shot None is a shot of its
-        own); otherwise its thumbnail is kept. Measured: a looped clip's repeats differ by up to 0.13 grey
-        levels, its pictures a second apart by 4.2, two shots of the shared films by 8 or more
-        (docs/BENCHMARKS.md, "Stop 65")."""
-        thumb = cv2.resize(small, REPEAT_THUMB, interpolation=cv2.INTER_AREA).astype(np.float32)
-        others = [t for t, s in zip(self._thumbs, self._thumb_shots) if s is None or s != shot]
-        if others and float(np.abs(np.stack(others) - thumb).mean(axis=(1, 2)).min()) < REPEAT_LEVEL:
-            return True
-        self._thumbs.append(thumb)
-        self._thumb_shots.append(shot)
-        return False
+    def _repeated(self, small: np.ndarray, shot: int | None) -> bool:
+        """Whether ``small``'s shot repeats an earlier one (a sample of shot None is a shot of its own),
+        judged on its first sample: a shot that does not is kept for those after it. Measured: a looped
+        clip's repeats differ by up to 0.26 grey levels, its two shots by 3.6, two shots of the shared
+        films by 8.7 or more (docs/BENCHMARKS.md, "Stop 65")."""
+        if shot is not None and self._seen and self._seen[0] == shot:
+            return self._seen[1]
+        thumb = cv2.resize(small, REPEAT_THUMB, interpolation=cv2.INTER_AREA).astype(np.float32).ravel()
+        kept = self._starts[:self._kept]
+        repeats = bool(kept.size) and float(np.abs(kept - thumb).mean(axis=1).min()) < REPEAT_LEVEL
+        if not repeats:
+            if self._kept == len(self._starts):
+                grown = np.zeros((max(64, 2 * self._kept), self._starts.shape[1]), np.float32)
+                grown[:self._kept] = self._starts
+                self._starts = grown
+            self._starts[self._kept] = thumb
+            self._kept += 1
+        self._seen = (shot, repeats)
+        return repeats
 
     def _close(self) -> None:
         """Count the current shot's edges."""
