@@ -46,7 +46,7 @@ MAX_TRANSLUCENT = 0.5  # translucent shapes covering more are left as picture
 LEVEL_FROM = 0.5  # quantile of the strokes' opacities their grey level is read from (a fainter fit leans to the mean)
 MAX_ALPHA = 0.75  # opacities are unblended up to this (the film under them amplified at most 4 x)
 REPEAT_THUMB = (16, 9)  # px: the thumbnail two shots' first samples are compared on
-REPEAT_LEVEL = 1.0  # grey levels: a shot whose first sample is this close (mean absolute difference) to one's repeats it
+REPEAT_LEVEL = 1.0  # grey levels: a shot whose first sample is this close (mean absolute difference) repeats
 
 
 def find_overlays(lumas: Sequence[np.ndarray]) -> "Overlays | None":
@@ -78,6 +78,7 @@ class EdgeTally:
         self.fitted = 0
         self._shot: tuple = ()  # the current shot: (its id, int32 edge counts, samples)
         self._starts = np.zeros((0, REPEAT_THUMB[0] * REPEAT_THUMB[1]), np.float32)  # shots' first thumbnails
+        self._means = np.zeros(0, np.float32)  # their means (two thumbnails' mean difference bounds their distance)
         self._kept = 0  # rows of ``_starts`` in use
         self._seen: tuple = ()  # the shot of the last sample looked at, and whether it repeats an earlier one
 
@@ -115,14 +116,15 @@ class EdgeTally:
         if shot is not None and self._seen and self._seen[0] == shot:
             return self._seen[1]
         thumb = cv2.resize(small, REPEAT_THUMB, interpolation=cv2.INTER_AREA).astype(np.float32).ravel()
-        kept = self._starts[:self._kept]
-        repeats = bool(kept.size) and float(np.abs(kept - thumb).mean(axis=1).min()) < REPEAT_LEVEL
+        mean = float(thumb.mean())
+        near = self._starts[:self._kept][np.abs(self._means[:self._kept] - mean) < REPEAT_LEVEL]  # the only candidates
+        repeats = bool(near.size) and float(np.abs(near - thumb).mean(axis=1).min()) < REPEAT_LEVEL
         if not repeats:
             if self._kept == len(self._starts):
-                grown = np.zeros((max(64, 2 * self._kept), self._starts.shape[1]), np.float32)
-                grown[:self._kept] = self._starts
-                self._starts = grown
-            self._starts[self._kept] = thumb
+                grow = max(64, self._kept)
+                self._starts = np.concatenate([self._starts, np.zeros((grow, thumb.size), np.float32)])
+                self._means = np.concatenate([self._means, np.zeros(grow, np.float32)])
+            self._starts[self._kept], self._means[self._kept] = thumb, mean
             self._kept += 1
         self._seen = (shot, repeats)
         return repeats
