@@ -136,7 +136,7 @@ def test_the_saliency_of_a_refinement_fills_the_same_overlays(films, name):
 def test_a_looped_clip_finds_no_overlay(tmp_path):
     """The shared 2 s clip played 8 times in a row (320 x 180, 16 s): each copy's samples repeat the
     first's and add no evidence, so nothing is found (the code before unblended 0.3 % of it: the scene's
-    own edges stood in every copy's shots, the opacity fit ran through its two distinct samples)."""
+    own edges stood in every copy's shots, the opacity fit ran through its two shots' pictures)."""
     loop = reencode(shared_clip("bbb_1080p60_2s_h264_aac6ch.mp4"), tmp_path / "loop.mp4", times=8, size=(320, 180))
     found = pipeline.analyse(loop).video.stats["overlays"]
     assert (found["found_by"], found["share"], found["translucent"]) == ("", 0.0, 0.0)

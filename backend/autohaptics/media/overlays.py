@@ -86,7 +86,8 @@ class EdgeTally:
         """One picture: uint8 [shape=(height, width)], full-range luma of the active picture (bars
         left out), of shot ``shot`` (None: a shot of its own; pictures of one shot come together).
         Passed over: a dark picture (lit on under ``LIT_SHARE``: a fade, a night, a title card; an
-        overlay's dark parts show no edge on it), one of another aspect, and those of a shot that repeats one."""
+        overlay's dark parts show no edge on it), one of another aspect, and those of a shot that repeats
+        an earlier shot (:meth:`_repeated`)."""
         small = _shrunk(np.ascontiguousarray(luma, np.uint8))
         if (self.lo is not None and small.shape != self.lo.shape) or \
                 np.count_nonzero(small > LIT_LEVEL) < LIT_SHARE * small.size or self._repeated(small, shot):
