@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from autohaptics.imaging import finite32
+from autohaptics.errors import ParameterError
+from autohaptics.imaging import finite32, noise_sd
 
 
 @given(arrays(st.sampled_from([np.float32, np.float64]), st.tuples(st.integers(1, 6), st.integers(1, 6)),
@@ -25,3 +28,32 @@ def test_finite32_keeps_a_finite_float32_array():
     y = x.copy()
     y[1, 2] = np.nan
     assert finite32(y) is not y and finite32(y)[1, 2] == 0.0 and np.isnan(y[1, 2])
+
+
+def test_noise_sd_reads_white_noise_over_flat_ramps_and_edges():
+    """Known answers: Gaussian noise of sd 5 reads 5 (within 5 %) on a flat grey, on a ramp and over a
+    picture whose edges (a checkerboard of 16 px squares) cover under half of it; the pictures alone read 0."""
+    rng = np.random.default_rng(3)
+    h, w = 90, 160
+    flat = np.full((h, w), 120.0)
+    ramp = np.tile(np.linspace(40, 200, w), (h, 1))
+    checks = np.where((np.indices((h, w)) // 16).sum(axis=0) % 2 == 0, 70.0, 170.0)
+    for picture in (flat, ramp, checks):
+        assert noise_sd(picture.astype(np.uint8)) == 0.0
+        noisy = np.clip(picture + rng.normal(0, 5, (h, w)), 0, 255).astype(np.uint8)
+        assert noise_sd(noisy) == pytest.approx(5.0, rel=0.05)
+    a, b = (np.clip(flat + rng.normal(0, 5, (h, w)), 0, 255).astype(np.uint8) for _ in range(2))
+    assert noise_sd(cv2.subtract(a, b, dtype=cv2.CV_16S)) == pytest.approx(5.0 * np.sqrt(2), rel=0.05)
+
+
+def test_noise_sd_takes_a_picture_or_a_difference_only():
+    assert noise_sd(np.zeros((2, 50), np.uint8)) == 0.0  # no inner pixels
+    for bad in (np.zeros((8, 8), np.float32), np.zeros((8, 8, 3), np.uint8)):
+        with pytest.raises(ParameterError, match="noise_sd"):
+            noise_sd(bad)
+
+
+@given(arrays(np.uint8, st.tuples(st.integers(1, 40), st.integers(1, 40))))
+def test_noise_sd_is_finite_and_in_range(x):
+    """0 <= noise <= 1.4826 x 16 x 255 / 6 (the mask's largest response), for any picture."""
+    assert 0.0 <= noise_sd(x) <= 1.4826 * 16 * 255 / 6

@@ -141,6 +141,7 @@ THESIS_RULES: dict[str, Any] = {
     "flow.min_span_frames": 0.0,  # the default pairs frames two apart, whichever frames are decoded
     "flow.cadence_ratio": 0.0,  # the default times a pair by its picture steps under a repeat cadence
     "depth.expansion_grain": 0.0,  # the default counts expansion only where it holds over more than a block
+    "airflow.static_noise": 0.0,  # the default raises the static test's level with the pair's noise (film grain)
     "airflow.cell_rel": 0.5,  # the default's cell bar is 0.55 of the tick's strong motion, not 0.5 of its strongest cell
     "airflow.peak_cells": 1,  # the default's strong motion is the mean of the five strongest cells
     "airflow.motion_sigma_ticks": 0.0,  # the default judges a tick on its shot's motion around it
@@ -285,7 +286,8 @@ def params_from_args(args):
 # Analysis-time fields whose default analyses otherwise than the analysis did before the field
 # existed: a document without the field was analysed with this value (dotted name -> value).
 ABSENT_AS = {"flow.min_span_frames": 0.0, "flow.cadence_ratio": 0.0, "depth.expansion_grain": 0.0,
-             "cuts.in_one_step": False, "video.stereo": "2d", "video.overlays": "keep"}
+             "cuts.in_one_step": False, "video.stereo": "2d", "video.overlays": "keep",
+             "airflow.static_noise": 0.0}
 
 
 def analysis_key(doc: dict) -> dict:

@@ -154,6 +154,45 @@ def test_static_pair_detection():
     assert not airflow.is_static(a, a[:, :100])  # sizes differ: never "static"
 
 
+def grained(picture: np.ndarray, sd: float, seed: int) -> np.ndarray:
+    """``picture`` with film grain of ``sd`` grey levels, new for each ``seed`` (as on a proxy)."""
+    noise = np.random.default_rng(seed).normal(0.0, sd, picture.shape)
+    return np.clip(picture.astype(np.float64) + noise, 0, 255).astype(np.uint8)
+
+
+def test_a_grainy_pair_is_static_and_what_moves_under_the_grain_is_seen():
+    """Film grain of sd 6 grey levels on the proxy, new every frame: a still picture is static (by the
+    rule before ``static_noise``, 0, it moves: 16 % of its pixels differ by over 12); an object that
+    appears under the same grain, and a pan of one pixel, are not."""
+    a = gray(pan_scene(0.6), 0.5, 160, 90)
+    g0, g1 = grained(a, 6.0, 1), grained(a, 6.0, 2)
+    assert 0.1 < float((cv2.absdiff(g0, g1) > 12).mean()) < 0.25
+    assert airflow.is_static(g0, g1)
+    assert not airflow.is_static(g0, g1, params=airflow.AirflowParams(static_noise=0.0))
+    moved = a.copy()
+    moved[40:46, 70:76] = 255  # the 6 x 6 px object of test_static_pair_detection
+    assert not airflow.is_static(g0, grained(moved, 6.0, 2))
+    assert not airflow.is_static(g0, grained(np.roll(a, 1, axis=1), 6.0, 2))
+
+
+def test_the_noise_is_estimated_only_where_it_can_decide(monkeypatch):
+    """A pair static at ``static_level`` needs no estimate; a clean change whose difference is quiet
+    needs one (the difference's); a grainy pair three (the frames' too). Counted, not timed."""
+    import autohaptics.airflow.flow as flow_module
+
+    estimate, calls = flow_module.noise_sd, []
+    monkeypatch.setattr(flow_module, "noise_sd", lambda x: calls.append(x.dtype) or estimate(x))
+    a = gray(pan_scene(0.6), 0.5, 160, 90)
+    moved = a.copy()
+    moved[40:46, 70:76] = 255
+    assert airflow.is_static(a, a) and calls == []
+    assert not airflow.is_static(a, moved) and calls == [np.int16]
+    calls.clear()
+    assert airflow.is_static(grained(a, 6.0, 1), grained(a, 6.0, 2)) and calls == [np.int16, np.uint8, np.uint8]
+    calls.clear()
+    assert not airflow.is_static(a, moved, params=airflow.AirflowParams(static_noise=0.0)) and calls == []
+
+
 def test_fade_detection():
     """A global brightness/contrast change (a fade, a flash) is not motion; a fade during which
     something moves is; identical frames are not a fade (that is the static check's business);

@@ -44,8 +44,8 @@ class AirflowParams:
         its strongest (:func:`strong_motion`; the thesis: 0.5 of the strongest cell, ``peak_cells`` 1).
     near_min, near_share : a cell is "near" at ``near_min`` or more (0..1, 1 = nearest), or among the nearest
         ``near_share`` of its tick's cells (0..1, default 0.4; 0 = ``near_min`` alone, the thesis; :func:`near_cells`).
-    static_level, static_fraction : a pair is static when under ``static_fraction`` of the proxy's pixels
-        changed by more than ``static_level`` grey levels (noise tolerant; a small moving object is seen).
+    static_level, static_fraction, static_noise : a pair is static when under ``static_fraction`` of the proxy's
+        pixels changed by over ``static_level`` grey levels or, higher, ``static_noise`` x the pair's noise (grain).
     fill_enclosed : a near cell enclosed by "on" cells blows too (an approaching object's still centre).
     flat_std : a frame whose luma std is below this (grey levels) is flat; two flat frames: no motion (:func:`is_fade`).
     fade_min_step : a pair only brightened/darkened by this or more (grey levels) is a fade (:func:`is_fade`).
@@ -72,6 +72,7 @@ class AirflowParams:
     near_share: float = 0.4
     static_level: float = field(default=12.0, metadata=stage(ANALYSIS))
     static_fraction: float = field(default=0.002, metadata=stage(ANALYSIS))
+    static_noise: float = field(default=6.0, metadata=stage(ANALYSIS))
     fill_enclosed: bool = True
     flat_std: float = field(default=2.0, metadata=stage(ANALYSIS))
     fade_min_step: float = field(default=1.0, metadata=stage(ANALYSIS))
@@ -92,6 +93,8 @@ class AirflowParams:
             raise ParameterError(f"airflow.threshold must be >= 0 (frame widths/s) or None, got {self.threshold!r}")
         if not (0.0 <= float(self.floor) < 100.0):
             raise ParameterError(f"airflow.floor must lie in 0..100 frame widths/s, got {self.floor!r}")
+        if not (math.isfinite(self.static_noise) and 0.0 <= self.static_noise <= 50.0):
+            raise ParameterError(f"airflow.static_noise must lie in 0..50, got {self.static_noise!r}")
         for name in ("flat_std", "fade_min_step"):
             v = float(getattr(self, name))
             if not (math.isfinite(v) and 0.0 <= v <= 255.0):

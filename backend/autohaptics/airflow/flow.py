@@ -21,7 +21,7 @@ import numpy as np
 from autohaptics.airflow.fans import AirflowParams
 from autohaptics.errors import ParameterError
 from autohaptics.records import ANALYSIS
-from autohaptics.imaging import as_gray, finite32
+from autohaptics.imaging import as_gray, finite32, noise_sd
 
 FLOW_METHODS = ("dis", "farneback")
 DIS_PRESETS = {"ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST, "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
@@ -155,12 +155,29 @@ def motion_score(mag: np.ndarray) -> float:
 
 
 def is_static(prev_gray: np.ndarray, gray: np.ndarray, *, params: AirflowParams = AirflowParams()) -> bool:
-    """True when nothing moved between two frames beyond noise (see AirflowParams)."""
+    """True when nothing moved between two frames beyond noise: under ``static_fraction`` of the pixels
+    differ by more than a level, ``static_level`` or, where higher, ``static_noise`` x the pair's noise
+    as the difference's spread (see AirflowParams).
+
+    The pair's noise (:func:`~autohaptics.imaging.noise_sd`) is the least of the difference's and each
+    frame's x sqrt(2): texture reads as noise in a frame's own estimate and motion in the difference's,
+    film grain (new every frame) in all three. It is estimated only for a pair that changed beyond
+    ``static_level``, and a frame's only when the difference's could raise the level.
+    """
     a, b = as_gray(prev_gray), as_gray(gray)
     if a.shape != b.shape:
         return False
-    changed = cv2.absdiff(a, b) > params.static_level
-    return float(changed.mean()) < params.static_fraction
+    diff = cv2.absdiff(a, b)
+    if float((diff > params.static_level).mean()) < params.static_fraction:
+        return True  # a higher level changes nothing
+    k = float(params.static_noise)
+    if k <= 0:
+        return False
+    level = k * noise_sd(cv2.subtract(a, b, dtype=cv2.CV_16S))
+    if not level > params.static_level:
+        return False
+    level = min(level, k * math.sqrt(2) * min(noise_sd(a), noise_sd(b)))
+    return level > params.static_level and float((diff > level).mean()) < params.static_fraction
 
 
 def is_fade(prev_gray: np.ndarray, gray: np.ndarray, *, params: AirflowParams = AirflowParams()) -> bool:

@@ -108,7 +108,7 @@ def _broadcast(src: Path, dst: Path, options: dict) -> Path:
 
 
 def _burnt(src: Path, dst: Path, options: dict) -> Path:
-    """``src`` with an overlay burnt in over its picture (``testing.burnin.with_burn_in``, ``options["kind"]``)."""
+    """``src`` with an overlay or film grain burnt in (``testing.burnin.with_burn_in``, ``options["kind"]``)."""
     from autohaptics.testing.burnin import with_burn_in
 
     return with_burn_in(src, dst, options["kind"])
@@ -141,6 +141,8 @@ VARIANTS: tuple[Variant, ...] = (
             write=_burnt, options={"kind": "logo"}),
     Variant("a watermark burnt in across the middle (a line of words at 35 % white)", "overlay", ".mkv",
             write=_burnt, options={"kind": "watermark"}),
+    Variant("film grain (Gaussian, sd 8 grey levels, a little over a pixel across, new every frame)", "picture",
+            ".mkv", write=_burnt, options={"kind": "grain"}),
     Variant("23.976 fps", "rate", options={"fps": Fraction(24000, 1001)}),
     Variant("25 fps", "rate", options={"fps": 25}),
     Variant("29.97 fps", "rate", options={"fps": Fraction(30000, 1001)}),

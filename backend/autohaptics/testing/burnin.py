@@ -1,7 +1,8 @@
 """Overlays burnt in over a film as copies carry them (:mod:`autohaptics.media.overlays`' known answers
 and the matrix's rows): a screener's or a daily's timecode (a black box at the bottom centre, its white
 digits counting the frames from 01:00:00:00), a channel's logo (a ring and letters at 60 % white, top
-right) and a watermark (a line of words at 35 % white across the middle).
+right) and a watermark (a line of words at 35 % white across the middle); and film grain, which a
+scan or a grain-preserving encode carries over the whole picture (the static test's known answers).
 """
 
 from __future__ import annotations
@@ -17,8 +18,9 @@ import numpy as np
 from autohaptics.errors import ParameterError
 from autohaptics.testing.encode import media_output
 
-KINDS = ("timecode", "logo", "watermark")
+KINDS = ("timecode", "logo", "watermark", "grain")
 WATERMARK = "SCREENER  PROPERTY OF ACME"
+GRAIN_SD = 8.0  # grey levels: the grain's standard deviation at the picture's own size
 
 
 def timecode(frame_no: int, fps: float) -> str:
@@ -45,6 +47,8 @@ def burn(rgb: np.ndarray, kind: str, frame_no: int, fps: float) -> np.ndarray:
         raise ParameterError(f"overlay kind must be one of {KINDS}, got {kind!r}")
     img = np.ascontiguousarray(rgb, np.uint8).copy()
     h, w = img.shape[:2]
+    if kind == "grain":
+        return grain(img, frame_no)
     if kind == "timecode":
         x, y, bw, bh = timecode_box(w, h)
         scale, thick = h / 400.0, max(1, int(round(h / 160)))
@@ -65,6 +69,17 @@ def burn(rgb: np.ndarray, kind: str, frame_no: int, fps: float) -> np.ndarray:
     cv2.putText(over, WATERMARK, (int(w * 0.12), int(h * 0.5)), cv2.FONT_HERSHEY_SIMPLEX, h / 300,
                 (255, 255, 255), 2, cv2.LINE_AA)
     return cv2.addWeighted(over, 0.35, img, 0.65, 0)
+
+
+def grain(rgb: np.ndarray, frame_no: int, *, sd: float = GRAIN_SD) -> np.ndarray:
+    """``rgb`` (uint8 [shape=(h, w, 3)]) with film grain: Gaussian noise in brightness, a little over a
+    pixel across (blurred at a 0.7 px standard deviation), of standard deviation ``sd`` grey levels, new
+    every frame (drawn from ``frame_no``, so a frame's grain is the same in every copy)."""
+    h, w = rgb.shape[:2]
+    noise = cv2.GaussianBlur(np.random.default_rng(int(frame_no)).normal(0.0, 1.0, (h, w)).astype(np.float32),
+                             (0, 0), 0.7)
+    noise *= float(sd) / max(float(noise.std()), 1e-6)
+    return np.clip(rgb.astype(np.float32) + noise[..., None], 0, 255).astype(np.uint8)
 
 
 def with_burn_in(src: str | os.PathLike, dst: str | os.PathLike, kind: str, *, crf: int = 18,
