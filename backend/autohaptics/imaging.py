@@ -56,20 +56,26 @@ def finite32(x: np.ndarray) -> np.ndarray:
 _NOISE_MASK = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
 
 
-def noise_sd(x: np.ndarray) -> float:
-    """A picture's noise as a Gaussian's standard deviation, grey levels (>= 0): the median absolute
-    response to Immerkaer's mask over the inner pixels, x 1.4826 / 6.
+def noise_response(gray: np.ndarray) -> np.ndarray:
+    """Immerkaer's mask over a uint8 picture's inner pixels: int16 [shape=(h - 2, w - 2)], |values| <= 4080
+    (empty under 3 x 3). Linear: two frames' difference responds with the difference of their responses."""
+    gray = as_gray(gray)
+    return cv2.filter2D(gray, cv2.CV_16S, _NOISE_MASK)[1:-1, 1:-1]
 
-    x : a 2-D uint8 picture or int16 difference of two (values within +-255); 0.0 when under 3 x 3.
-    The median, not Immerkaer's mean, so edges and texture over under half the picture do not
-    count. Grain a pixel or more across reads under its spread: the mask passes fine detail only.
+
+def noise_sd(response: np.ndarray) -> float:
+    """The noise a :func:`noise_response` (or a difference of two) reads, as a Gaussian's standard
+    deviation in grey levels, 0..63: the median absolute response x 1.4826 / 6 (0.0 when empty).
+
+    The median, not Immerkaer's mean, so edges and texture over under half the picture do not count;
+    a response counts up to 255 (so 63 at most, far past any film's grain). Grain a pixel or more
+    across reads under its spread: the mask passes fine detail only.
     """
-    x = np.asarray(x)
-    if x.ndim != 2 or x.dtype not in (np.uint8, np.int16):
-        raise ParameterError(f"noise_sd needs a 2-D uint8 or int16 array, got {x.dtype} {x.shape}")
-    if min(x.shape) < 3:
+    response = np.asarray(response)
+    if response.ndim != 2 or response.dtype != np.int16:
+        raise ParameterError(f"noise_sd needs a 2-D int16 response, got {response.dtype} {response.shape}")
+    if response.size == 0:
         return 0.0
-    response = cv2.filter2D(np.ascontiguousarray(x), cv2.CV_16S, _NOISE_MASK)[1:-1, 1:-1]  # |r| <= 16 x 255
-    counts = np.cumsum(np.bincount(np.abs(response).ravel()))  # the median by counting: integers, no sort
-    median = int(np.searchsorted(counts, (counts[-1] + 1) // 2))
+    counts = np.cumsum(cv2.calcHist([cv2.convertScaleAbs(response)], [0], None, [256], [0, 256]).ravel())
+    median = int(np.searchsorted(counts, (counts[-1] + 1) // 2))  # the median by counting: no sort
     return 1.4826 * median / 6.0

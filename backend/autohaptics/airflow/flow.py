@@ -21,7 +21,7 @@ import numpy as np
 from autohaptics.airflow.fans import AirflowParams
 from autohaptics.errors import ParameterError
 from autohaptics.records import ANALYSIS
-from autohaptics.imaging import as_gray, finite32, noise_sd
+from autohaptics.imaging import as_gray, finite32, noise_response, noise_sd
 
 FLOW_METHODS = ("dis", "farneback")
 DIS_PRESETS = {"ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST, "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
@@ -173,10 +173,11 @@ def is_static(prev_gray: np.ndarray, gray: np.ndarray, *, params: AirflowParams 
     k = float(params.static_noise)
     if k <= 0:
         return False
-    level = k * noise_sd(cv2.subtract(a, b, dtype=cv2.CV_16S))
+    response_a, response_b = noise_response(a), noise_response(b)
+    level = k * noise_sd(response_a - response_b)  # int16: |difference| <= 8160
     if not level > params.static_level:
         return False
-    level = min(level, k * math.sqrt(2) * min(noise_sd(a), noise_sd(b)))
+    level = min(level, k * math.sqrt(2) * min(noise_sd(response_a), noise_sd(response_b)))
     return level > params.static_level and float((diff > level).mean()) < params.static_fraction
 
 
