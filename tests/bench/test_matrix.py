@@ -192,3 +192,16 @@ def _tracks_digest(tl) -> str:
     """The first 12 hex digits of the SHA-256 of a timeline's vibration and fan tracks."""
     return hashlib.sha256(np.ascontiguousarray(tl.vibration).tobytes() + np.ascontiguousarray(tl.fans).tobytes()
                           ).hexdigest()[:12]
+
+
+@pytest.mark.slow
+def test_film_grain_over_a_film_keeps_its_fans(tmp_path):
+    """The matrix's grain row on the Sintel trailer (sd 8 grey levels, new every frame): without the static
+    test's noise level (``airflow.static_noise=0``) its still pairs move and the fan threshold follows the grain,
+    tolerant fan IoU 0.736 (docs/BENCHMARKS.md, "Stop 66"). Written by a fresh interpreter, as above."""
+    src = shared_clip("sintel_trailer_640x272_vp8_vorbis.webm")
+    dst = tmp_path / "grain.mkv"
+    code = "import sys; from autohaptics.testing.burnin import with_burn_in; with_burn_in(sys.argv[1], sys.argv[2], 'grain')"
+    subprocess.run([sys.executable, "-c", code, str(src), str(dst)], check=True, timeout=600)
+    fig = row_figures(pipeline.generate(src), pipeline.generate(dst), VARIANTS[0])
+    assert misses(fig) == [], fig
