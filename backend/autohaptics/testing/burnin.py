@@ -2,7 +2,7 @@
 and the matrix's rows): a screener's or a daily's timecode (a black box at the bottom centre, its white
 digits counting the frames from 01:00:00:00), a channel's logo (a ring and letters at 60 % white, top
 right) and a watermark (a line of words at 35 % white across the middle); and film grain, which a
-scan or a grain-preserving encode carries over the whole picture (the static test's known answers).
+scan or a grain-preserving encode carries over the whole picture (the matrix's grain row).
 """
 
 from __future__ import annotations
