@@ -176,6 +176,16 @@ def test_a_grainy_pair_is_static_and_what_moves_under_the_grain_is_seen():
     assert not airflow.is_static(g0, grained(np.roll(a, 1, axis=1), 6.0, 2))
 
 
+def test_a_pan_over_fine_texture_is_not_taken_for_grain():
+    """A texture as fine as the proxy's pixels (every pixel drawn anew) reads as noise of about 70 grey
+    levels in each frame and in their difference; it counts as grain only up to ``GRAIN_MOST``, so
+    a pan over it of 1-3 px moves (without the bound, the level passes 255 and the pan reads still)."""
+    texture = np.random.default_rng(6).integers(0, 256, (90, 200), dtype=np.uint8)
+    for shift in (1, 2, 3):
+        a, b = texture[:, 10:170], texture[:, 10 + shift:170 + shift]
+        assert not airflow.is_static(np.ascontiguousarray(a), np.ascontiguousarray(b))
+
+
 def test_the_noise_is_estimated_only_where_it_can_decide(monkeypatch):
     """A pair static at ``static_level`` needs no estimate; a clean change whose difference is quiet
     needs one (the difference's); a grainy pair three (the frames' too). Counted, not timed."""

@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from autohaptics.media.overlays import MAX_COVER, MIN_SHOTS, EdgeTally, Overlays, find_overlays
-from autohaptics.testing.burnin import KINDS, burn, timecode, timecode_box
+from autohaptics.testing.burnin import OVERLAYS, burn, timecode, timecode_box
 
 W, H = 640, 272
 
@@ -243,7 +243,7 @@ def test_unblending_keeps_every_picture_in_range(h, w, rgb, colour, seed):
     assert float(ov.alpha_at(h, w).max()) <= 0.75 + 1e-6
 
 
-@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("kind", OVERLAYS)
 def test_burn_changes_only_its_place(kind):
     rgb = _scene(2)
     out = burn(rgb, kind, 10, 24.0)

@@ -27,6 +27,7 @@ FLOW_METHODS = ("dis", "farneback")
 DIS_PRESETS = {"ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST, "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
                "medium": cv2.DISOPTICAL_FLOW_PRESET_MEDIUM}
 _MIN_FLOW_SIDE = 16  # px; smaller proxies have no room for a flow patch: motion reads 0
+GRAIN_MOST = 6.0  # grey levels on the gray proxy: the most noise the static test allows for (is_static)
 
 
 @dataclass(frozen=True)
@@ -161,7 +162,9 @@ def is_static(prev_gray: np.ndarray, gray: np.ndarray, *, params: AirflowParams 
 
     The pair's noise (:func:`~autohaptics.imaging.noise_sd`) is the least of the difference's and each
     frame's x sqrt(2): texture reads as noise in a frame's own estimate and motion in the difference's,
-    film grain (new every frame) in all three. It is estimated only for a pair that changed beyond
+    film grain (new every frame) in all three. It counts up to :data:`GRAIN_MOST` per frame: grain of sd 8
+    on a 640 px picture reads 2-4 on its proxy, and "noise" past 6 is a picture's own fine texture (gravel,
+    leaves), which must not hide its motion. It is estimated only for a pair that changed beyond
     ``static_level``, and a frame's only when the difference's could raise the level.
     """
     a, b = as_gray(prev_gray), as_gray(gray)
@@ -174,7 +177,7 @@ def is_static(prev_gray: np.ndarray, gray: np.ndarray, *, params: AirflowParams 
     if k <= 0:
         return False
     response_a, response_b = noise_response(a), noise_response(b)
-    level = k * noise_sd(response_a - response_b)  # int16: |difference| <= 8160
+    level = k * min(noise_sd(response_a - response_b), math.sqrt(2) * GRAIN_MOST)  # int16: |difference| <= 8160
     if not level > params.static_level:
         return False
     level = min(level, k * math.sqrt(2) * min(noise_sd(response_a), noise_sd(response_b)))

@@ -18,7 +18,8 @@ import numpy as np
 from autohaptics.errors import ParameterError
 from autohaptics.testing.encode import media_output
 
-KINDS = ("timecode", "logo", "watermark", "grain")
+OVERLAYS = ("timecode", "logo", "watermark")  # each in its place; grain over the whole picture
+KINDS = (*OVERLAYS, "grain")
 WATERMARK = "SCREENER  PROPERTY OF ACME"
 GRAIN_SD = 8.0  # grey levels: the grain's standard deviation at the picture's own size
 
