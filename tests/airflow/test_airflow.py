@@ -177,9 +177,9 @@ def test_a_grainy_pair_is_static_and_what_moves_under_the_grain_is_seen():
 
 
 def test_a_pan_over_fine_texture_is_not_taken_for_grain():
-    """A texture as fine as the proxy's pixels (every pixel drawn anew) reads as noise of about 70 grey
-    levels in each frame and in their difference; it counts as grain only up to ``GRAIN_MOST``, so
-    a pan over it of 1-3 px moves (without the bound, the level passes 255 and the pan reads still)."""
+    """A texture as fine as the proxy's pixels (every pixel drawn anew) reads as noise of 63 grey levels
+    (the most ``noise_sd`` reads) in each frame and in their difference; it counts as grain only up to
+    ``GRAIN_MOST``, so a pan over it of 1-3 px moves (without the bound the level passes 255: still)."""
     texture = np.random.default_rng(6).integers(0, 256, (90, 200), dtype=np.uint8)
     for shift in (1, 2, 3):
         a, b = texture[:, 10:170], texture[:, 10 + shift:170 + shift]
