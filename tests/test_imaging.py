@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from autohaptics.errors import ParameterError
-from autohaptics.imaging import finite32, noise_response, noise_sd
+from autohaptics.imaging import finite32, noise_over, noise_response, noise_sd
 
 
 @given(arrays(st.sampled_from([np.float32, np.float64]), st.tuples(st.integers(1, 6), st.integers(1, 6)),
@@ -61,3 +61,15 @@ def test_noise_sd_is_finite_and_in_range(x):
     assert r.dtype == np.int16 and r.shape == (max(x.shape[0] - 2, 0), max(x.shape[1] - 2, 0))
     for response in (r, r - noise_response(255 - x)):
         assert 0.0 <= noise_sd(response) <= 1.4826 * 255 / 6
+
+
+@given(arrays(np.uint8, st.tuples(st.integers(1, 30), st.integers(1, 30))), st.floats(-1.0, 80.0))
+def test_noise_over_is_the_estimate_against_a_bar(x, sd):
+    """``noise_over(r, sd)`` is ``noise_sd(r) > sd`` for any picture, difference and bar (63 the most it reads)."""
+    r = noise_response(x)
+    for response in (r, r - noise_response(255 - x)):
+        assert noise_over(response, sd) == (noise_sd(response) > sd)
+    for bar in (1.4826 * 8 / 6, 63.0105, 1e9, -1e-9):
+        assert noise_over(r, bar) == (noise_sd(r) > bar)
+    with pytest.raises(ParameterError, match="noise_over"):
+        noise_over(x, sd)

@@ -3,6 +3,8 @@ aspect-kept resizing and a picture's noise."""
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
 
@@ -79,3 +81,21 @@ def noise_sd(response: np.ndarray) -> float:
     counts = np.cumsum(cv2.calcHist([cv2.convertScaleAbs(response)], [0], None, [256], [0, 256]).ravel())
     median = int(np.searchsorted(counts, (counts[-1] + 1) // 2))  # the median by counting: no sort
     return 1.4826 * median / 6.0
+
+
+def noise_over(response: np.ndarray, sd: float) -> bool:
+    """Whether ``noise_sd(response) > sd``, by one count of the responses within the bar (a picture
+    read as clean or noisy without the median's histogram)."""
+    response = np.asarray(response)
+    if response.ndim != 2 or response.dtype != np.int16:
+        raise ParameterError(f"noise_over needs a 2-D int16 response, got {response.dtype} {response.shape}")
+    if response.size == 0 or not math.isfinite(sd):
+        return 0.0 > sd
+    bar = int(math.floor(6.0 * sd / 1.4826))  # the largest median that reads sd or less...
+    while 1.4826 * (bar + 1) / 6.0 <= sd:  # ...as noise_sd rounds it
+        bar += 1
+    while bar >= 0 and 1.4826 * bar / 6.0 > sd:
+        bar -= 1
+    if bar < 0 or bar >= 255:
+        return bar < 0
+    return int(np.count_nonzero(np.abs(response) <= bar)) < (response.size + 1) // 2

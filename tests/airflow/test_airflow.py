@@ -187,21 +187,36 @@ def test_a_pan_over_fine_texture_is_not_taken_for_grain():
 
 
 def test_the_noise_is_estimated_only_where_it_can_decide(monkeypatch):
-    """A pair static at ``static_level`` needs no estimate; a clean change whose difference is quiet
-    needs one (the difference's); a grainy pair three (the frames' too). Counted, not timed."""
+    """No estimate for a pair static at ``static_level``, nor for one that changed beyond any level the
+    noise could raise it to (an object appearing at full contrast); one count (the first frame reads
+    clean) for a faint change in a clean pair; for a grainy pair both frames' counts, then the three
+    estimates the level takes. Counted, not timed."""
     import autohaptics.airflow.flow as flow_module
 
-    estimate, calls = flow_module.noise_sd, []
-    monkeypatch.setattr(flow_module, "noise_sd", lambda r: calls.append(r.shape) or estimate(r))
+    calls = []
+
+    def counted(name):
+        real = getattr(flow_module, name)
+
+        def call(*args):
+            calls.append(name)
+            return real(*args)
+        return call
+
+    for name in ("noise_over", "noise_sd"):
+        monkeypatch.setattr(flow_module, name, counted(name))
     a = gray(pan_scene(0.6), 0.5, 160, 90)
-    moved = a.copy()
+    moved, faint = a.copy(), a.copy()
     moved[40:46, 70:76] = 255
+    faint[40:46, 70:76] = np.clip(a[40:46, 70:76].astype(int) + 30, 0, 255)  # 30 grey levels over 0.25 %
     assert airflow.is_static(a, a) and calls == []
-    assert not airflow.is_static(a, moved) and len(calls) == 1
+    assert not airflow.is_static(a, moved) and calls == []
+    assert not airflow.is_static(a, faint) and calls == ["noise_over"]
     calls.clear()
-    assert airflow.is_static(grained(a, 6.0, 1), grained(a, 6.0, 2)) and len(calls) == 3
+    assert airflow.is_static(grained(a, 6.0, 1), grained(a, 6.0, 2))
+    assert calls == ["noise_over"] * 2 + ["noise_sd"] * 3
     calls.clear()
-    assert not airflow.is_static(a, moved, params=airflow.AirflowParams(static_noise=0.0)) and calls == []
+    assert not airflow.is_static(a, faint, params=airflow.AirflowParams(static_noise=0.0)) and calls == []
 
 
 def test_fade_detection():

@@ -21,7 +21,7 @@ import numpy as np
 from autohaptics.airflow.fans import AirflowParams
 from autohaptics.errors import ParameterError
 from autohaptics.records import ANALYSIS
-from autohaptics.imaging import as_gray, finite32, noise_response, noise_sd
+from autohaptics.imaging import as_gray, finite32, noise_over, noise_response, noise_sd
 
 FLOW_METHODS = ("dis", "farneback")
 DIS_PRESETS = {"ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST, "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
@@ -165,7 +165,8 @@ def is_static(prev_gray: np.ndarray, gray: np.ndarray, *, params: AirflowParams 
     film grain (new every frame) in all three. It counts up to :data:`GRAIN_MOST` per frame: grain of sd 8
     on a 640 px picture reads 2-4 on its proxy, and "noise" past 6 is a picture's own fine texture (gravel,
     leaves), which must not hide its motion. It is estimated only for a pair that changed beyond
-    ``static_level``, and a frame's only when the difference's could raise the level.
+    ``static_level`` but not beyond the level that bound allows: the first frame's, then the second's and
+    the difference's while each could still raise the level (a clean frame reads too little).
     """
     a, b = as_gray(prev_gray), as_gray(gray)
     if a.shape != b.shape:
@@ -174,13 +175,18 @@ def is_static(prev_gray: np.ndarray, gray: np.ndarray, *, params: AirflowParams 
     if float((diff > params.static_level).mean()) < params.static_fraction:
         return True  # a higher level changes nothing
     k = float(params.static_noise)
-    if k <= 0:
+    most = k * math.sqrt(2) * GRAIN_MOST  # the highest level any noise raises it to
+    if not most > params.static_level or float((diff > most).mean()) >= params.static_fraction:
+        return False  # changed beyond that too: moving whatever the noise (no estimate needed)
+    clean = params.static_level / (k * math.sqrt(2))  # a frame's noise that leaves the level where it is
+    response_a = noise_response(a)
+    if not noise_over(response_a, clean):
+        return False  # a clean frame (most of them), told by one count
+    response_b = noise_response(b)
+    if not noise_over(response_b, clean):
         return False
-    response_a, response_b = noise_response(a), noise_response(b)
-    level = k * min(noise_sd(response_a - response_b), math.sqrt(2) * GRAIN_MOST)  # int16: |difference| <= 8160
-    if not level > params.static_level:
-        return False
-    level = min(level, k * math.sqrt(2) * min(noise_sd(response_a), noise_sd(response_b)))
+    level = k * min(math.sqrt(2) * min(noise_sd(response_a), noise_sd(response_b)), noise_sd(response_a - response_b))
+    level = min(level, most)  # int16 responses: |difference| <= 8160
     return level > params.static_level and float((diff > level).mean()) < params.static_fraction
 
 
