@@ -73,29 +73,36 @@ def noise_sd(response: np.ndarray) -> float:
     a response counts up to 255 (so 63 at most, far past any film's grain). Grain a pixel or more
     across reads under its spread: the mask passes fine detail only.
     """
-    response = np.asarray(response)
-    if response.ndim != 2 or response.dtype != np.int16:
-        raise ParameterError(f"noise_sd needs a 2-D int16 response, got {response.dtype} {response.shape}")
+    response = _checked(response, "noise_sd")
     if response.size == 0:
         return 0.0
     counts = np.cumsum(cv2.calcHist([cv2.convertScaleAbs(response)], [0], None, [256], [0, 256]).ravel())
-    median = int(np.searchsorted(counts, (counts[-1] + 1) // 2))  # the median by counting: no sort
-    return 1.4826 * median / 6.0
+    return _sd_of(int(np.searchsorted(counts, (counts[-1] + 1) // 2)))  # the median by counting: no sort
 
 
 def noise_over(response: np.ndarray, sd: float) -> bool:
     """Whether ``noise_sd(response) > sd``, by one count of the responses within the bar (a picture
     read as clean or noisy without the median's histogram)."""
-    response = np.asarray(response)
-    if response.ndim != 2 or response.dtype != np.int16:
-        raise ParameterError(f"noise_over needs a 2-D int16 response, got {response.dtype} {response.shape}")
+    response = _checked(response, "noise_over")
     if response.size == 0 or not math.isfinite(sd):
         return 0.0 > sd
-    bar = int(math.floor(6.0 * sd / 1.4826))  # the largest median that reads sd or less...
-    while 1.4826 * (bar + 1) / 6.0 <= sd:  # ...as noise_sd rounds it
+    bar = int(math.floor(sd / _sd_of(1)))  # the largest median that reads sd or less...
+    while _sd_of(bar + 1) <= sd:  # ...as noise_sd rounds it
         bar += 1
-    while bar >= 0 and 1.4826 * bar / 6.0 > sd:
+    while bar >= 0 and _sd_of(bar) > sd:
         bar -= 1
     if bar < 0 or bar >= 255:
         return bar < 0
     return int(np.count_nonzero(np.abs(response) <= bar)) < (response.size + 1) // 2
+
+
+def _checked(response: np.ndarray, name: str) -> np.ndarray:
+    response = np.asarray(response)
+    if response.ndim != 2 or response.dtype != np.int16:
+        raise ParameterError(f"{name} needs a 2-D int16 response, got {response.dtype} {response.shape}")
+    return response
+
+
+def _sd_of(median: int) -> float:
+    """A median absolute response as a Gaussian's standard deviation, grey levels."""
+    return 1.4826 * median / 6.0
