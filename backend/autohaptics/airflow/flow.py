@@ -185,8 +185,9 @@ def is_static(prev_gray: np.ndarray, gray: np.ndarray, *, params: AirflowParams 
     response_b = noise_response(b)
     if not noise_over(response_b, clean):
         return False
-    level = k * min(math.sqrt(2) * min(noise_sd(response_a), noise_sd(response_b)), noise_sd(response_a - response_b))
-    level = min(level, most)  # int16 responses: |difference| <= 8160
+    noise = min(math.sqrt(2) * min(noise_sd(response_a), noise_sd(response_b)),
+                noise_sd(response_a - response_b))  # int16 responses: |difference| <= 8160
+    level = min(k * noise, most)
     return level > params.static_level and float((diff > level).mean()) < params.static_fraction
 
 
