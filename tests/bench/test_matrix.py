@@ -7,6 +7,7 @@ rows: on that scene (all met) and on a shared film (three known misses, strict x
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import subprocess
 import sys
@@ -17,7 +18,7 @@ import pytest
 
 from autohaptics import pipeline
 from autohaptics import testing as synth
-from autohaptics.bench.matrix import JOLT_MAX, TARGETS, cut_analysis, misses, row_figures, silence_pair
+from autohaptics.bench.matrix import JOLT_MAX, TARGETS, cut_analysis, misses, over_row, row_figures, silence_pair
 from autohaptics.bench.variants import VARIANTS, not_applicable, variant_file
 from autohaptics.errors import ParameterError
 from autohaptics.media import probe
@@ -84,6 +85,34 @@ def test_a_row_whose_encoder_changes_its_process_is_written_by_a_fresh_interpret
     assert (os.sched_getscheduler(0), os.sched_getparam(0).sched_priority) == before
     with pytest.raises(ParameterError, match="only a row of the matrix"):
         variant_file(src, replace(isolated[0], name="another AV1"), tmp_path / "other")
+
+
+def test_rows_over_another_row_are_written_from_its_file_and_compared_with_the_clean_film(tmp_path, capsys):
+    """``--over grain``: the letterbox row is the grainy film letterboxed (grain in its picture, not in
+    its bars), named for both rows and judged against the clean source."""
+    from autohaptics.cli.main import main
+    from autohaptics.media import iter_video
+
+    src = synth.write_scene(tmp_path / "short.mp4", material_scene(6.0), width=320, height=180, fps=25)
+    out = tmp_path / "m"
+    assert main(["bench", "matrix", str(src), "--rows", "letterbox", "--over", "grain", "--no-silence",
+                 "--out", str(out)]) == 0
+    rows = json.loads((out / "matrix.json").read_text())["rows"]
+    grain, letterbox = over_row("grain"), over_row("letterbox")
+    assert [r["variant"] for r in rows] == [f"{grain.name}, then {letterbox.name}"]
+    assert set(rows[0]) >= set(TARGETS) and "film grain" in capsys.readouterr().out
+    both = out / "variants" / f"short__{grain.slug}__{letterbox.slug}{letterbox.suffix}"
+    plain = variant_file(src, letterbox, tmp_path / "plain")
+
+    def middle(path):  # the middle frame, 320 x 240: the letterbox pads 180 px of picture to 240
+        return next(f for i, f in enumerate(iter_video(path)) if i == 75).gray(320).astype(np.float32)
+
+    grain_only = middle(both) - middle(plain)
+    assert grain_only[40:200].std() > 3.0 and np.abs(grain_only[:25]).max() <= 2
+    with pytest.raises(ParameterError, match="no row"):
+        over_row("no such row")
+    with pytest.raises(ParameterError, match="cut"):
+        over_row("cut mid-score")
 
 
 def test_a_cut_of_the_analysis_is_the_film_from_there(clean):

@@ -17,7 +17,9 @@ gives its film-relative levels): onset F1, fan-tick F1, tolerant fan IoU and tem
 ``--speed`` each file's ``generate`` and its bare decode (:func:`~autohaptics.bench.decode.bare_decode`) also run as
 whole processes, and the row gives their ratio. The digital-silence pair (booms and blips over exact silence, and
 over a -100 dBFS floor) is a row of its own: the silence variant against the floor variant, and the ratio of their
-generate times.
+generate times. With ``--over WORDS`` each row is written from the file of the first row whose name holds those
+words instead of the source (a grainy film as each screener, letterboxed, at each rate: material that meets two
+rows at once), and still compared with the clean source.
 
 Variant files are written once into ``--out`` and reused; nothing large is committed.
 """
@@ -88,6 +90,20 @@ def row_figures(clean, test, variant: Variant, film=None) -> dict:
     return fig
 
 
+def over_row(words: str) -> Variant | None:
+    """The row ``--over`` names: the first whose name contains ``words`` (case aside; None for none
+    asked). A cut cannot be one: the rows after it would compare a film from the cut on with the film."""
+    words = words.strip().lower()
+    if not words:
+        return None
+    found = next((v for v in VARIANTS if words in v.name.lower()), None)
+    if found is None:
+        raise ParameterError(f"--over {words!r}: no row of the matrix has that in its name")
+    if found.start_s > 0:
+        raise ParameterError(f"--over {found.name!r}: a cut cannot be written under other rows")
+    return found
+
+
 def misses(fig: dict) -> list[str]:
     """The targets a row's figures miss, as short phrases (empty: the row meets them all). A cut's
     jolt counts only where the film itself does not vibrate at that place."""
@@ -126,6 +142,10 @@ def register(sub) -> None:
     p = sub.add_parser("matrix", help="the material matrix: variants of each clip against the clean one")
     p.add_argument("video", nargs="*", help="source files (default: the shared film clips)")
     p.add_argument("--rows", default="", help="only the rows whose name contains one of these comma-separated words")
+    p.add_argument("--over", default="",
+                   help="write each row from the first row whose name contains these words instead of the source "
+                        "(e.g. 'grain': a grainy film as each screener, letterboxed, at each rate), against the "
+                        "clean source")
     p.add_argument("--speed", action="store_true",
                    help="also time each file's generate and bare decode as whole processes (ratio per row)")
     p.add_argument("--no-silence", action="store_true", help="leave out the digital-silence pair")
@@ -145,6 +165,8 @@ def run(args) -> int:
             raise ParameterError(f"{s}: no such file")
     words = [w.strip().lower() for w in args.rows.split(",") if w.strip()]
     variants = [v for v in VARIANTS if not words or any(w in v.name.lower() for w in words)]
+    over = over_row(args.over)
+    variants = [v for v in variants if v is not over]
     here = machine()
     print(machine_line(here), file=sys.stderr)
     rows, figures = [], []
@@ -152,22 +174,24 @@ def run(args) -> int:
         clean = _measured(src, out, args.speed)
         rows.append(_table_row(src.name, "clean", clean, None))
         analysis = None
+        base = src if over is None else variant_file(src, over, out / "variants")
         for v in variants:
-            why = not_applicable(v, probe(src))
+            why = not_applicable(v, probe(base))
             if why:
                 print(f"{src.name}: {v.name}: left out ({why})", file=sys.stderr)
                 continue
-            print(f"{src.name}: {v.name} ...", file=sys.stderr)
-            path = variant_file(src, v, out / "variants")
+            name = v.name if over is None else f"{over.name}, then {v.name}"
+            print(f"{src.name}: {name} ...", file=sys.stderr)
+            path = variant_file(base, v, out / "variants")
             got = _measured(path, out, args.speed)
             ref = clean["timeline"]
             if v.start_s > 0:
                 analysis = analysis or _analysis(src)
                 ref = _derive(cut_analysis(analysis, v.start_s, got["timeline"].n_ticks))
             fig = {**row_figures(ref, got["timeline"], v, film=clean["timeline"]), **_speed(got)}
-            figures.append({"source": src.name, "variant": v.name, "group": v.group, **fig,
+            figures.append({"source": src.name, "variant": name, "group": v.group, **fig,
                             "misses": misses(fig)})
-            rows.append(_table_row(src.name, v.name, got, fig))
+            rows.append(_table_row(src.name, name, got, fig))
     if not args.no_silence:
         silent, floor = silence_pair(out / "variants", duration_s=args.silence_s)
         a, b = _measured(floor, out, True), _measured(silent, out, True)
