@@ -255,9 +255,10 @@ def grainy_screener(tmp_path_factory):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="a codec's held pictures read as a frame-rate conversion: over grain, x264 "
-                   "starts an I-frame every 5 frames of a still shot and holds the picture between, and the cadence's "
-                   "mean step climbs and lingers (docs/BENCHMARKS.md, 'Stop 67'); tolerant fan IoU 0.782")
+@pytest.mark.xfail(strict=True, raises=AssertionError,
+                   reason="a codec's held pictures read as a frame-rate conversion: over grain, x264 starts an "
+                   "I-frame every 5 frames of a still shot and holds the picture between, and the cadence's mean "
+                   "step climbs and lingers (docs/BENCHMARKS.md, 'Stop 67'); tolerant fan IoU 0.782")
 def test_film_grain_under_an_h264_screener_keeps_its_fans(grainy_screener):
     dst, original, row = grainy_screener
     fig = row_figures(original, pipeline.generate(dst), row)
