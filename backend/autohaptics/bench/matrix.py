@@ -90,18 +90,23 @@ def row_figures(clean, test, variant: Variant, film=None) -> dict:
     return fig
 
 
+def named_rows(words: str) -> list[Variant]:
+    """The rows whose name contains one of the comma-separated ``words`` (case aside; all rows for none)."""
+    wanted = [w.strip().lower() for w in words.split(",") if w.strip()]
+    return [v for v in VARIANTS if not wanted or any(w in v.name.lower() for w in wanted)]
+
+
 def over_row(words: str) -> Variant | None:
     """The row ``--over`` names: the first whose name contains ``words`` (case aside; None for none
     asked). A cut cannot be one: the rows after it would compare a film from the cut on with the film."""
-    words = words.strip().lower()
-    if not words:
+    if not words.strip():
         return None
-    found = next((v for v in VARIANTS if words in v.name.lower()), None)
-    if found is None:
-        raise ParameterError(f"--over {words!r}: no row of the matrix has that in its name")
-    if found.start_s > 0:
-        raise ParameterError(f"--over {found.name!r}: a cut cannot be written under other rows")
-    return found
+    found = named_rows(words)
+    if not found:
+        raise ParameterError(f"--over {words.strip()!r}: no row of the matrix has that in its name")
+    if found[0].start_s > 0:
+        raise ParameterError(f"--over {found[0].name!r}: a cut cannot be written under other rows")
+    return found[0]
 
 
 def misses(fig: dict) -> list[str]:
@@ -163,10 +168,8 @@ def run(args) -> int:
     for s in sources:
         if not s.is_file():
             raise ParameterError(f"{s}: no such file")
-    words = [w.strip().lower() for w in args.rows.split(",") if w.strip()]
-    variants = [v for v in VARIANTS if not words or any(w in v.name.lower() for w in words)]
     over = over_row(args.over)
-    variants = [v for v in variants if v is not over]
+    variants = [v for v in named_rows(args.rows) if v is not over]
     here = machine()
     print(machine_line(here), file=sys.stderr)
     rows, figures = [], []
@@ -175,8 +178,9 @@ def run(args) -> int:
         rows.append(_table_row(src.name, "clean", clean, None))
         analysis = None
         base = src if over is None else variant_file(src, over, out / "variants")
+        info = probe(base)
         for v in variants:
-            why = not_applicable(v, probe(base))
+            why = not_applicable(v, info)
             if why:
                 print(f"{src.name}: {v.name}: left out ({why})", file=sys.stderr)
                 continue
