@@ -32,12 +32,13 @@ def feed(cad: Cadence, pictures: list[int], fps: int, start: int = 0, **kw) -> l
     return times
 
 
-def judged_pairs(content_fps: int, stream_fps: float, seconds: float, span: int):
-    """Feed a conversion of ``content_fps`` to ``stream_fps`` and yield, for each pair of frames ``span``
-    apart that holds a step, once it is settled (``Cadence.settled_s``, as the video pass holds a pair;
-    the last ones after ``finish``): its first frame's time and its time over its picture steps' time."""
-    n = int(seconds * stream_fps)
-    pics = [int(j * content_fps // stream_fps) for j in range(n)]
+def judged_pairs(content_fps: int, stream_fps: float, seconds: float, span: int, pics: list[int] | None = None):
+    """Feed a conversion of ``content_fps`` to ``stream_fps`` (or the pictures ``pics`` of the content
+    at that rate) and yield, for each pair of frames ``span`` apart that holds a step, once it is settled
+    (``Cadence.settled_s``, as the video pass holds a pair; the last ones after ``finish``): its first
+    frame's time and its time over its picture steps' time."""
+    pics = pics or [int(j * content_fps // stream_fps) for j in range(int(seconds * stream_fps))]
+    n = len(pics)
     cad = Cadence(1 / stream_fps, 0.35)
     held = []
     for j, k in enumerate(pics):
@@ -64,6 +65,20 @@ def test_a_conversion_times_every_pair_by_its_picture_steps(content_fps, stream_
         assert len(pairs) > 20 and all(0.92 <= r <= 1.08 for _, r in pairs), (span, pairs)
         # from 1 s on the mean step is taken over MEAN_STEPS of the picture's steps
         assert all(0.96 <= r <= 1.04 for t, r in pairs if t >= 1.0), (span, pairs)
+
+
+def test_a_picture_held_is_no_cadence_and_the_step_after_it_lasts_the_hold():
+    """A 24 -> 30 fps conversion whose third second holds each picture for 5 frames (a codec keeps a
+    still, grainy shot's pictures between key frames 5 frames apart while the picture moves a little):
+    the step after a hold lasts the hold, over which its picture's motion gathered, and the hold's runs
+    stay out of the mean step, so the conversion after it reads its own steps at once (taken into the
+    mean, they made it climb towards 5 intervals for the next 24 steps: motion read at a quarter)."""
+    conv = shown(24, 30, 150)
+    pics = conv[:60] + [conv[60 + 5 * (j // 5)] for j in range(30)] + conv[90:]
+    for span in (2, 3):
+        pairs = [(t, r) for t, r in judged_pairs(24, 30, 0, span, pics) if t >= 1.0]
+        assert sum(2.0 <= t < 3.0 for t, _ in pairs) >= 6 and sum(t >= 3.0 for t, _ in pairs) > 20, span
+        assert all(0.96 <= r <= 1.04 for _, r in pairs), (span, pairs)
 
 
 def test_a_repeat_every_25th_frame_is_a_picture_held():

@@ -13,17 +13,24 @@ pair's time counts the frames after its first that are steps, each lasting its o
 step over its last ``MEAN_STEPS`` steps (frames / steps of whole runs: 2.5 at 24 -> 59.94, 1.2 at 25 -> 30, 2 on a
 stretch animated on twos, about 1 in a variable-rate stream, whose intervals are its own); a frame that could not be
 judged (no frame right before it, a still picture) counts its own interval, which is what it lasts on average either
-way. docs/BENCHMARKS.md, "Screener encodes" (fifth stop) and "Stop 60".
+way. A run of more frames than ``HELD_S`` holds (3 at 30 fps) is no conversion's but a picture held (a still shot's
+pictures that a codec keeps between its key frames, a freeze): it is left out of the mean step, and the step after
+it lasts the time since the run's own step, over which the picture's motion gathered (not in a variable-rate stream,
+whose repeats last nothing). docs/BENCHMARKS.md, "Screener encodes" (fifth stop),
+"Stop 60" and "Stop 68".
 """
 
 from __future__ import annotations
 
+import math
 from collections import deque
 
 import numpy as np
 
 REACH = 5  # frames on either side of a frame in which a step is looked for (24 fps at 120: runs of 5)
 MAX_STEP_FRAMES = 6.0  # the longest mean step, frame intervals (24 fps at 144 Hz)
+HELD_S = 1 / 12  # the longest run of a cadence, s (a 12 fps picture: animation on twos at 24 fps, and at 30 fps
+# a film's own repeat beside a conversion's, 3 frames); a run of more frames is a picture held
 FLOOR = 0.5  # mean grey levels; steps around a frame below this are too small to judge a repeat by
 REPEAT_MAX = 2.5  # mean grey levels; a repeat differs by coding noise at most (beside a flash or a cut,
 # action's large differences are small)
@@ -49,6 +56,8 @@ class Cadence:
         self.interval = float(interval_s) if interval_s > 0 and np.isfinite(interval_s) else 0.0
         self.ratio = float(ratio) if self.interval > 0 else 0.0
         self.variable = bool(variable)
+        # the most frames a cadence's run holds (none in a variable-rate stream, whose repeats are pictures held)
+        self.longest_run = math.ceil(round(HELD_S / self.interval, 6)) if self.interval and not self.variable else 0
         self.count = 0  # frames seen
         self.found = 0  # repeats found
         self.judged = 0  # frames judged (a repeat or a step)
@@ -148,6 +157,8 @@ class Cadence:
                     break
                 if started and rep:
                     pending += 1
+                elif started and self._held(pending + 1):
+                    pending = 0  # a picture held: not the cadence's
                 elif started:
                     frames, runs, pending = frames + pending + 1, runs + 1, 0
                     if runs == MEAN_STEPS:
@@ -157,6 +168,10 @@ class Cadence:
             mean = mean if mean >= 1.0 + MIN_REPEATS else 1.0
             self._step = (self.count, mean, runs)
         return self._step[1], self._step[2]
+
+    def _held(self, run: int) -> bool:
+        """Whether a run of ``run`` frames (a step and its repeats) is a picture held, not a cadence's."""
+        return 0 < self.longest_run < run
 
     def least_span_s(self, steps: float) -> float:
         """A flow pair's least span for ``steps`` of the picture's steps, s: ``steps`` frame intervals
@@ -168,20 +183,29 @@ class Cadence:
 
     def pair_time(self, t0: float, t1: float) -> float:
         """A flow pair's time from a frame at ``t0`` to one at ``t1``, s: each frame after the first
-        that is a step lasts its interval times the mean step (:meth:`step_s` in intervals), a repeat
+        that is a step lasts its interval times the mean step (:meth:`step_s` in intervals), or, after
+        a picture held (a run longer than ``HELD_S`` holds), the time since that run's step; a repeat lasts
         nothing, a frame not judged its own interval; ``t1 - t0`` when that leaves nothing."""
         span = max(t1 - t0, 1e-3)
         if self.ratio <= 0:
             return span
+        frames = self._frames
         mean = None
         total = 0.0
-        for _, t, dt, rep in reversed(self._frames):  # newest first: a pair spans the last few frames
+        for j in range(len(frames) - 1, -1, -1):  # newest first: a pair spans the last few frames
+            _, t, dt, rep = frames[j]
             if t <= t0:
                 break
             if t > t1 or rep:
                 continue
             if rep is None:
                 total += dt
+                continue
+            k = j - 1  # the step of the run before this one
+            while k >= 0 and frames[k][3]:
+                k -= 1
+            if k >= 0 and frames[k][3] is False and self._held(j - k):
+                total += t - frames[k][1]
             else:
                 mean = self._mean()[0] if mean is None else mean
                 total += dt * mean

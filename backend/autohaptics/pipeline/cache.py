@@ -36,7 +36,8 @@ from autohaptics.shots import Boundaries, detect
 # 8: a sound that changes sample rate mid-stream resampled from each rate (``media.audio``).
 # 9: a transport stream of several programmes read as one programme, its clock its own (``media.programs``).
 # 10: a translucent overlay wider than a filled one may be (a watermark) unblended (``media.overlays``).
-ANALYSIS_REVISION = 10
+# 11: a run of repeats longer than a cadence's is a picture held, outside the mean step (``airflow.cadence``).
+ANALYSIS_REVISION = 11
 
 
 @dataclass
