@@ -13,11 +13,11 @@ pair's time counts the frames after its first that are steps, each lasting its o
 step over its last ``MEAN_STEPS`` steps (frames / steps of whole runs: 2.5 at 24 -> 59.94, 1.2 at 25 -> 30, 2 on a
 stretch animated on twos, about 1 in a variable-rate stream, whose intervals are its own); a frame that could not be
 judged (no frame right before it, a still picture) counts its own interval, which is what it lasts on average either
-way. A run of more frames than ``HELD_S`` holds (3 at 30 fps) is no conversion's but a picture held (a still shot's
-pictures that a codec keeps between its key frames, a freeze): it is left out of the mean step, and the step after
-it lasts the time since the run's own step, over which the picture's motion gathered (not in a variable-rate stream,
-whose repeats last nothing). docs/BENCHMARKS.md, "Screener encodes" (fifth stop),
-"Stop 60" and "Stop 68".
+way. A run of more frames than ``HELD_S`` holds, rounded up (2 at 24 fps, 3 at 30, 10 at 120), is no conversion's
+but a picture held (a still shot's pictures that a codec keeps between its key frames, a freeze): it is left out of
+the mean step, and the step after it lasts the time since the run's own step, over which the picture's motion
+gathered (not in a variable-rate stream, whose repeats last nothing). docs/BENCHMARKS.md, "Screener encodes" (fifth
+stop), "Stop 60" and "Stop 68".
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ class Cadence:
         self.interval = float(interval_s) if interval_s > 0 and np.isfinite(interval_s) else 0.0
         self.ratio = float(ratio) if self.interval > 0 else 0.0
         self.variable = bool(variable)
-        # the most frames a cadence's run holds (none in a variable-rate stream, whose repeats are pictures held)
+        # the most frames a cadence's run holds (0: any, in a variable-rate stream, whose repeats last nothing)
         self.longest_run = math.ceil(round(HELD_S / self.interval, 6)) if self.interval and not self.variable else 0
         self.count = 0  # frames seen
         self.found = 0  # repeats found
