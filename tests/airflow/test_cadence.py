@@ -215,9 +215,12 @@ def test_off_or_without_a_frame_rate_the_pair_time_is_the_span():
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.lists(st.integers(0, 40), min_size=3, max_size=80), st.floats(0.0, 1.0), st.integers(0, 79),
-       st.integers(1, 5))
-def test_a_pair_time_is_positive_and_at_most_the_longest_step_per_frame_of_its_span(pics, ratio, a, span):
+@given(st.lists(st.tuples(st.integers(0, 40), st.integers(1, 8)), min_size=3, max_size=40), st.floats(0.0, 1.0),
+       st.integers(0, 79), st.integers(1, 5))
+def test_a_pair_time_is_positive_and_at_most_the_longest_step_per_frame_of_its_span(runs, ratio, a, span):
+    """Pictures shown for 1-8 frames each: runs of repeats, pictures held among them (the step after a hold
+    lasts the hold, and a run is judged whole only with a step within ``REACH`` frames of each repeat)."""
+    pics = [k for k, n in runs for _ in range(n)][:80]
     cad = Cadence(1 / 30, ratio)
     times = feed(cad, pics, 30)
     a = min(a, len(times) - 1)
