@@ -72,7 +72,7 @@ def test_a_picture_held_is_no_cadence_and_the_step_after_it_lasts_the_hold():
     still, grainy shot's pictures between key frames 5 frames apart while the picture moves a little):
     the step after a hold lasts the hold, over which its picture's motion gathered, and the hold's runs
     stay out of the mean step, so the conversion after it reads its own steps at once (taken into the
-    mean, they made it climb towards 5 intervals for the next 24 steps: motion read at a quarter)."""
+    mean, they made it climb towards 5 intervals and linger over the next 24 steps; the code before fails)."""
     conv = shown(24, 30, 150)
     pics = conv[:60] + [conv[60 + 5 * (j // 5)] for j in range(30)] + conv[90:]
     for span in (2, 3):
