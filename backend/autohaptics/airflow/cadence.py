@@ -184,8 +184,8 @@ class Cadence:
     def pair_time(self, t0: float, t1: float) -> float:
         """A flow pair's time from a frame at ``t0`` to one at ``t1``, s: each frame after the first
         that is a step lasts its interval times the mean step (:meth:`step_s` in intervals), or, after
-        a picture held (a run longer than ``HELD_S`` holds), the time since that run's step; a repeat lasts
-        nothing, a frame not judged its own interval; ``t1 - t0`` when that leaves nothing."""
+        a picture held (a run of more frames than ``HELD_S`` holds), the time since that run's step; a
+        repeat lasts nothing, a frame not judged its own interval; ``t1 - t0`` when that leaves nothing."""
         span = max(t1 - t0, 1e-3)
         if self.ratio <= 0:
             return span
