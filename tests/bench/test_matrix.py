@@ -237,29 +237,21 @@ def test_film_grain_over_a_film_keeps_its_fans(tmp_path):
     assert misses(fig) == [], fig
 
 
-@pytest.fixture(scope="module")
-def grainy_screener(tmp_path_factory):
-    """The Sintel trailer with the matrix's grain, then as its H.264 240p crf 32 screener (30 fps), each written by
-    a fresh interpreter (as above), and the clean trailer's timeline."""
+@pytest.mark.slow
+def test_film_grain_under_an_h264_screener_keeps_its_fans(tmp_path):
+    """The Sintel trailer with the matrix's grain, then as its H.264 240p crf 32 screener (30 fps), each written
+    by a fresh interpreter (as above). Over grain, x264 starts an I-frame every 5 frames of a still shot and holds
+    the picture between: those runs are pictures held, not a frame-rate conversion, so they stay out of the
+    cadence's mean step and the step after each lasts the hold (tolerant fan IoU 0.835; 0.782 when they made the
+    mean step climb and linger into the action after, docs/BENCHMARKS.md, 'Stop 67' and 'Stop 68')."""
     src = shared_clip("sintel_trailer_640x272_vp8_vorbis.webm")
-    work = tmp_path_factory.mktemp("grainy_screener")
     row = next(v for v in VARIANTS if v.name == "screener H.264 240p crf 32")
     code = ("import sys; from pathlib import Path; from autohaptics.bench.matrix import over_row; "
-            "from autohaptics.bench.variants import VARIANTS, variant_file; "
+            "from autohaptics.bench.variants import variant_file; "
             "print(variant_file(Path(sys.argv[1]), over_row(sys.argv[2]), Path(sys.argv[3])))")
-    grain = subprocess.run([sys.executable, "-c", code, str(src), "grain", str(work)], check=True, timeout=600,
+    grain = subprocess.run([sys.executable, "-c", code, str(src), "grain", str(tmp_path)], check=True, timeout=600,
                            capture_output=True, text=True).stdout.strip()
-    dst = subprocess.run([sys.executable, "-c", code, grain, row.name, str(work)], check=True, timeout=600,
+    dst = subprocess.run([sys.executable, "-c", code, grain, row.name, str(tmp_path)], check=True, timeout=600,
                          capture_output=True, text=True).stdout.strip()
-    return dst, pipeline.generate(src), row
-
-
-@pytest.mark.slow
-def test_film_grain_under_an_h264_screener_keeps_its_fans(grainy_screener):
-    """Over grain, x264 starts an I-frame every 5 frames of a still shot and holds the picture between: those
-    runs are pictures held, not a frame-rate conversion, so they stay out of the cadence's mean step and the
-    step after each lasts the hold (tolerant fan IoU 0.835; 0.782 when they made the mean step climb and linger
-    into the action after, docs/BENCHMARKS.md, 'Stop 67' and 'Stop 68')."""
-    dst, original, row = grainy_screener
-    fig = row_figures(original, pipeline.generate(dst), row)
+    fig = row_figures(pipeline.generate(src), pipeline.generate(dst), row)
     assert misses(fig) == [], fig
